@@ -1,0 +1,1 @@
+"""Main controller FSM: e-stop, gesture to path to poses, collision preemption."""

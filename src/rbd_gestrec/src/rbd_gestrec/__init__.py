@@ -1,0 +1,1 @@
+"""ROS side of gesture recognition: gesture topic in, GetLastGesture service."""

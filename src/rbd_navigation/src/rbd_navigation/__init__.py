@@ -1,0 +1,1 @@
+"""GeneratePath service: tricks as pose sequences, from YAML."""

@@ -1,0 +1,1 @@
+"""Position controller FSM and control law (thesis Eq. 1)."""

@@ -1,0 +1,94 @@
+"""The drop-in claim: the packages under src/ build in a fresh catkin workspace with
+catkin_make, catkin build (catkin_tools) and colcon, and every rbd package is found.
+
+The workspace is built the way the robot does it (system python, no venv, nothing of this
+checkout's devel space on the paths). Tests are not compiled there (CATKIN_ENABLE_TESTING=OFF):
+`make test` compiles and runs them once in the main build.
+"""
+
+import os
+import shutil
+import subprocess
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PACKAGES = sorted(
+    d for d in os.listdir(os.path.join(ROOT, "src")) if os.path.isfile(os.path.join(ROOT, "src", d, "package.xml"))
+)
+CMAKE_ARGS = ["-DPYTHON_EXECUTABLE=/usr/bin/python3", "-DCATKIN_ENABLE_TESTING=OFF", "-DCMAKE_BUILD_TYPE=Release"]
+
+
+def clean_env():
+    """An environment with no ROS workspace sourced (as on a fresh robot shell)."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("ROS_", "CMAKE_", "PKG_CONFIG", "COLCON"))}
+    for key in ("PYTHONPATH", "LD_LIBRARY_PATH", "VIRTUAL_ENV"):
+        env.pop(key, None)
+    env["PATH"] = "/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin"
+    if shutil.which("ccache"):
+        env["CCACHE_BASEDIR"] = "/tmp"
+    return env
+
+
+def run(cmd, cwd):
+    env = clean_env()
+    env["PWD"] = cwd  # catkin_make takes its base path from PWD
+    proc = subprocess.run(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          universal_newlines=True)
+    assert proc.returncode == 0, "%s failed:\n%s" % (" ".join(cmd), proc.stdout[-6000:])
+    return proc.stdout
+
+
+@pytest.fixture
+def workspace(tmp_path):
+    """A fresh catkin workspace with this repository's packages copied under src/."""
+    src = tmp_path / "ws" / "src"
+    src.mkdir(parents=True)
+    for pkg in PACKAGES:
+        shutil.copytree(os.path.join(ROOT, "src", pkg), str(src / pkg),
+                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    return tmp_path / "ws"
+
+
+def test_every_rbd_package_is_a_package():
+    expected = {"robodog", "rbd_msgs", "rbd_lidar", "rbd_controller", "rbd_pos_controller", "rbd_localization",
+                "rbd_navigation", "rbd_gestrec", "rbd_bridge", "rbd_a1_driver", "rbd_sim", "rbd_bringup"}
+    assert set(PACKAGES) == expected
+
+
+def test_catkin_make(workspace):
+    out = run(["catkin_make", "-j2"] + CMAKE_ARGS, str(workspace))
+    for pkg in PACKAGES:
+        assert "+++ processing catkin" in out and ("'%s'" % pkg) in out, pkg
+    assert (workspace / "devel" / "share" / "rbd_msgs" / "msg").exists() or (
+        workspace / "devel" / "lib" / "python3" / "dist-packages" / "rbd_msgs" / "srv" / "__init__.py"
+    ).exists()
+
+
+def test_catkin_build(workspace):
+    run(["catkin", "init"], str(workspace))
+    run(["catkin", "config", "--cmake-args"] + CMAKE_ARGS, str(workspace))
+    listed = run(["catkin", "list", "-u"], str(workspace)).split()
+    assert set(PACKAGES) <= set(listed)
+    run(["catkin", "build", "-j2", "--no-status", "--no-notify"], str(workspace))
+    for pkg in PACKAGES:
+        assert (workspace / "devel" / ".private" / pkg).is_dir(), pkg
+
+
+def test_colcon_build(workspace):
+    listed = run(["colcon", "list", "--names-only"], str(workspace)).split()
+    assert set(PACKAGES) == set(listed)
+    run(["colcon", "build", "--parallel-workers", "2", "--event-handlers", "console_direct-",
+         "--cmake-args"] + CMAKE_ARGS, str(workspace))
+    for pkg in PACKAGES:
+        assert (workspace / "install" / pkg / "share" / pkg / "package.xml").exists(), pkg
+
+
+def test_repository_root_as_source_space(tmp_path):
+    """`catkin_make --source <repo>` (the README's own build) also sees every package."""
+    build = tmp_path / "build"
+    devel = "-DCATKIN_DEVEL_PREFIX=%s" % (tmp_path / "devel")
+    out = run(["catkin_make", "--source", ROOT, "--build", str(build), devel,
+               "cmake_check_build_system"] + CMAKE_ARGS, str(tmp_path))
+    for pkg in PACKAGES:
+        assert ("'%s'" % pkg) in out, pkg

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Idempotent machine + venv setup for RoboDog (Debian 12).
+#   1. apt packages from tools/apt-packages.txt (skipped when all are installed)
+#   2. localhost must resolve (roslaunch needs it)
+#   3. .venv from /usr/bin/python3 --system-site-packages with pinned requirements
+#      (skipped when requirements.txt and rbd_local/pyproject.toml are unchanged)
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$root"
+
+mapfile -t pkgs < <(grep -v '^\s*#' tools/apt-packages.txt | grep -v '^\s*$')
+missing=()
+for p in "${pkgs[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${#missing[@]} Debian packages: ${missing[*]}"
+  sudo_cmd=()
+  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+  "${sudo_cmd[@]}" apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+  echo "setup: Debian packages present"
+fi
+
+if ! getent hosts localhost >/dev/null; then
+  echo "127.0.0.1 localhost" >> /etc/hosts
+fi
+
+want="$(cat requirements.txt rbd_local/pyproject.toml | sha256sum | cut -d' ' -f1)"
+have="$(cat .venv/.rbd-requirements 2>/dev/null || true)"
+if [ "$want" != "$have" ] || [ ! -x .venv/bin/python ]; then
+  echo "setup: creating .venv"
+  [ -x .venv/bin/python ] || /usr/bin/python3 -m venv --system-site-packages .venv
+  # catkin and colcon crawl the source space: keep the venv out of it.
+  touch .venv/CATKIN_IGNORE .venv/COLCON_IGNORE
+  .venv/bin/python -m pip install -q --disable-pip-version-check -r requirements.txt 2>&1 | { grep -v "is ignored: it is neither" || true; }
+  .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps -e rbd_local 2>&1 | { grep -v "is ignored: it is neither" || true; }
+  echo "$want" > .venv/.rbd-requirements
+else
+  echo "setup: .venv up to date"
+fi
