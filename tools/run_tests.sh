@@ -27,10 +27,15 @@ if [ $rc -ne 0 ]; then
   echo "catkin run_tests exited $rc" > "$results/BUILD-FAILED"
 fi
 
-echo "== pytest (lint, ROS-free cores, rbd_local, system tests)"
+echo "== pytest (lint, ROS-free cores, system tests)"
 start=$(date +%s)
-pytest -p no:cacheprovider -q --junitxml="$results/pytest.xml" ${RBD_PYTEST_ARGS:-} \
-  src rbd_local/tests tests
+pytest -q --junitxml="$results/pytest.xml" ${RBD_PYTEST_ARGS:-} src tests
 echo "   pytest exit $? in $(( $(date +%s) - start )) s"
+
+# The laptop app is its own pip package: test it from its own root.
+echo "== pytest rbd_local (laptop app)"
+start=$(date +%s)
+(cd rbd_local && pytest -q -c ../pytest.ini --rootdir . --junitxml="$results/pytest-rbd_local.xml" ${RBD_PYTEST_ARGS:-} tests)
+echo "   pytest rbd_local exit $? in $(( $(date +%s) - start )) s"
 
 python3 tools/test_summary.py "$results" build/test_results
