@@ -72,6 +72,12 @@ def make(**kwargs):
     return world, ctl
 
 
+def release(world, ctl):
+    """Release the e-stop and let the first (flushing) gesture poll happen."""
+    ctl.set_emergency(False)
+    run(world, ctl, 1)
+
+
 def run(world, ctl, ticks):
     for _ in range(ticks):
         ctl.tick(world.t)
@@ -90,10 +96,12 @@ def test_starts_in_estop_and_publishes_gate():
 
 def test_release_sets_attentive_pose_then_gesture_runs_trick_then_waits():
     world, ctl = make()
+    world.gestures.append("walk")  # made during the e-stop: dropped
     ctl.set_emergency(False)
     assert world.estop_flag is False
     assert ctl.state == State.WAITING_FOR_GESTURE
     run(world, ctl, 2)
+    assert world.gestures == [] and world.sent == []
     assert world.body_poses[0][1] < 0.0  # attentive: pitch nose-up
     world.gestures.append("walk")
     run(world, ctl, 3)
@@ -106,7 +114,7 @@ def test_release_sets_attentive_pose_then_gesture_runs_trick_then_waits():
 
 def test_unknown_command_goes_back_to_waiting_without_motion():
     world, ctl = make()
-    ctl.set_emergency(False)
+    release(world, ctl)
     world.gestures.append("fly")
     run(world, ctl, 5)
     assert ctl.state == State.WAITING_FOR_GESTURE
@@ -116,7 +124,7 @@ def test_unknown_command_goes_back_to_waiting_without_motion():
 
 def test_refused_pose_aborts_trick():
     world, ctl = make()
-    ctl.set_emergency(False)
+    release(world, ctl)
     world.refuse = True
     world.gestures.append("walk")
     run(world, ctl, 6)
@@ -127,7 +135,7 @@ def test_refused_pose_aborts_trick():
 def test_pose_timeout_aborts_trick():
     world, ctl = make()
     ctl.pose_timeout = 2.0
-    ctl.set_emergency(False)
+    release(world, ctl)
     world.ticks_per_pose = 1000
     world.gestures.append("walk")
     run(world, ctl, 20)
@@ -137,7 +145,7 @@ def test_pose_timeout_aborts_trick():
 
 def test_no_running_report_aborts():
     world, ctl = make()
-    ctl.set_emergency(False)
+    release(world, ctl)
     world.set_position = lambda pose: (True, "ok")
     ctl.ports.set_position = world.set_position
     world.gestures.append("walk")
@@ -148,7 +156,7 @@ def test_no_running_report_aborts():
 
 def test_queue_shows_current_then_remaining_names():
     world, ctl = make()
-    ctl.set_emergency(False)
+    release(world, ctl)
     world.gestures.append("walk")
     run(world, ctl, 4)
     assert ctl.state == State.EXECUTING
@@ -156,7 +164,7 @@ def test_queue_shows_current_then_remaining_names():
 
 
 def _drive_to(world, ctl, state):
-    ctl.set_emergency(False)
+    release(world, ctl)
     if state == State.WAITING_FOR_GESTURE:
         return
     world.gestures.append("walk")
@@ -183,8 +191,8 @@ def test_preemption_and_resume_from_every_work_state(state, stop):
         ctl.set_collision(True)
         assert ctl.state == State.COLLISION_DETECTED
         assert world.calls == [("pos_collision", True)]
-    # while stopped: no new poses, no gesture polls consumed
-    world.gestures.append("walk") if state == State.WAITING_FOR_GESTURE else None
+    # while stopped: no new poses; a gesture made now is dropped after the release
+    world.gestures.append("walk")
     run(world, ctl, 10)
     assert world.sent == sent_before
     world.calls.clear()
@@ -195,6 +203,10 @@ def test_preemption_and_resume_from_every_work_state(state, stop):
         ctl.set_collision(False)
         assert world.calls == [("pos_collision", False)]
     assert ctl.state == state
+    if state == State.WAITING_FOR_GESTURE:
+        run(world, ctl, 10)
+        assert world.sent == [] and world.gestures == []  # the early gesture was dropped
+        world.gestures.append("walk")
     run(world, ctl, 30)
     assert ctl.state == State.WAITING_FOR_GESTURE
     if state == State.EXECUTING:
@@ -206,7 +218,7 @@ def test_preemption_and_resume_from_every_work_state(state, stop):
 
 def test_stale_path_result_dropped_after_preemption():
     world, ctl = make()
-    ctl.set_emergency(False)
+    release(world, ctl)
     world.gestures.append("walk")
     run(world, ctl, 1)
     assert ctl.state == State.GENERATING_PATH

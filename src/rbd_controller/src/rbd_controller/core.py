@@ -89,6 +89,7 @@ class MainController(object):
         self._sent_seq = 0
         self._last_poll = -1e9
         self._body_pose_wanted = None  # type: Optional[Tuple[float, float, float]]
+        self._flush_gesture = False
         self._synced = (None, None)  # (emergency, collision) told to the position controller
         self.fsm = Fsm(
             on_enter={
@@ -172,6 +173,7 @@ class MainController(object):
         self.current = None
         self.sent_at = None
         self._body_pose_wanted = (0.0, self.attentive_pitch, 0.0)
+        self._flush_gesture = True  # a gesture made while busy or stopped is not acted on
 
     def _enter_generating(self, _previous: State) -> None:
         self._body_pose_wanted = (0.0, 0.0, 0.0)
@@ -208,6 +210,11 @@ class MainController(object):
             return
         self._last_poll = now
         command = self.ports.get_gesture()
+        with self.lock:
+            flush, self._flush_gesture = self._flush_gesture, False
+        if flush and command:
+            self.ports.log("info", "dropping gesture %r made before the robot was ready" % command)
+            return
         if not command:
             return
         with self.lock:
