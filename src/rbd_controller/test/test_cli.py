@@ -3,7 +3,9 @@ import pytest
 from rbd_controller.cli import parse_estop_args
 
 
-@pytest.mark.parametrize("argv, expected", [(["on"], True), (["OFF"], False), (["release"], False), (["on", "__name:=x"], True)])
+@pytest.mark.parametrize(
+    "argv, expected", [(["on"], True), (["OFF"], False), (["release"], False), (["on", "__name:=x"], True)]
+)
 def test_valid(argv, expected):
     assert parse_estop_args(argv) is expected
 

@@ -4,7 +4,7 @@ from rbd_controller.core import MainController, Ports
 from rbd_controller.fsm import State
 
 
-class FakeWorld(object):
+class FakeWorld:
     """Fake gestrec, navigation, position controller and publishers."""
 
     def __init__(self, path=("p1", "p2", "p3")):

@@ -9,7 +9,7 @@ from rbd_pos_controller.controller import (
     TRANSITIONS,
     Event,
     Goal,
-    GoalRejected,
+    GoalRejectedError,
     Params,
     PositionController,
     State,
@@ -151,7 +151,7 @@ def test_body_pose_waits_for_answer_and_settle_time():
 )
 def test_nan_goal_rejected_no_motion(goal):
     ctl = controller_in(State.WAITING_FOR_POSE)
-    with pytest.raises(GoalRejected, match="non-finite"):
+    with pytest.raises(GoalRejectedError, match="non-finite"):
         ctl.set_goal(goal, 0.0)
     assert ctl.state == State.WAITING_FOR_POSE
     assert ctl.step(0.1) == (0.0, 0.0, 0.0)
@@ -160,17 +160,17 @@ def test_nan_goal_rejected_no_motion(goal):
 @pytest.mark.parametrize("state", [State.EMERGENCY_STOP, State.COLLISION_DETECTED])
 def test_goal_rejected_while_stopped(state):
     ctl = controller_in(state)
-    with pytest.raises(GoalRejected):
+    with pytest.raises(GoalRejectedError):
         ctl.set_goal(Goal(1.0, 0.0, 0.0), 0.0)
     assert ctl.state == state
 
 
 def test_goal_rejected_without_fresh_pose():
     ctl = PositionController()
-    with pytest.raises(GoalRejected, match="pose"):
+    with pytest.raises(GoalRejectedError, match="pose"):
         ctl.set_goal(Goal(1.0, 0.0, 0.0), 0.0)
     ctl.update_pose(0.0, 0.0, 0.0, 0.0)
-    with pytest.raises(GoalRejected, match="pose"):
+    with pytest.raises(GoalRejectedError, match="pose"):
         ctl.set_goal(Goal(1.0, 0.0, 0.0), 0.6)
 
 

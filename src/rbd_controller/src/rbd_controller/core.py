@@ -6,14 +6,14 @@ without the lock; their results are dropped if the FSM changed meanwhile (epoch 
 """
 
 import threading
-from typing import Any, Callable, List, Optional, Sequence, Tuple
+from typing import Any, Callable, List, Sequence, Tuple
 
 from rbd_controller.fsm import Event, Fsm, State
 
 PathResult = Tuple[bool, str, Sequence[Any], Sequence[str]]
 
 
-class Ports(object):
+class Ports:
     """What the controller needs from the outside world (ROS in the node, fakes in tests).
 
     Every callable must not raise; failures are reported through return values.
@@ -53,7 +53,7 @@ class Ports(object):
         self.log = log
 
 
-class MainController(object):
+class MainController:
     """Gesture -> path -> poses, preempted by e-stop and collision, resuming afterwards.
 
     Args:
@@ -278,5 +278,7 @@ class MainController(object):
             self.ports.log("error", "position controller never reported running; aborting trick")
             self._fire_if(epoch, Event.ABORT)
         elif now - self.sent_at > self.pose_timeout:
-            self.ports.log("error", "pose %r not reached in %.0f s; aborting trick" % (self.current[1], self.pose_timeout))
+            self.ports.log(
+                "error", "pose %r not reached in %.0f s; aborting trick" % (self.current[1], self.pose_timeout)
+            )
             self._fire_if(epoch, Event.ABORT)

@@ -7,7 +7,7 @@ the e-stop is engaged is remembered and takes over when the e-stop is released.
 """
 
 import enum
-from typing import Callable, Dict, List, Optional, Tuple
+from typing import Callable, Dict, Optional
 
 
 class State(enum.Enum):
@@ -56,7 +56,7 @@ for _state in WORK_STATES:
     TRANSITIONS[(_state, Event.COLLISION)] = State.COLLISION_DETECTED
 
 
-class Fsm(object):
+class Fsm:
     """Table-driven FSM with a resume slot and on_enter hooks.
 
     Args:

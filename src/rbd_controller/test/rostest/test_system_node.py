@@ -11,9 +11,10 @@ import rospy
 import rostest
 from geometry_msgs.msg import PoseStamped, Twist, Vector3
 from nav_msgs.msg import Path
-from rbd_msgs.msg import ControllerState, PathQueue
 from std_msgs.msg import Bool, String
 from std_srvs.srv import SetBool
+
+from rbd_msgs.msg import ControllerState, PathQueue
 
 CONTROL_PERIOD = 1.0 / 20.0  # rbd_pos_controller rate
 MARGIN = 0.25  # scheduling margin for a loaded machine [s]
@@ -32,7 +33,7 @@ def wait_for(predicate, timeout, step=0.01):
     return predicate()
 
 
-class World(object):
+class World:
     def __init__(self):
         self.lock = threading.Lock()
         self.truth = None
@@ -117,7 +118,9 @@ class TestControlSystem(unittest.TestCase):
         self.assertTrue(wait_for(lambda: self.w.state == name, timeout), "state %r, wanted %s" % (self.w.state, name))
 
     def wait_pos_state(self, name, timeout=20.0):
-        self.assertTrue(wait_for(lambda: self.w.pos_state == name, timeout), "pos state %r, wanted %s" % (self.w.pos_state, name))
+        self.assertTrue(
+            wait_for(lambda: self.w.pos_state == name, timeout), "pos state %r, wanted %s" % (self.w.pos_state, name)
+        )
 
     def wait_moving_in(self, pos_state):
         """Wait for pos_state and for the robot to actually move in it."""

@@ -1,6 +1,6 @@
 """Gesture -> command mapping and a one-shot "last gesture" slot. ROS-free."""
 
-from typing import Any, Dict, Mapping, Optional, Tuple
+from typing import Any, Dict, Mapping, Optional
 
 
 class GestureConfigError(ValueError):
@@ -33,7 +33,7 @@ def parse_mapping(data: Any) -> Dict[str, str]:
     return mapping
 
 
-class GestureBuffer(object):
+class GestureBuffer:
     """Keeps the newest known gesture's command until it is taken once.
 
     Args:

@@ -6,8 +6,9 @@ import unittest
 
 import rospy
 import rostest
-from rbd_msgs.srv import GetLastGesture
 from std_msgs.msg import String
+
+from rbd_msgs.srv import GetLastGesture
 
 
 class TestGestrec(unittest.TestCase):

@@ -23,7 +23,7 @@ class TrickError(ValueError):
     """Raised when a tricks file or a request is invalid."""
 
 
-class Step(object):
+class Step:
     """One step of a trick, relative to the robot's pose at request time."""
 
     __slots__ = STEP_KEYS
@@ -51,7 +51,7 @@ class Step(object):
         return "Step(%s)" % ", ".join("%s=%r" % (k, getattr(self, k)) for k in STEP_KEYS)
 
 
-class Goal(object):
+class Goal:
     """An absolute goal: position [m], heading [rad], body attitude [rad] and height [m]."""
 
     __slots__ = ("name", "x", "y", "yaw", "roll", "pitch", "body_height")
@@ -121,7 +121,9 @@ def parse_step(raw: Any, where: str) -> Step:
             raise TrickError("%s.%s = %g m exceeds +-%g m" % (where, key, values[key], MAX_STEP_OFFSET))
     for key in ("roll", "pitch"):
         if abs(values[key]) > ROLL_PITCH_LIMIT:
-            raise TrickError("%s.%s = %g rad exceeds the A1 limit +-%g rad" % (where, key, values[key], ROLL_PITCH_LIMIT))
+            raise TrickError(
+                "%s.%s = %g rad exceeds the A1 limit +-%g rad" % (where, key, values[key], ROLL_PITCH_LIMIT)
+            )
     if not BODY_HEIGHT_MIN <= values["body_height"] <= BODY_HEIGHT_MAX:
         raise TrickError(
             "%s.body_height = %g m outside the A1 range [%g, %g] m"

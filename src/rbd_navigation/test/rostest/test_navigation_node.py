@@ -8,8 +8,8 @@ import unittest
 import rospy
 import rostest
 from geometry_msgs.msg import PoseStamped
-from rbd_msgs.srv import GeneratePath
 
+from rbd_msgs.srv import GeneratePath
 from rbd_navigation.tricks import quaternion_from_rpy, yaw_from_quaternion
 
 

@@ -20,7 +20,7 @@ from typing import Tuple
 Twist2D = Tuple[float, float, float]
 
 
-class Gains(object):
+class Gains:
     """Gains [1/s] and saturations [m/s, rad/s]; defaults are the thesis' Table 2."""
 
     __slots__ = ("k_x", "k_y", "k_alpha", "max_vx", "max_vy", "max_wz")
@@ -56,7 +56,7 @@ class Gains(object):
         return "Gains(%s)" % ", ".join("%s=%.3f" % (k, getattr(self, k)) for k in self.__slots__)
 
 
-class Errors(object):
+class Errors:
     """Geometric variables of Eq. 1 between a pose and a goal."""
 
     __slots__ = ("e_x", "e_y", "rho", "alpha", "gamma", "delta", "ex_robot", "ey_robot")

@@ -6,7 +6,7 @@ command. Transitions are one explicit table; the stop states zero the velocity o
 
 import enum
 import math
-from typing import Callable, Dict, List, Optional, Tuple
+from typing import Callable, Optional
 
 from rbd_pos_controller.control_law import (
     Errors,
@@ -81,7 +81,7 @@ STATUS = {
 }
 
 
-class Goal(object):
+class Goal:
     """A goal pose: position [m], heading [rad], body roll/pitch [rad], body height change [m]."""
 
     __slots__ = ("x", "y", "yaw", "roll", "pitch", "body_height")
@@ -108,7 +108,7 @@ class Goal(object):
         )
 
 
-class Params(object):
+class Params:
     """Tolerances and options of the position controller (defaults documented in the README)."""
 
     __slots__ = (
@@ -168,14 +168,14 @@ class Params(object):
         self.body_pose_settle = float(body_pose_settle)
 
 
-class GoalRejected(ValueError):
+class GoalRejectedError(ValueError):
     """Raised by set_goal when a goal cannot be accepted; the message says why."""
 
 
 ZERO = (0.0, 0.0, 0.0)  # type: Twist2D
 
 
-class PositionController(object):
+class PositionController:
     """The position controller: FSM + Eq. 1.
 
     Args:
@@ -268,17 +268,17 @@ class PositionController(object):
         """Accept a new goal (replaces a running one).
 
         Raises:
-            GoalRejected: NaN/inf values, a stop state, or no fresh pose to start from.
+            GoalRejectedError: NaN/inf values, a stop state, or no fresh pose to start from.
         """
         values = (goal.x, goal.y, goal.yaw, goal.roll, goal.pitch, goal.body_height)
         if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
-            raise GoalRejected("goal has non-finite values: %r" % (goal,))
+            raise GoalRejectedError("goal has non-finite values: %r" % (goal,))
         if self.state == State.EMERGENCY_STOP:
-            raise GoalRejected("emergency stop engaged")
+            raise GoalRejectedError("emergency stop engaged")
         if self.state == State.COLLISION_DETECTED:
-            raise GoalRejected("collision detected")
+            raise GoalRejectedError("collision detected")
         if not self.pose_fresh(now):
-            raise GoalRejected("no robot pose received within %.2f s" % self.params.pose_timeout)
+            raise GoalRejectedError("no robot pose received within %.2f s" % self.params.pose_timeout)
         x, y, _ = self._pose
         self.goal = goal
         far = math.hypot(goal.x - x, goal.y - y) >= self.params.skip_rotation_distance

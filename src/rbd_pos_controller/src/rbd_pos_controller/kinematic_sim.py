@@ -8,10 +8,10 @@ control law quickly and deterministically.
 
 import collections
 import math
-from typing import Deque, Tuple
+from typing import Tuple
 
 
-class KinematicRobot(object):
+class KinematicRobot:
     """Unicycle-with-sideways-velocity robot.
 
     Args:

@@ -9,10 +9,10 @@ import unittest
 import rospy
 import rostest
 from geometry_msgs.msg import Pose, PoseStamped, Twist, Vector3
-from rbd_msgs.srv import SetPosition
 from std_msgs.msg import Float32, String
 from std_srvs.srv import SetBool
 
+from rbd_msgs.srv import SetPosition
 from rbd_pos_controller.geometry import quaternion_from_rpy, rpy_from_quaternion
 
 PERIOD = 1.0 / 20.0  # the controller's rate
@@ -26,7 +26,7 @@ def make_pose(x, y, yaw, roll=0.0, pitch=0.0, z=0.0):
     return pose
 
 
-class Recorder(object):
+class Recorder:
     def __init__(self):
         self.lock = threading.Lock()
         self.truth = None
@@ -52,7 +52,11 @@ class Recorder(object):
     def xy_yaw(self):
         with self.lock:
             p = self.truth
-        return p.position.x, p.position.y, rpy_from_quaternion(p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w)[2]
+        return (
+            p.position.x,
+            p.position.y,
+            rpy_from_quaternion(p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w)[2],
+        )
 
 
 def wait_for(predicate, timeout, step=0.02):
@@ -69,7 +73,11 @@ class TestPosController(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node("test_pos_controller", anonymous=True)
         cls.rec = Recorder()
-        for name in ("/rbd_pos_controller/set_position", "/rbd_pos_controller/emergency", "/kinematic_robot/pause_pose"):
+        for name in (
+            "/rbd_pos_controller/set_position",
+            "/rbd_pos_controller/emergency",
+            "/kinematic_robot/pause_pose",
+        ):
             rospy.wait_for_service(name, timeout=60.0)
         cls.set_position = rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)
         cls.emergency = rospy.ServiceProxy("/rbd_pos_controller/emergency", SetBool)
@@ -126,7 +134,9 @@ class TestPosController(unittest.TestCase):
         x, y, _ = self.rec.xy_yaw()
         res = self.set_position(pose=make_pose(x - 1.0, y, math.pi))
         self.assertTrue(res.accepted)
-        self.assertTrue(wait_for(lambda: any(abs(c.angular.z) > 0.1 for c in self.last_cmd_after(time.monotonic() - 0.1)), 5.0))
+        self.assertTrue(
+            wait_for(lambda: any(abs(c.angular.z) > 0.1 for c in self.last_cmd_after(time.monotonic() - 0.1)), 5.0)
+        )
         t0 = time.monotonic()
         self.emergency(data=True)
         self.assertTrue(wait_for(lambda: self.rec.status[-1] == "emergency", 2.0))
@@ -144,7 +154,9 @@ class TestPosController(unittest.TestCase):
         x, y, yaw = self.rec.xy_yaw()
         goal = make_pose(x + 0.8 * math.cos(yaw), y + 0.8 * math.sin(yaw), yaw)
         self.assertTrue(self.set_position(pose=goal).accepted)
-        self.assertTrue(wait_for(lambda: any(abs(c.linear.x) > 0.1 for c in self.last_cmd_after(time.monotonic() - 0.1)), 5.0))
+        self.assertTrue(
+            wait_for(lambda: any(abs(c.linear.x) > 0.1 for c in self.last_cmd_after(time.monotonic() - 0.1)), 5.0)
+        )
         t0 = time.monotonic()
         self.pause(data=True)
         time.sleep(1.0)
@@ -161,7 +173,9 @@ class TestPosController(unittest.TestCase):
         self.scale_pub.publish(Float32(0.0))
         time.sleep(0.3)
         x, y, yaw = self.rec.xy_yaw()
-        self.assertTrue(self.set_position(pose=make_pose(x + 0.5 * math.cos(yaw), y + 0.5 * math.sin(yaw), yaw)).accepted)
+        self.assertTrue(
+            self.set_position(pose=make_pose(x + 0.5 * math.cos(yaw), y + 0.5 * math.sin(yaw), yaw)).accepted
+        )
         time.sleep(0.5)
         self.assert_robot_stopped()
         self.scale_pub.publish(Float32(1.0))
