@@ -12,6 +12,7 @@ def run_goals(
     goals: Sequence[Goal],
     params: Optional[Params] = None,
     drift_per_rad: float = 0.0,
+    drift_heading: float = math.pi / 2,
     latency: float = 0.08,
     rate: float = 20.0,
     pose_rate: float = 20.0,
@@ -24,7 +25,7 @@ def run_goals(
     Raises:
         RuntimeError: if the goals are not all reached within limit seconds.
     """
-    robot = KinematicRobot(latency=latency, drift_per_rad=drift_per_rad)
+    robot = KinematicRobot(latency=latency, drift_per_rad=drift_per_rad, drift_heading=drift_heading)
     ctl = PositionController(params)
     log = RunLog((0.0, 0.0, 0.0))
     log.label = label

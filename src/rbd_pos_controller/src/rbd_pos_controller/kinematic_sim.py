@@ -19,7 +19,10 @@ class KinematicRobot:
         y: start y [m].
         yaw: start heading [rad].
         latency: command latency [s] (commands take effect this much later).
-        drift_per_rad: sideways drift while turning [m per rad turned], body frame +y.
+        drift_per_rad: creep while turning [m per rad turned].
+        drift_heading: direction of the creep in the body frame [rad]: pi/2 = sideways (+y),
+            0 = forward (rbd_sim's mock A1 default; the net displacement of a half turn is then
+            sideways).
         max_v: speed limits (vx, vy, wz) [m/s, m/s, rad/s] the robot itself enforces.
     """
 
@@ -30,6 +33,7 @@ class KinematicRobot:
         yaw: float = 0.0,
         latency: float = 0.0,
         drift_per_rad: float = 0.0,
+        drift_heading: float = math.pi / 2,
         max_v: Tuple[float, float, float] = (1.0, 0.5, 2.0),
     ) -> None:
         self.x = x
@@ -38,6 +42,7 @@ class KinematicRobot:
         self.t = 0.0
         self.latency = latency
         self.drift_per_rad = drift_per_rad
+        self.drift_heading = drift_heading
         self.max_v = max_v
         self._queue = collections.deque()  # type: Deque[Tuple[float, Tuple[float, float, float]]]
         self._active = (0.0, 0.0, 0.0)
@@ -58,7 +63,9 @@ class KinematicRobot:
         while self._queue and self._queue[0][0] <= self.t + 1e-9:
             self._active = self._queue.popleft()[1]
         vx, vy, wz = self._active
-        vy = vy + self.drift_per_rad * abs(wz)
+        creep = self.drift_per_rad * abs(wz)
+        vx = vx + creep * math.cos(self.drift_heading)
+        vy = vy + creep * math.sin(self.drift_heading)
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         self.x += (c * vx - s * vy) * dt
         self.y += (s * vx + c * vy) * dt

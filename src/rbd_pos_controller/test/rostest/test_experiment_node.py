@@ -51,11 +51,16 @@ class TestExperiment(unittest.TestCase):
         rospy.set_param(NODE + "rotation_x_control", False)
         rospy.set_param(NODE + "rotation_y_control", False)
         without = run_experiment("rotation180", os.path.join(self.out, "rotation_off"), "180 deg, no position control")
+        rospy.set_param(NODE + "rotation_x_control", True)
         rospy.set_param(NODE + "rotation_y_control", True)
-        with_y = run_experiment("rotation180", os.path.join(self.out, "rotation_y"), "180 deg, y control")
-        rospy.loginfo("180 deg drift: without %.3f m, with y %.3f m", without["drift_from_start_m"], with_y["drift_from_start_m"])
+        with_pc = run_experiment("rotation180", os.path.join(self.out, "rotation_xy"), "180 deg, x+y position control")
+        rospy.loginfo(
+            "180 deg drift: without %.3f m, with position control %.3f m",
+            without["drift_from_start_m"],
+            with_pc["drift_from_start_m"],
+        )
         self.assertGreater(without["drift_from_start_m"], 0.2)  # the drift is really there
-        self.assertLessEqual(with_y["drift_from_start_m"] * 2.0, without["drift_from_start_m"])
+        self.assertLessEqual(with_pc["drift_from_start_m"] * 2.0, without["drift_from_start_m"])
 
 
 if __name__ == "__main__":
