@@ -10,7 +10,7 @@ import unittest
 import rospy
 import rostest
 from geometry_msgs.msg import PoseStamped, Twist, Vector3
-from nav_msgs.msg import Path
+from nav_msgs.msg import Odometry, Path
 from std_msgs.msg import Bool, String
 from std_srvs.srv import SetBool
 
@@ -18,6 +18,7 @@ from rbd_msgs.msg import ControllerState, PathQueue
 
 CONTROL_PERIOD = 1.0 / 20.0  # rbd_pos_controller rate
 MARGIN = 0.25  # scheduling margin for a loaded machine [s]
+STILL = 1e-3  # |velocity| below this counts as standing still [m/s, rad/s]
 
 
 def yaw_of(q):
@@ -47,8 +48,15 @@ class World:
         self.cstate = None
         self.body = None
         rospy.Subscriber("/rbd_sim/ground_truth_pose", PoseStamped, self.on_truth)
-        rospy.Subscriber("/kinematic_robot/velocity", Twist, self.on_velocity)
-        rospy.Subscriber("/kinematic_robot/body_pose", Vector3, self.on_body)
+        # ~truth: "kinematic" (test stand-in) or "mock_a1" (rbd_sim ground truth, with the
+        # mock's deceleration limits: ~stop_time allows for them).
+        self.truth_source = rospy.get_param("~truth", "kinematic")
+        self.stop_time = float(rospy.get_param("~stop_time", 0.0))
+        if self.truth_source == "mock_a1":
+            rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_odometry)
+        else:
+            rospy.Subscriber("/kinematic_robot/velocity", Twist, self.on_velocity)
+            rospy.Subscriber("/kinematic_robot/body_pose", Vector3, self.on_body)
         rospy.Subscriber("/rbd_controller/state", String, self.on_state)
         rospy.Subscriber("/rbd_pos_controller/state", String, self.on_pos_state)
         rospy.Subscriber("/rbd_controller/estop", Bool, lambda m: setattr(self, "estop", m.data))
@@ -63,6 +71,12 @@ class World:
     def on_velocity(self, msg):
         with self.lock:
             self.applied.append((time.monotonic(), msg.linear.x, msg.linear.y, msg.angular.z))
+
+    def on_odometry(self, msg):
+        q = msg.pose.pose.orientation
+        pitch = math.asin(max(-1.0, min(1.0, 2.0 * (q.w * q.y - q.z * q.x))))
+        self.body = Vector3(0.0, pitch, 0.0)
+        self.on_velocity(msg.twist.twist)
 
     def on_body(self, msg):
         self.body = msg
@@ -82,12 +96,12 @@ class World:
 
     def moving_since(self, t0):
         with self.lock:
-            return [v for v in self.applied if v[0] >= t0 and any(abs(c) > 1e-9 for c in v[1:])]
+            return [v for v in self.applied if v[0] >= t0 and any(abs(c) > STILL for c in v[1:])]
 
     def first_zero_after(self, t0):
         with self.lock:
             for v in self.applied:
-                if v[0] >= t0 and all(c == 0.0 for c in v[1:]):
+                if v[0] >= t0 and all(abs(c) <= STILL for c in v[1:]):
                     return v[0] - t0
         return None
 
@@ -133,14 +147,14 @@ class TestControlSystem(unittest.TestCase):
         self.assertTrue(wait_for(lambda: self.w.first_zero_after(t0) is not None, 2.0), label)
         delay = self.w.first_zero_after(t0)
         rospy.loginfo("%s: zero velocity at the robot %.3f s after the request", label, delay)
-        self.assertLess(delay, CONTROL_PERIOD + MARGIN, label)
+        self.assertLess(delay, CONTROL_PERIOD + MARGIN + self.w.stop_time, label)
         time.sleep(0.3)
         t1 = time.monotonic()
         x0, y0, yaw0 = self.w.pose()
         time.sleep(0.5)
         x1, y1, yaw1 = self.w.pose()
         self.assertEqual(self.w.moving_since(t1), [], label)
-        self.assertLess(math.hypot(x1 - x0, y1 - y0) + abs(yaw1 - yaw0), 1e-6, label)
+        self.assertLess(math.hypot(x1 - x0, y1 - y0) + abs(yaw1 - yaw0), 1e-3, label)
 
     def assert_back_at_start(self, start):
         x, y, yaw = self.w.pose()
@@ -176,7 +190,7 @@ class TestControlSystem(unittest.TestCase):
         self.assertEqual(self.w.queue.names[0], "out 0.45 m, turn left")
         self.assertTrue(wait_for(lambda: self.w.path is not None and len(self.w.path.poses) == 2, 2.0), "nav_msgs/Path")
         self.assertEqual(self.w.cstate.state_name, "EXECUTING")
-        self.assertAlmostEqual(self.w.body.y, 0.0, places=3)  # neutral before moving
+        self.assertTrue(wait_for(lambda: abs(self.w.body.y) < 0.02, 3.0), "neutral body before moving")
         self.wait_state("WAITING_FOR_GESTURE", 40.0)
         self.assertEqual(self.w.states[n:], ["GENERATING_PATH", "EXECUTING", "WAITING_FOR_GESTURE"])
         self.assert_back_at_start(start)
