@@ -70,8 +70,20 @@ def test_turn_180_drifts_04_when_on():
     m = turn_180(0.4)
     assert abs(abs(m.heading) - math.pi) < 0.05
     assert math.hypot(m.x, m.y) == pytest.approx(0.4, abs=0.06)
+    # Sideways to the heading the turn started from, towards the turn side (left for CCW).
+    assert m.y > 0.34 and abs(m.x) < 0.05
     # The robot's own odometry does not see the slip.
     assert math.hypot(m.odom_x, m.odom_y) < 1e-6
+
+
+def test_turn_out_and_back_adds_up_sideways():
+    m = A1Model(A1Config(drift_per_180=0.4, drift_sigma=0.0))
+    t = drive(m, lambda t: walk(wz=0.5), 0.0, math.pi / 0.5)
+    t = drive(m, lambda t: walk(), t, 0.5)
+    t = drive(m, lambda t: walk(wz=-0.5), t, math.pi / 0.5)
+    drive(m, lambda t: walk(), t, 1.0)
+    assert abs(m.heading) < 0.05
+    assert m.y == pytest.approx(0.8, abs=0.05) and abs(m.x) < 0.05
 
 
 def test_turn_180_no_drift_when_off():
@@ -172,4 +184,4 @@ def test_config_validation():
     with pytest.raises(ValueError):
         A1Config(max_vx=0.0)
     with pytest.raises(ValueError):
-        A1Config(drift_direction=0.5)
+        A1Config(drift_heading=4.0)

@@ -11,9 +11,14 @@ integrates them:
 * Mode 2 (velocity walking): velocity and yaw rate saturated to ``max_*`` and reached with the
   acceleration limits ``max_acc_*``. Modes 0/1: stand still; mode 1 tilts/lowers the body to
   euler + bodyHeight (rate limited). Modes 3..13 are not modeled: the mock holds still.
-* Imperfection (thesis §4.3): in-place rotation makes the body slip sideways. The slip is a
-  body-frame lateral velocity ``k * |yaw rate|`` with ``k = drift_per_180 / 2`` (a constant body
-  lateral slip integrated over a half turn moves the robot by ``2 k``), scaled once per run by
+* Imperfection (thesis §4.3): an in-place 180 deg turn leaves the robot about 0.4 m off the spot,
+  sideways to its path. Modeled as a creep velocity fixed in the body frame,
+  ``k * |yaw rate| * (cos(drift_heading), sin(drift_heading))`` with ``k = drift_per_180 / 2``:
+  integrated over a half turn it moves the robot by ``2 k``. With the default
+  ``drift_heading = 0`` (the trot creeps forward while turning) the net displacement of a
+  half turn is perpendicular to the heading the turn started from, towards the turn side (left
+  for a counter-clockwise turn), so a turn out and a turn back (the thesis loop) add up to a
+  sideways offset, as in thesis Fig. 16. ``k`` is scaled once per run by
   ``1 + drift_sigma * N(0, 1)`` from the seeded RNG. ``drift_per_180 = 0`` turns it off.
 
 Ground truth (``pose()``) includes the slip; the robot's own odometry (``HighState.position``)
@@ -42,7 +47,7 @@ class A1Config:
         max_acc_wz: float = 4.0,
         drift_per_180: float = 0.4,
         drift_sigma: float = 0.05,
-        drift_direction: float = 1.0,
+        drift_heading: float = 0.0,
         attitude_rate: float = 1.5,
         height_rate: float = 0.3,
         max_roll: float = 0.75,
@@ -68,8 +73,8 @@ class A1Config:
                 raise ValueError("%s must be > 0, got %r" % (name, values[name]))
         if drift_per_180 < 0.0 or drift_sigma < 0.0:
             raise ValueError("drift_per_180 and drift_sigma must be >= 0")
-        if drift_direction not in (-1.0, 1.0):
-            raise ValueError("drift_direction must be +1 (left) or -1 (right)")
+        if abs(drift_heading) > math.pi:
+            raise ValueError("drift_heading must be in [-pi, pi] rad")
         for name, value in values.items():
             setattr(self, name, float(value) if name != "seed" else int(value))
 
@@ -112,11 +117,11 @@ class A1Model:
     def __init__(self, config: A1Config = None, now: float = 0.0) -> None:
         self.config = c = config if config is not None else A1Config()
         rng = random.Random(c.seed)
-        self.drift_gain = c.drift_direction * c.drift_per_180 / 2.0 * max(0.0, 1.0 + c.drift_sigma * rng.gauss(0, 1))
+        self.drift_gain = c.drift_per_180 / 2.0 * max(0.0, 1.0 + c.drift_sigma * rng.gauss(0, 1))
         # Ground truth of the locomotion frame (feet) and the body pose on top of it.
         self.x, self.y, self.heading = c.x0, c.y0, c.yaw0
         self.vx = self.vy = self.wz = 0.0  # commanded part, body frame [m/s, rad/s]
-        self.slip_vy = 0.0  # the drift's lateral velocity [m/s]
+        self.slip = (0.0, 0.0)  # the drift's creep velocity in the body frame [m/s]
         self.roll = self.pitch = self.body_yaw = 0.0  # body attitude relative to the feet [rad]
         self.dheight = 0.0  # body height change from nominal [m]
         self.rates = (0.0, 0.0, 0.0)  # roll, pitch, body-yaw rates [rad/s]
@@ -199,7 +204,8 @@ class A1Model:
         self.vy = _toward(self.vy, tvy, c.max_acc_y * dt)
         self.wz = _toward(self.wz, twz, c.max_acc_wz * dt)
         self.acc = ((self.vx - vx0) / dt, (self.vy - vy0) / dt)
-        self.slip_vy = self.drift_gain * abs(self.wz)
+        creep = self.drift_gain * abs(self.wz)
+        self.slip = (creep * math.cos(c.drift_heading), creep * math.sin(c.drift_heading))
         old = (self.roll, self.pitch, self.body_yaw, self.dheight)
         self.roll = _toward(self.roll, troll, c.attitude_rate * dt)
         self.pitch = _toward(self.pitch, tpitch, c.attitude_rate * dt)
@@ -209,9 +215,9 @@ class A1Model:
         self.dheight_rate = (self.dheight - old[3]) / dt
         mid = self.heading + 0.5 * self.wz * dt
         cm, sm = math.cos(mid), math.sin(mid)
-        vy_true = self.vy + self.slip_vy
-        self.x += (self.vx * cm - vy_true * sm) * dt
-        self.y += (self.vx * sm + vy_true * cm) * dt
+        vx_true, vy_true = self.vx + self.slip[0], self.vy + self.slip[1]
+        self.x += (vx_true * cm - vy_true * sm) * dt
+        self.y += (vx_true * sm + vy_true * cm) * dt
         # Own odometry: leg odometry without the slip, heading from the IMU (true).
         mo = mid - self.config.yaw0
         self.odom_x += (self.vx * math.cos(mo) - self.vy * math.sin(mo)) * dt
@@ -233,7 +239,7 @@ class A1Model:
 
     def twist(self) -> tuple:
         """Ground truth (vx, vy, vz, wx, wy, wz) in the body frame (roll/pitch ignored for velocity)."""
-        return (self.vx, self.vy + self.slip_vy, self.dheight_rate, self.rates[0], self.rates[1],
+        return (self.vx + self.slip[0], self.vy + self.slip[1], self.dheight_rate, self.rates[0], self.rates[1],
                 self.wz + self.rates[2])
 
     def high_state(self) -> ul.HighState:

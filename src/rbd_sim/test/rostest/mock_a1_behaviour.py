@@ -92,6 +92,7 @@ class MockA1Behaviour(unittest.TestCase):
         while time.monotonic() - t0 < duration:
             self.pub.publish(msg)
             time.sleep(1.0 / RATE)
+        return self.gt.get()
 
     def settle(self, timeout=5.0):
         """Wait until the ground truth has not moved for 0.3 s; return the pose."""
@@ -127,8 +128,7 @@ class MockA1Behaviour(unittest.TestCase):
 
     def test_2_no_cmd_vel_for_025s_stops(self):
         self.settle()
-        self.send(twist(0.3), 1.0)
-        at_last = self.gt.get()
+        at_last = self.send(twist(0.3), 1.0)
         t_last = time.monotonic()
         time.sleep(1.0)
         stopped = self.gt.get()
