@@ -130,7 +130,7 @@ class A1Model:
         # The robot's own odometry (no slip), in its power-up frame.
         self.odom_x = self.odom_y = 0.0
         # Command pipeline.
-        self._pending = collections.deque()
+        self._pending = collections.deque(maxlen=4096)  # bounded even if step() is starved
         self._active = None  # (arrival time, HighCmd)
         self.time = now
         self.rejected = 0
