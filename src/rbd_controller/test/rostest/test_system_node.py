@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""rostest: the control nodes together on the kinematic robot (ground truth = its integrated pose)."""
+"""rostest: the control nodes together on rbd_sim's mock A1 + rbd_a1_driver, measured on ground truth."""
 
 import math
 import subprocess
@@ -9,7 +9,7 @@ import unittest
 
 import rospy
 import rostest
-from geometry_msgs.msg import PoseStamped, Twist, Vector3
+from geometry_msgs.msg import PoseStamped, Vector3
 from nav_msgs.msg import Odometry, Path
 from std_msgs.msg import Bool, String
 from std_srvs.srv import SetBool
@@ -48,15 +48,9 @@ class World:
         self.cstate = None
         self.body = None
         rospy.Subscriber("/rbd_sim/ground_truth_pose", PoseStamped, self.on_truth)
-        # ~truth: "kinematic" (test stand-in) or "mock_a1" (rbd_sim ground truth, with the
-        # mock's deceleration limits: ~stop_time allows for them).
-        self.truth_source = rospy.get_param("~truth", "kinematic")
-        self.stop_time = float(rospy.get_param("~stop_time", 0.0))
-        if self.truth_source == "mock_a1":
-            rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_odometry)
-        else:
-            rospy.Subscriber("/kinematic_robot/velocity", Twist, self.on_velocity)
-            rospy.Subscriber("/kinematic_robot/body_pose", Vector3, self.on_body)
+        # ~stop_time allows for the mock A1's deceleration limits when judging "stopped in time".
+        self.stop_time = float(rospy.get_param("~stop_time", 0.4))
+        rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_odometry)
         rospy.Subscriber("/rbd_controller/state", String, self.on_state)
         rospy.Subscriber("/rbd_pos_controller/state", String, self.on_pos_state)
         rospy.Subscriber("/rbd_controller/estop", Bool, lambda m: setattr(self, "estop", m.data))
@@ -77,9 +71,6 @@ class World:
         pitch = math.asin(max(-1.0, min(1.0, 2.0 * (q.w * q.y - q.z * q.x))))
         self.body = Vector3(0.0, pitch, 0.0)
         self.on_velocity(msg.twist.twist)
-
-    def on_body(self, msg):
-        self.body = msg
 
     def on_state(self, msg):
         with self.lock:

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""rostest: run_experiment on a drifting robot; thesis path and 180 deg with/without position control.
+"""rostest: run_experiment on the mock A1 (drift on); thesis path, 180 deg with/without position control.
 
 Thresholds are the issue's goals. Set RBD_EXPERIMENT_OUT to keep the JSON/PNG output.
 """
@@ -64,4 +64,4 @@ class TestExperiment(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_pos_controller", "experiment_kinematic", TestExperiment)
+    rostest.rosrun("rbd_pos_controller", "experiment_mock_a1", TestExperiment)
