@@ -234,7 +234,8 @@ class World(object):
     # -- snapshots ----------------------------------------------------------------------------
     def dynamic_cylinders(self, t: float) -> list:
         """People at time t [s] since the epoch, then placed obstacles."""
-        return [p.cylinder(t) for p in self.people] + [self.placed[k] for k in sorted(self.placed)]
+        placed = self.placed  # one read: another thread may swap the dict
+        return [p.cylinder(t) for p in self.people] + [placed[k] for k in sorted(placed)]
 
     def all_cylinders(self, t: float) -> list:
         """Static cylinders, people at time t and placed obstacles."""
