@@ -129,18 +129,19 @@ class Raycaster(object):
                 ry.ix = _F32(1.0) / ry.dx
                 ry.iy = _F32(1.0) / ry.dy
             ry.axy = ry.dx * ry.dx + ry.dy * ry.dy
-            azc, margin = self._nominal_azimuths(ry)
+            cols = _Columns(*self._nominal_azimuths(ry))
             spread = float(np.max(np.hypot(ow[:, 0] - t[0], ow[:, 1] - t[1]))) + 0.01
             centre = ow.mean(axis=0)
             nb = len(boxes)
-            for k, prim in enumerate(prims):
-                pid = np.int16(FIRST_PRIMITIVE_ID + k)
-                for sl in _sectors(prim, t, azc, margin, spread, max_range):
-                    bv = best[:, sl]
-                    if k < nb:
-                        _box(prim, ry, sl, centre, bv, hit[:, sl], pid)
-                    else:
-                        _cylinder(prim, ry, sl, bv, hit[:, sl], pid)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                for k, prim in enumerate(prims):
+                    pid = np.int16(FIRST_PRIMITIVE_ID + k)
+                    for sl in _sectors(prim, t, cols, spread, max_range):
+                        bv = best[:, sl]
+                        if k < nb:
+                            _box(prim, ry, sl, centre, bv, hit[:, sl], pid)
+                        else:
+                            _cylinder(prim, ry, sl, bv, hit[:, sl], pid)
         far = best > _F32(max_range)
         best[far] = np.inf
         hit[far] = NO_HIT
@@ -158,32 +159,83 @@ class Raycaster(object):
         return azc, margin
 
 
-def _sectors(prim: object, t: np.ndarray, azc: np.ndarray, margin: float, spread: float, max_range: float) -> list:
-    """Column slices whose rays may hit prim (at most two because of wrap-around)."""
-    ddx, ddy = prim.cx - t[0], prim.cy - t[1]
-    d = math.hypot(ddx, ddy)
-    rho = prim.bounding_radius() + spread
-    if d - rho > max_range:
-        return []
-    if d <= rho * 1.05 + 0.05:
-        return [slice(None)]
-    half = math.asin(min(1.0, rho / d)) + margin
-    if half >= math.pi:
-        return [slice(None)]
-    diff = np.abs((azc - math.atan2(ddy, ddx) + math.pi) % _TWO_PI - math.pi)
-    idx = np.flatnonzero(diff <= half)
+class _Columns(object):
+    """Maps world azimuth intervals to column slices for one cast (internal).
+
+    Nominal column azimuths decrease with the column index (the OS1 turns clockwise); negated
+    and unwrapped they increase, so an interval maps to column slices by binary search.
+    """
+
+    def __init__(self, azc: np.ndarray, margin: float) -> None:
+        self.azc = azc
+        self.margin = margin
+        self.inc = np.unwrap(-azc)
+        self.w = azc.size
+        self.monotonic = bool(np.all(np.diff(self.inc) > 0)) and self.inc[-1] - self.inc[0] < _TWO_PI
+
+    def slices(self, mid: float, half: float) -> list:
+        """Column slices whose nominal azimuth is within half (+ margin) of mid [rad]."""
+        half += self.margin
+        if half >= math.pi:
+            return [slice(None)]
+        if not self.monotonic:  # extreme tilt: fall back to a mask
+            diff = np.abs((self.azc - mid + math.pi) % _TWO_PI - math.pi)
+            idx = np.flatnonzero(diff <= half)
+            return _runs(idx)
+        inc, w = self.inc, self.w
+        x = inc[0] + (-mid - inc[0]) % _TWO_PI
+        lo, hi = x - half, x + half
+        out = []
+        i0, i1 = int(np.searchsorted(inc, lo, "left")), int(np.searchsorted(inc, hi, "right"))
+        if i1 > i0:
+            out.append(slice(i0, i1))
+        if lo < inc[0]:
+            j = int(np.searchsorted(inc, lo + _TWO_PI, "left"))
+            if j < w:
+                out.append(slice(j, w))
+        if hi - _TWO_PI >= inc[0]:
+            j = int(np.searchsorted(inc, hi - _TWO_PI, "right"))
+            if j > 0:
+                out.append(slice(0, j))
+        return out
+
+
+def _runs(idx: np.ndarray) -> list:
+    """Contiguous runs of sorted indices as slices."""
     if idx.size == 0:
         return []
-    if idx[-1] - idx[0] + 1 == idx.size:
-        return [slice(int(idx[0]), int(idx[-1]) + 1)]
-    gaps = np.flatnonzero(np.diff(idx) > 1)
-    out = []
-    start = 0
-    for g in gaps:
-        out.append(slice(int(idx[start]), int(idx[g]) + 1))
-        start = g + 1
-    out.append(slice(int(idx[start]), int(idx[-1]) + 1))
-    return out
+    cuts = np.flatnonzero(np.diff(idx) > 1)
+    starts = [0] + [int(c) + 1 for c in cuts]
+    ends = [int(c) for c in cuts] + [idx.size - 1]
+    return [slice(int(idx[a]), int(idx[b]) + 1) for a, b in zip(starts, ends)]
+
+
+def _sectors(prim: object, t: np.ndarray, cols: _Columns, spread: float, max_range: float) -> list:
+    """Column slices whose rays may hit prim."""
+    ddx, ddy = prim.cx - t[0], prim.cy - t[1]
+    d = math.hypot(ddx, ddy)
+    if d - prim.bounding_radius() - spread > max_range:
+        return []
+    a0 = math.atan2(ddy, ddx)
+    if hasattr(prim, "hx"):  # box: exact angular span of its footprint corners
+        c, s = math.cos(prim.yaw), math.sin(prim.yaw)
+        # Sensor in the box frame; inside the (grown) footprint means every column.
+        u = c * (t[0] - prim.cx) + s * (t[1] - prim.cy)
+        v = -s * (t[0] - prim.cx) + c * (t[1] - prim.cy)
+        hx, hy = prim.hx + spread, prim.hy + spread
+        if abs(u) <= hx * 1.01 + 0.02 and abs(v) <= hy * 1.01 + 0.02:
+            return [slice(None)]
+        rel = []
+        for sx, sy in ((hx, hy), (hx, -hy), (-hx, -hy), (-hx, hy)):
+            px = prim.cx + c * sx - s * sy - t[0]
+            py = prim.cy + s * sx + c * sy - t[1]
+            rel.append((math.atan2(py, px) - a0 + math.pi) % _TWO_PI - math.pi)
+        lo, hi = min(rel), max(rel)
+        return cols.slices(a0 + 0.5 * (lo + hi), 0.5 * (hi - lo))
+    rho = prim.bounding_radius() + spread
+    if d <= rho * 1.05 + 0.05:
+        return [slice(None)]
+    return cols.slices(a0, math.asin(min(1.0, rho / d)))
 
 
 def _aligned(b: object) -> tuple:
@@ -210,8 +262,7 @@ def _box(b: object, ry: _Rays, sl: slice, t: np.ndarray, bv: np.ndarray, hv: np.
         px, py = c * px + s * py, c * py - s * px
         dx, dy = ry.dx[:, sl], ry.dy[:, sl]
         ex, ey = c * dx + s * dy, c * dy - s * dx
-        with np.errstate(divide="ignore"):
-            ix, iy = _F32(1.0) / ex, _F32(1.0) / ey
+        ix, iy = _F32(1.0) / ex, _F32(1.0) / ey
         cs, sn = math.cos(b.yaw), math.sin(b.yaw)
         sx = cs * (t[0] - b.cx) + sn * (t[1] - b.cy)
         sy = cs * (t[1] - b.cy) - sn * (t[0] - b.cx)
@@ -225,18 +276,17 @@ def _box(b: object, ry: _Rays, sl: slice, t: np.ndarray, bv: np.ndarray, hv: np.
         (sy, hy, py, iy, (px, ex, hx32), (pz, dz, hz32)),
         (sz, hz, pz, iz, (px, ex, hx32), (py, ey, hy32)),
     )
-    with np.errstate(invalid="ignore", over="ignore"):
-        for s_coord, half, p, inv, (pa, ea, ha), (pb, eb, hb) in faces:
-            if abs(s_coord) <= half:
-                continue  # the sensor lies between these two faces: neither looks at it
-            plane = _F32(half if s_coord > 0 else -half)
-            tf = (plane - p) * inv
-            ok = np.abs(pa + tf * ea) <= ha
-            ok &= np.abs(pb + tf * eb) <= hb
-            ok &= tf > 0
-            ok &= tf < bv
-            np.copyto(bv, tf, where=ok)
-            np.copyto(hv, pid, where=ok)
+    for s_coord, half, p, inv, (pa, ea, ha), (pb, eb, hb) in faces:
+        if abs(s_coord) <= half:
+            continue  # the sensor lies between these two faces: neither looks at it
+        plane = _F32(half if s_coord > 0 else -half)
+        tf = (plane - p) * inv
+        ok = np.abs(pa + tf * ea) <= ha
+        ok &= np.abs(pb + tf * eb) <= hb
+        ok &= tf > 0
+        ok &= tf < bv
+        np.copyto(bv, tf, where=ok)
+        np.copyto(hv, pid, where=ok)
 
 
 def _cylinder(cyl: object, ry: _Rays, sl: slice, bv: np.ndarray, hv: np.ndarray, pid: np.int16) -> None:
@@ -249,25 +299,24 @@ def _cylinder(cyl: object, ry: _Rays, sl: slice, bv: np.ndarray, hv: np.ndarray,
     b = dx * px + dy * py
     c = px * px + py * py - r2
     disc = b * b - axy * c
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        sq = np.sqrt(np.maximum(disc, _F32(0.0)))
-        tn = -(b + sq) / axy
-        if np.any(c < 0):  # an origin inside the cylinder sees its inner wall
-            tn = np.where(tn > 0, tn, (sq - b) / axy)
-        z = oz + tn * dz
-        ok = disc >= 0
-        ok &= tn > 0
-        ok &= z >= _F32(cyl.z0)
-        ok &= z <= _F32(cyl.z1)
-        ok &= tn < bv
-        np.copyto(bv, tn, where=ok)
-        np.copyto(hv, pid, where=ok)
-        oz_max, oz_min = float(oz.max()), float(oz.min())
-        for cap in (cyl.z1, cyl.z0):
-            if (cap == cyl.z1 and oz_max <= cap) or (cap == cyl.z0 and oz_min >= cap):
-                continue
-            tc = (_F32(cap) - oz) * ry.iz[:, sl]
-            qx, qy = px + tc * dx, py + tc * dy
-            okc = (tc > 0) & (qx * qx + qy * qy <= r2) & (tc < bv)
-            np.copyto(bv, tc, where=okc)
-            np.copyto(hv, pid, where=okc)
+    sq = np.sqrt(np.maximum(disc, _F32(0.0)))
+    tn = -(b + sq) / axy
+    if np.any(c < 0):  # an origin inside the cylinder sees its inner wall
+        tn = np.where(tn > 0, tn, (sq - b) / axy)
+    z = oz + tn * dz
+    ok = disc >= 0
+    ok &= tn > 0
+    ok &= z >= _F32(cyl.z0)
+    ok &= z <= _F32(cyl.z1)
+    ok &= tn < bv
+    np.copyto(bv, tn, where=ok)
+    np.copyto(hv, pid, where=ok)
+    oz_max, oz_min = float(oz.max()), float(oz.min())
+    for cap in (cyl.z1, cyl.z0):
+        if (cap == cyl.z1 and oz_max <= cap) or (cap == cyl.z0 and oz_min >= cap):
+            continue
+        tc = (_F32(cap) - oz) * ry.iz[:, sl]
+        qx, qy = px + tc * dx, py + tc * dy
+        okc = (tc > 0) & (qx * qx + qy * qy <= r2) & (tc < bv)
+        np.copyto(bv, tc, where=okc)
+        np.copyto(hv, pid, where=okc)
