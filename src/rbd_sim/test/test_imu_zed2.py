@@ -75,7 +75,7 @@ def test_zed2_same_seed_same_output_different_seed_differs():
 
 def test_zed2_all_off_is_exact():
     m = Zed2Model(0, 0, 0, 0, 0, 0, jump_rate=0.0, seed=1)
-    for pos, rpy, jumped in run_zed(m, seconds=5, speed=0.5, turn=0.3):
+    for _pos, _rpy, jumped in run_zed(m, seconds=5, speed=0.5, turn=0.3):
         assert not jumped
     est = m.step(0.1, (1.0, 2.0, 0.3), (0.01, 0.02, 0.5))
     assert est.position == pytest.approx((1.0, 2.0, 0.3))
@@ -91,8 +91,10 @@ def test_zed2_drift_grows_with_distance_as_modelled():
         finals.append(pos[1])  # lateral error (true y = 0)
     std = float(np.std(finals))
     assert std == pytest.approx(0.03 * math.sqrt(18.0), rel=0.25)
-    standing = [run_zed(Zed2Model(noise_pos_std=0.0, drift_per_m=0.03, drift_per_s=0.0, jump_rate=0.0, seed=s))[-1][0][1]
-                for s in range(20)]
+    standing = [
+        run_zed(Zed2Model(noise_pos_std=0.0, drift_per_m=0.03, drift_per_s=0.0, jump_rate=0.0, seed=s))[-1][0][1]
+        for s in range(20)
+    ]
     assert max(abs(v) for v in standing) < 1e-12  # no motion, no time drift: no drift
 
 
@@ -101,8 +103,17 @@ def test_zed2_jump_statistics():
     counts = []
     sizes = []
     for seed in range(runs):
-        m = Zed2Model(noise_pos_std=0.0, drift_per_m=0.0, drift_per_s=0.0, yaw_drift_per_s=0.0, jump_rate=rate,
-                      jump_reset_prob=0.0, jump_min=0.1, jump_max=0.3, seed=seed)
+        m = Zed2Model(
+            noise_pos_std=0.0,
+            drift_per_m=0.0,
+            drift_per_s=0.0,
+            yaw_drift_per_s=0.0,
+            jump_rate=rate,
+            jump_reset_prob=0.0,
+            jump_min=0.1,
+            jump_max=0.3,
+            seed=seed,
+        )
         prev = None
         for pos, _rpy, jumped in run_zed(m, seconds=seconds):
             if jumped and prev is not None:

@@ -31,8 +31,16 @@ def test_packed_layout(columns, hz):
     assert len(data) == 48 * 32 * columns
     assert os1.POINT_STEP == 48
     assert [f[:2] for f in os1.POINT_FIELDS] == [
-        ("x", 0), ("y", 4), ("z", 8), ("intensity", 16), ("t", 20), ("reflectivity", 24), ("ring", 26),
-        ("ambient", 28), ("range", 32)]
+        ("x", 0),
+        ("y", 4),
+        ("z", 8),
+        ("intensity", 16),
+        ("t", 20),
+        ("reflectivity", 24),
+        ("ring", 26),
+        ("ambient", 28),
+        ("range", 32),
+    ]
     assert [f[2] for f in os1.POINT_FIELDS] == [7, 7, 7, 7, 6, 4, 4, 4, 6]
     for row, col in ((0, 0), (17, columns // 2), (31, columns - 1)):
         off = (row * columns + col) * 48
@@ -43,7 +51,7 @@ def test_packed_layout(columns, hz):
         assert t == pytest.approx(col * 1e9 / (hz * columns), abs=1)
         # xyz is what ouster-sdk's LUT gives for this range: |p - beam origin| = range - n
         assert math.isfinite(x) and math.isfinite(y) and math.isfinite(z)
-        assert data[off + 36:off + 48] == b"\0" * 12 and data[off + 30:off + 32] == b"\0\0"
+        assert data[off + 36 : off + 48] == b"\0" * 12 and data[off + 30 : off + 32] == b"\0\0"
 
 
 def test_unsupported_modes_rejected():
@@ -71,7 +79,7 @@ def test_box_in_front_and_noise_bounds():
     clean = os1.Os1Model(META, 1024, 10, range_noise_std=0.0, seed=2)
     a = m.scan(*LEVEL, hall(), 0.0)
     b = clean.scan(*LEVEL, hall(), 0.0)
-    diff = (a.range_mm.astype(np.int64) - b.range_mm.astype(np.int64))
+    diff = a.range_mm.astype(np.int64) - b.range_mm.astype(np.int64)
     assert np.abs(diff).max() <= 31
     assert 6 < diff.std() < 14
     row = 15  # +0.18 deg

@@ -65,7 +65,9 @@ def test_matches_brute_force_reference(columns, world_name, worlds_dir):
         trans = np.array([rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.2, 0.5)])
         cyl = world.all_cylinders(k * 3.7)
         res = model.raycaster.cast(rot, trans, world.floor_z, world.ceiling_z, world.boxes, cyl, 120.0)
-        ref = reference_cast(model.directions, model.origins, rot, trans, world.floor_z, world.ceiling_z, world.boxes, cyl)
+        ref = reference_cast(
+            model.directions, model.origins, rot, trans, world.floor_z, world.ceiling_z, world.boxes, cyl
+        )
         both = np.isfinite(ref) & np.isfinite(res.dist)
         mismatch = np.isfinite(ref) != np.isfinite(res.dist)
         assert mismatch.mean() < 1e-3

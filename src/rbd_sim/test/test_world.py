@@ -45,8 +45,15 @@ def test_unknown_world_name_lists_known(worlds_dir):
         ({"people": [{"name": "p", "path": []}]}, "non-empty list"),
         ({"people": [{"name": "p", "path": [[0, "a"]]}]}, "finite number"),
         ({"tables": [{"center": [0, 0], "size": [1, 1], "height": "tall"}]}, "height.*finite number"),
-        ({"boxes": [{"name": "a", "center": [0, 0], "size": [1, 1, 1]}, {"name": "a", "center": [2, 0], "size": [1, 1, 1]}]},
-         "duplicate name"),
+        (
+            {
+                "boxes": [
+                    {"name": "a", "center": [0, 0], "size": [1, 1, 1]},
+                    {"name": "a", "center": [2, 0], "size": [1, 1, 1]},
+                ]
+            },
+            "duplicate name",
+        ),
         ({"floor": {"height": 0}}, "floor: unknown key"),
         ([1, 2], "top level must be a mapping"),
         ({"walls": [{"from": [0, 0], "to": [0, 0]}]}, "zero length"),
@@ -101,8 +108,10 @@ def test_people_move_deterministically(worlds_dir):
     b = load_world(resolve_world_path("lab", worlds_dir))
     for t in (0.0, 1.3, 17.9):
         assert [(c.cx, c.cy) for c in a.dynamic_cylinders(t)] == [(c.cx, c.cy) for c in b.dynamic_cylinders(t)]
-    assert a.dynamic_cylinders(0.0)[0].cx != a.dynamic_cylinders(2.0)[0].cx or \
-        a.dynamic_cylinders(0.0)[0].cy != a.dynamic_cylinders(2.0)[0].cy
+    assert (
+        a.dynamic_cylinders(0.0)[0].cx != a.dynamic_cylinders(2.0)[0].cx
+        or a.dynamic_cylinders(0.0)[0].cy != a.dynamic_cylinders(2.0)[0].cy
+    )
 
 
 def test_place_move_remove():
@@ -119,8 +128,13 @@ def test_place_move_remove():
 
 @pytest.mark.parametrize(
     "args, match",
-    [(("", 0, 0, 0.3, 1), "name"), (("p", float("nan"), 0, 0.3, 1), "finite"), (("p", 0, 0, 0.0, 1), "> 0"),
-     (("p", 0, 0, 0.3, -1), "> 0"), (("p", 0, 0, 50.0, 1), "radius <= 5")],
+    [
+        (("", 0, 0, 0.3, 1), "name"),
+        (("p", float("nan"), 0, 0.3, 1), "finite"),
+        (("p", 0, 0, 0.0, 1), "> 0"),
+        (("p", 0, 0, 0.3, -1), "> 0"),
+        (("p", 0, 0, 50.0, 1), "radius <= 5"),
+    ],
 )
 def test_place_rejects_bad_values(args, match):
     w = world_from_dict({})

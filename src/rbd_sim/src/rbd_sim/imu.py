@@ -16,7 +16,7 @@ ACCEL_COVARIANCE_DIAG = 0.01
 GYRO_COVARIANCE_DIAG = 6e-4
 
 
-class ImuModel(object):
+class ImuModel:
     """Accelerometer + gyroscope with constant bias, bias random walk and white noise.
 
     Args:
@@ -75,7 +75,7 @@ class ImuModel(object):
         return accel, gyro
 
 
-class AccelerationEstimator(object):
+class AccelerationEstimator:
     """World-frame acceleration from successive velocity samples (finite difference + low-pass).
 
     Args:

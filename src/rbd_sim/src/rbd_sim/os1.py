@@ -22,7 +22,7 @@ import os
 
 import numpy as np
 
-from rbd_sim.raycast import FIRST_PRIMITIVE_ID, NO_HIT, Raycaster
+from rbd_sim.raycast import FIRST_PRIMITIVE_ID, Raycaster
 
 VALID_COLUMNS = (512, 1024, 2048)
 VALID_HZ = (10, 20)
@@ -95,7 +95,7 @@ def transform_mm_to_m(values: list) -> np.ndarray:
     return t
 
 
-class Scan(object):
+class Scan:
     """One simulated scan, destaggered, as (H, W) images (row 0 = top beam).
 
     Attributes:
@@ -118,7 +118,7 @@ class Scan(object):
         return out
 
 
-class Os1Model(object):
+class Os1Model:
     """Beam geometry, noise and scan synthesis of an OS1.
 
     Args:
@@ -256,7 +256,11 @@ class Os1Model(object):
         refl[~valid] = 0
         if self._dest_cols is not None:
             rows = np.arange(h)[:, None]
-            range_mm, refl, hit = range_mm[rows, self._dest_cols], refl[rows, self._dest_cols], hit[rows, self._dest_cols]
+            range_mm, refl, hit = (
+                range_mm[rows, self._dest_cols],
+                refl[rows, self._dest_cols],
+                hit[rows, self._dest_cols],
+            )
         scan = Scan()
         scan.range_mm, scan.reflectivity, scan.hit = range_mm, refl, hit
         scan.lut = self._lut if self._dest_cols is None else self._destaggered_lut()

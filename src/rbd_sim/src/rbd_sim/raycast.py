@@ -29,7 +29,7 @@ _TWO_PI = 2.0 * math.pi
 _F32 = np.float32
 
 
-class CastResult(object):
+class CastResult:
     """Output of :meth:`Raycaster.cast`.
 
     Attributes:
@@ -45,13 +45,13 @@ class CastResult(object):
         self.dist, self.hit, self.primitives = dist, hit, primitives
 
 
-class _Rays(object):
+class _Rays:
     """World-frame ray arrays of one cast (internal)."""
 
     __slots__ = ("dx", "dy", "dz", "ix", "iy", "iz", "axy", "ox", "oy", "oz")
 
 
-class Raycaster(object):
+class Raycaster:
     """Casts a fixed fan of rays against world primitives.
 
     Args:
@@ -159,7 +159,7 @@ class Raycaster(object):
         return azc, margin
 
 
-class _Columns(object):
+class _Columns:
     """Maps world azimuth intervals to column slices for one cast (internal).
 
     Nominal column azimuths decrease with the column index (the OS1 turns clockwise); negated

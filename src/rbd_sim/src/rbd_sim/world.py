@@ -44,7 +44,7 @@ class WorldError(ValueError):
     """A world file or a world request is invalid; the message says where and why."""
 
 
-class Box(object):
+class Box:
     """A box standing on z0 with a yaw about the vertical axis.
 
     Attributes:
@@ -80,7 +80,7 @@ class Box(object):
         return math.hypot(self.hx, self.hy)
 
 
-class Cylinder(object):
+class Cylinder:
     """A vertical cylinder (person, pillar, placed obstacle).
 
     Attributes:
@@ -116,7 +116,7 @@ class Cylinder(object):
         return self.radius
 
 
-class Person(object):
+class Person:
     """A person walking a scripted polyline at constant speed.
 
     Args:
@@ -174,7 +174,7 @@ class Person(object):
         return Cylinder(self.name, x, y, self.radius, 0.0, self.height, self.reflectivity, "person")
 
 
-class World(object):
+class World:
     """Static geometry, scripted people and run-time obstacles.
 
     Attributes:
@@ -214,7 +214,9 @@ class World(object):
         if radius <= 0.0 or height <= 0.0:
             raise WorldError("place_obstacle %r: radius and height must be > 0 (got %g, %g)" % (name, radius, height))
         if radius > 5.0 or height > 10.0:
-            raise WorldError("place_obstacle %r: radius <= 5 m and height <= 10 m (got %g, %g)" % (name, radius, height))
+            raise WorldError(
+                "place_obstacle %r: radius <= 5 m and height <= 10 m (got %g, %g)" % (name, radius, height)
+            )
         result = "moved" if name in self.placed else "added"
         self.placed[name] = Cylinder(
             name, x, y, radius, self.floor_z, self.floor_z + height, DEFAULT_REFLECTIVITY["placed"], "placed"
@@ -256,7 +258,9 @@ def resolve_world_path(name: str, worlds_dir: str) -> str:
     else:
         path = os.path.join(worlds_dir, name + ".yaml")
     if not os.path.isfile(path):
-        known = sorted(f[:-5] for f in os.listdir(worlds_dir) if f.endswith(".yaml")) if os.path.isdir(worlds_dir) else []
+        known = (
+            sorted(f[:-5] for f in os.listdir(worlds_dir) if f.endswith(".yaml")) if os.path.isdir(worlds_dir) else []
+        )
         raise WorldError("world %r: file %s not found (known worlds: %s)" % (name, path, ", ".join(known) or "none"))
     return path
 
@@ -271,7 +275,7 @@ def load_world(path: str) -> World:
         with open(path) as f:
             data = yaml.safe_load(f)
     except (OSError, yaml.YAMLError) as e:
-        raise WorldError("%s: cannot read world file: %s" % (path, e))
+        raise WorldError("%s: cannot read world file: %s" % (path, e)) from e
     return world_from_dict(data, path)
 
 
@@ -334,7 +338,9 @@ def _add_wall(world: World, e: dict, ctx: str, floor: float, name: str, refl: fl
     height = _num(e.get("height", 2.5), ctx + ".height", lo=0.01)
     z = floor + _num(e.get("z", 0.0), ctx + ".z")
     world.boxes.append(
-        Box(name, (ax + bx) / 2, (ay + by) / 2, length / 2, thick / 2, z, z + height, math.atan2(by - ay, bx - ax), refl)
+        Box(
+            name, (ax + bx) / 2, (ay + by) / 2, length / 2, thick / 2, z, z + height, math.atan2(by - ay, bx - ax), refl
+        )
     )
 
 

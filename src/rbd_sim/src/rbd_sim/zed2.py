@@ -20,7 +20,7 @@ import numpy as np
 from rbd_sim.transforms import wrap_angle
 
 
-class ZedPose(object):
+class ZedPose:
     """One estimated pose.
 
     Attributes:
@@ -33,7 +33,7 @@ class ZedPose(object):
     __slots__ = ("position", "rpy", "covariance", "jumped")
 
 
-class Zed2Model(object):
+class Zed2Model:
     """Drift, noise and jump model of the ZED2 pose.
 
     Args:

@@ -50,7 +50,7 @@ def beam_geometry(meta, width):
     return alt, sensor_az, origin
 
 
-class Latest(object):
+class Latest:
     """Keeps messages of one topic; wait_new() returns the first one stamped after a time."""
 
     def __init__(self, topic, msg_type, keep=200):

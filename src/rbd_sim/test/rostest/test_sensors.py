@@ -11,17 +11,17 @@ import struct
 import sys
 import unittest
 
+import cloud_check as cc
 import numpy as np
 import rospy
 import rostest
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
-from rbd_msgs.srv import PlaceObstacle, PlaceObstacleRequest
 from sensor_msgs.msg import Imu, PointCloud2, PointField
 from std_msgs.msg import String
 from visualization_msgs.msg import MarkerArray
 
-import cloud_check as cc
+from rbd_msgs.srv import PlaceObstacle, PlaceObstacleRequest
 
 BASE_Z = 0.28
 MOUNT_Z = 0.07
@@ -61,7 +61,9 @@ class TestSensors(unittest.TestCase):
     def test_layout_matches_ouster_ros_byte_for_byte(self):
         msg = self.first
         self.assertEqual(msg.header.frame_id, "os_sensor")
-        self.assertEqual([(f.name, f.offset, f.datatype, f.count) for f in msg.fields], [e + (1,) for e in EXPECTED_FIELDS])
+        self.assertEqual(
+            [(f.name, f.offset, f.datatype, f.count) for f in msg.fields], [e + (1,) for e in EXPECTED_FIELDS]
+        )
         self.assertEqual(msg.point_step, 48)
         self.assertEqual(msg.height, 32)
         self.assertEqual(msg.width, self.columns)

@@ -11,13 +11,13 @@ import sys
 import threading
 import unittest
 
+import cloud_check as cc
 import numpy as np
 import rospy
 import rostest
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import PointCloud2
 
-import cloud_check as cc
 from rbd_sim.transforms import rpy_to_matrix, rpy_to_quat
 
 MOUNT = np.array([0.0, 0.0, 0.07])
@@ -64,8 +64,13 @@ class TestTilt(unittest.TestCase):
         """Range [m] at which beam (row, col) meets the floor z = 0 for this base pose."""
         alt, az, origin = cc.beam_geometry(self.meta, width)
         n = self.meta["lidar_origin_to_beam_origin_mm"] * 1e-3
-        d_s = np.array([math.cos(alt[row]) * math.cos(az[row, col]), math.cos(alt[row]) * math.sin(az[row, col]),
-                        math.sin(alt[row])])
+        d_s = np.array(
+            [
+                math.cos(alt[row]) * math.cos(az[row, col]),
+                math.cos(alt[row]) * math.sin(az[row, col]),
+                math.sin(alt[row]),
+            ]
+        )
         rot = rpy_to_matrix(*pose[3:])
         o = np.array(pose[:3]) + rot.dot(MOUNT + origin[col])
         d = rot.dot(d_s)
