@@ -114,6 +114,14 @@ class TestTilt(unittest.TestCase):
         moved, _ = self.floor_ranges([1.0, -0.5, 0.28, 0.0, 0.0, 1.0])  # elsewhere, turned
         self.assertAlmostEqual(moved["front"], level["front"], delta=0.08)
 
+        # Bad input: a NaN ground truth is ignored; the sensor keeps scanning from the last good pose.
+        msg = self.cloud_at([float("nan"), 0.0, 0.28, 0.0, 0.0, 0.0])
+        msg = self.clouds.wait_new(msg.header.stamp)
+        pts = cc.decode(msg)
+        _alt, az, _o = cc.beam_geometry(self.meta, msg.width)
+        col = int(np.argmin(np.abs(np.angle(np.exp(1j * az[31])))))
+        self.assertAlmostEqual(pts["range"][31, col] * 1e-3, moved["front"], delta=0.08)
+
 
 if __name__ == "__main__":
     rostest.rosrun("rbd_sim", "sensors_tilt", TestTilt, sys.argv)
