@@ -9,7 +9,7 @@ import pytest
 
 from rbd_sim import os1
 from rbd_sim.transforms import rpy_to_matrix
-from rbd_sim.world import Box, World
+from rbd_sim.world import Box, Cylinder, World
 
 META = os1.load_metadata(os1.DEFAULT_METADATA)
 LEVEL = (np.eye(3), np.array([0.0, 0.0, 0.35]))
@@ -157,3 +157,23 @@ def test_bad_metadata_rejected():
         os1.Os1Model(meta)
     with pytest.raises(ValueError, match="lacks"):
         os1.check_metadata({})
+
+
+def test_motion_distortion_forward_and_turning():
+    w = hall()
+    m = os1.Os1Model(META, 512, 10, range_noise_std=0.0, seed=0)
+    pos = np.array([0.0, 0.0, 1.5])  # above the target box: front beams reach the hall wall at x = 7.9
+    still = m.scan(np.eye(3), pos, w, 0.0).range_mm
+    moving = m.scan(np.eye(3), pos, w, 0.0, velocity=np.array([1.0, 0.0, 0.0])).range_mm
+    front, back = 256 + 6, 6  # +x column fired at ~0.05 s, -x column at ~0 s
+    row = 15
+    assert still[row, front] - moving[row, front] == pytest.approx(51, abs=3)  # 1 m/s x 0.051 s
+    assert abs(int(still[row, back]) - int(moving[row, back])) <= 2
+    # Turning at 1 rad/s: a thin pillar straight ahead shows up ~4 columns later.
+    w2 = World("p", 0.0, None)
+    w2.cylinders.append(Cylinder("pillar", 3.0, 0.0, 0.05, 0.0, 3.0))
+    a = m.scan(np.eye(3), pos, w2, 0.0)
+    b = m.scan(np.eye(3), pos, w2, 0.0, yaw_rate=1.0)
+    ca = np.flatnonzero(a.hit[row] >= 2).mean()
+    cb = np.flatnonzero(b.hit[row] >= 2).mean()
+    assert 3.0 <= cb - ca <= 5.5

@@ -194,6 +194,7 @@ class Os1Model:
         self.raycaster = Raycaster(self.directions, self.origins)
         # Column timestamps [ns], ring numbers and a fixed ambient (near-IR) image.
         self.col_t_ns = (np.arange(w) * (1e9 / (self.hz * w))).astype(np.uint32)
+        self._stagger_t = np.arange(w) / float(self.hz * w)  # firing time of each staggered column [s]
         amb_rng = np.random.default_rng(seed + 7919)
         self.ambient = amb_rng.integers(20, 120, size=(h, w)).astype(np.uint16)
         # Range noise: a seeded table of clipped normal samples [m]; each scan reads it from a
@@ -211,18 +212,33 @@ class Os1Model:
         """Scan period [s]."""
         return 1.0 / self.hz
 
-    def scan(self, sensor_rotation: np.ndarray, sensor_translation: np.ndarray, world: object, t: float) -> Scan:
+    def scan(
+        self,
+        sensor_rotation: np.ndarray,
+        sensor_translation: np.ndarray,
+        world: object,
+        t: float,
+        velocity: np.ndarray = None,
+        yaw_rate: float = 0.0,
+    ) -> Scan:
         """Simulate one scan.
 
         Args:
-            sensor_rotation: 3x3 rotation world <- os_sensor.
-            sensor_translation: os_sensor origin in the world [m].
+            sensor_rotation: 3x3 rotation world <- os_sensor at the scan start.
+            sensor_translation: os_sensor origin in the world at the scan start [m].
             world: A :class:`rbd_sim.world.World`.
             t: Time since the world epoch [s] (positions of people).
+            velocity: Sensor velocity in the world [m/s]; with yaw_rate [rad/s] it moves the
+                sensor while the columns are fired (motion distortion). None: standing still.
+            yaw_rate: Turn rate about the world z axis [rad/s].
 
         Returns:
             A destaggered :class:`Scan`.
         """
+        motion = None
+        if velocity is not None or yaw_rate:
+            vel = np.zeros(3) if velocity is None else np.asarray(velocity, dtype=np.float64)
+            motion = (vel, float(yaw_rate), self._stagger_t)
         res = self.raycaster.cast(
             sensor_rotation,
             sensor_translation,
@@ -231,6 +247,7 @@ class Os1Model:
             world.boxes,
             world.all_cylinders(t),
             self.max_range,
+            motion,
         )
         return self.finish(res)
 

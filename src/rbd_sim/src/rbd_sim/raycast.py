@@ -83,6 +83,7 @@ class Raycaster:
         boxes: list = (),
         cylinders: list = (),
         max_range: float = 120.0,
+        motion: tuple = None,
     ) -> CastResult:
         """Cast all rays from the sensor pose (rotation, translation) in the world.
 
@@ -94,6 +95,10 @@ class Raycaster:
             boxes: :class:`rbd_sim.world.Box` objects.
             cylinders: :class:`rbd_sim.world.Cylinder` objects.
             max_range: Distances beyond this are no hit [m].
+            motion: None, or (velocity, yaw_rate, column_times): the sensor moves with velocity
+                (world frame [m/s]) and turns at yaw_rate about the world z axis [rad/s] while
+                the columns are fired at column_times (W,) [s] after the pose's time, as a
+                spinning LiDAR on a moving robot does (motion distortion).
 
         Returns:
             A :class:`CastResult`.
@@ -106,6 +111,17 @@ class Raycaster:
         ry.dy = _F32(r[1, 0]) * sx_ + _F32(r[1, 1]) * sy_ + _F32(r[1, 2]) * sz_
         ry.dz = _F32(r[2, 0]) * sx_ + _F32(r[2, 1]) * sy_ + _F32(r[2, 2]) * sz_
         ow = self._o.dot(r.T) + t
+        if motion is not None:
+            vel, yaw_rate, col_t = motion
+            col_t = np.asarray(col_t, dtype=np.float64)
+            if yaw_rate:
+                psi = float(yaw_rate) * col_t
+                c, s = np.cos(psi), np.sin(psi)
+                c32, s32 = c[None, :].astype(np.float32), s[None, :].astype(np.float32)
+                ry.dx, ry.dy = c32 * ry.dx - s32 * ry.dy, s32 * ry.dx + c32 * ry.dy
+                qx, qy = ow[:, 0] - t[0], ow[:, 1] - t[1]
+                ow[:, 0], ow[:, 1] = t[0] + c * qx - s * qy, t[1] + s * qx + c * qy
+            ow = ow + np.asarray(vel, dtype=np.float64)[None, :] * col_t[:, None]
         ry.ox = ow[None, :, 0].astype(np.float32)
         ry.oy = ow[None, :, 1].astype(np.float32)
         ry.oz = ow[None, :, 2].astype(np.float32)
