@@ -6,6 +6,7 @@ import os
 import sys
 import unittest
 
+import cloud_check as cc
 import numpy as np
 import rospkg
 import rospy
@@ -13,10 +14,7 @@ import rostest
 from sensor_msgs.msg import PointCloud2
 from visualization_msgs.msg import Marker, MarkerArray
 
-import cloud_check as cc
 from rbd_sim.world import load_world
-
-SENSOR_Z = 0.35
 
 
 class TestPeople(unittest.TestCase):
