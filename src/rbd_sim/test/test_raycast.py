@@ -1,6 +1,7 @@
 """Ray caster against a brute-force float64 reference, and simple exact geometry."""
 
 import math
+import os
 
 import numpy as np
 import pytest
@@ -9,6 +10,8 @@ from rbd_sim import os1
 from rbd_sim.raycast import CEILING_ID, FIRST_PRIMITIVE_ID, FLOOR_ID, NO_HIT, Raycaster
 from rbd_sim.transforms import rpy_to_matrix
 from rbd_sim.world import Box, Cylinder, World, load_world
+
+WORLDS_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "worlds")
 
 META = os1.load_metadata(os1.DEFAULT_METADATA)
 
@@ -56,8 +59,8 @@ def reference_cast(dirs, origins, rot, trans, floor_z, ceiling_z, boxes, cylinde
 
 @pytest.mark.parametrize("columns", [512, 2048])
 @pytest.mark.parametrize("world_name", ["lab", "fair"])
-def test_matches_brute_force_reference(columns, world_name, worlds_dir):
-    world = load_world("%s/%s.yaml" % (worlds_dir, world_name))
+def test_matches_brute_force_reference(columns, world_name):
+    world = load_world("%s/%s.yaml" % (WORLDS_DIR, world_name))
     model = os1.Os1Model(META, columns, 10, seed=3)
     rng = np.random.default_rng(42)
     for k in range(4):
@@ -127,8 +130,8 @@ def test_bad_shapes_rejected():
         Raycaster(np.zeros((4, 8, 3)), np.zeros((4, 3)))
 
 
-def test_motion_matches_reference(worlds_dir):
-    world = load_world("%s/fair.yaml" % worlds_dir)
+def test_motion_matches_reference():
+    world = load_world("%s/fair.yaml" % WORLDS_DIR)
     model = os1.Os1Model(META, 1024, 10, seed=3)
     rot = rpy_to_matrix(0.05, -0.1, 2.0)
     trans = np.array([0.3, -0.2, 0.35])

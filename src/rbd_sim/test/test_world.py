@@ -1,15 +1,18 @@
 """World files: loading, validation errors, people on scripted paths, run-time obstacles."""
 
 import math
+import os
 
 import pytest
 
 from rbd_sim.world import Person, WorldError, load_world, resolve_world_path, world_from_dict
 
+WORLDS_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "worlds")
+
 
 @pytest.mark.parametrize("name", ["lab", "fair"])
-def test_shipped_worlds_load(name, worlds_dir):
-    w = load_world(resolve_world_path(name, worlds_dir))
+def test_shipped_worlds_load(name):
+    w = load_world(resolve_world_path(name))
     assert w.name == name
     assert len(w.boxes) >= 5
     assert len(w.people) >= 2
@@ -24,13 +27,13 @@ def test_shipped_worlds_load(name, worlds_dir):
         assert gap > 1.5, (name, b.name, gap)
 
 
-def test_fair_is_crowded(worlds_dir):
-    assert len(load_world(resolve_world_path("fair", worlds_dir)).people) >= 10
+def test_fair_is_crowded():
+    assert len(load_world(resolve_world_path("fair")).people) >= 10
 
 
-def test_unknown_world_name_lists_known(worlds_dir):
+def test_unknown_world_name_lists_known():
     with pytest.raises(WorldError, match="known worlds: .*lab"):
-        resolve_world_path("nope", worlds_dir)
+        resolve_world_path("nope")
 
 
 @pytest.mark.parametrize(
@@ -103,9 +106,9 @@ def test_person_paths():
     assert ph.position(0.0) == pytest.approx((1.0, 0.0))
 
 
-def test_people_move_deterministically(worlds_dir):
-    a = load_world(resolve_world_path("lab", worlds_dir))
-    b = load_world(resolve_world_path("lab", worlds_dir))
+def test_people_move_deterministically():
+    a = load_world(resolve_world_path("lab"))
+    b = load_world(resolve_world_path("lab"))
     for t in (0.0, 1.3, 17.9):
         assert [(c.cx, c.cy) for c in a.dynamic_cylinders(t)] == [(c.cx, c.cy) for c in b.dynamic_cylinders(t)]
     assert (
