@@ -12,7 +12,7 @@ WORLDS_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file
 
 @pytest.mark.parametrize("name", ["lab", "fair"])
 def test_shipped_worlds_load(name):
-    w = load_world(resolve_world_path(name))
+    w = load_world(resolve_world_path(name, WORLDS_DIR))
     assert w.name == name
     assert len(w.boxes) >= 5
     assert len(w.people) >= 2
@@ -28,12 +28,12 @@ def test_shipped_worlds_load(name):
 
 
 def test_fair_is_crowded():
-    assert len(load_world(resolve_world_path("fair")).people) >= 10
+    assert len(load_world(resolve_world_path("fair", WORLDS_DIR)).people) >= 10
 
 
 def test_unknown_world_name_lists_known():
     with pytest.raises(WorldError, match="known worlds: .*lab"):
-        resolve_world_path("nope")
+        resolve_world_path("nope", WORLDS_DIR)
 
 
 @pytest.mark.parametrize(
@@ -107,8 +107,8 @@ def test_person_paths():
 
 
 def test_people_move_deterministically():
-    a = load_world(resolve_world_path("lab"))
-    b = load_world(resolve_world_path("lab"))
+    a = load_world(resolve_world_path("lab", WORLDS_DIR))
+    b = load_world(resolve_world_path("lab", WORLDS_DIR))
     for t in (0.0, 1.3, 17.9):
         assert [(c.cx, c.cy) for c in a.dynamic_cylinders(t)] == [(c.cx, c.cy) for c in b.dynamic_cylinders(t)]
     assert (
