@@ -1,0 +1,253 @@
+#!/usr/bin/env python3
+"""rostest: the control nodes together on rbd_sim's mock A1 + rbd_a1_driver, measured on ground truth."""
+
+import math
+import subprocess
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from geometry_msgs.msg import PoseStamped, Vector3
+from nav_msgs.msg import Odometry, Path
+from std_msgs.msg import Bool, String
+from std_srvs.srv import SetBool
+
+from rbd_msgs.msg import ControllerState, PathQueue
+
+CONTROL_PERIOD = 1.0 / 20.0  # rbd_pos_controller rate
+MARGIN = 0.25  # scheduling margin for a loaded machine [s]
+STILL = 1e-3  # |velocity| below this counts as standing still [m/s, rad/s]
+
+
+def yaw_of(q):
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def wait_for(predicate, timeout, step=0.01):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(step)
+    return predicate()
+
+
+class World:
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.truth = None
+        self.applied = []  # (t, vx, vy, wz) actually acting on the robot
+        self.state = ""
+        self.states = []
+        self.pos_state = ""
+        self.estop = None
+        self.queue = None
+        self.path = None
+        self.cstate = None
+        self.body = None
+        rospy.Subscriber("/rbd_sim/ground_truth_pose", PoseStamped, self.on_truth)
+        # ~stop_time allows for the mock A1's deceleration limits when judging "stopped in time".
+        self.stop_time = float(rospy.get_param("~stop_time", 0.4))
+        rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_odometry)
+        rospy.Subscriber("/rbd_controller/state", String, self.on_state)
+        rospy.Subscriber("/rbd_pos_controller/state", String, self.on_pos_state)
+        rospy.Subscriber("/rbd_controller/estop", Bool, lambda m: setattr(self, "estop", m.data))
+        rospy.Subscriber("/rbd_controller/path_queue", PathQueue, lambda m: setattr(self, "queue", m))
+        rospy.Subscriber("/rbd_controller/path", Path, lambda m: setattr(self, "path", m))
+        rospy.Subscriber("/rbd_controller/controller_state", ControllerState, lambda m: setattr(self, "cstate", m))
+
+    def on_truth(self, msg):
+        with self.lock:
+            self.truth = msg.pose
+
+    def on_velocity(self, msg):
+        with self.lock:
+            self.applied.append((time.monotonic(), msg.linear.x, msg.linear.y, msg.angular.z))
+
+    def on_odometry(self, msg):
+        q = msg.pose.pose.orientation
+        pitch = math.asin(max(-1.0, min(1.0, 2.0 * (q.w * q.y - q.z * q.x))))
+        self.body = Vector3(0.0, pitch, 0.0)
+        self.on_velocity(msg.twist.twist)
+
+    def on_state(self, msg):
+        with self.lock:
+            self.state = msg.data
+            self.states.append(msg.data)
+
+    def on_pos_state(self, msg):
+        self.pos_state = msg.data
+
+    def pose(self):
+        with self.lock:
+            p = self.truth
+        return p.position.x, p.position.y, yaw_of(p.orientation)
+
+    def moving_since(self, t0):
+        with self.lock:
+            return [v for v in self.applied if v[0] >= t0 and any(abs(c) > STILL for c in v[1:])]
+
+    def first_zero_after(self, t0):
+        with self.lock:
+            for v in self.applied:
+                if v[0] >= t0 and all(abs(c) <= STILL for c in v[1:]):
+                    return v[0] - t0
+        return None
+
+
+class TestControlSystem(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("test_control_system", anonymous=True)
+        cls.w = World()
+        for name in (
+            "/rbd_controller/em_stop",
+            "/rbd_controller/collision",
+            "/rbd_pos_controller/set_position",
+            "/rbd_navigation/generate_path",
+            "/rbd_gestrec/get_last_gesture",
+        ):
+            rospy.wait_for_service(name, timeout=60.0)
+        cls.em_stop = rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)
+        cls.collision = rospy.ServiceProxy("/rbd_controller/collision", SetBool)
+        cls.gesture = rospy.Publisher("/rbd_gestrec/gesture", String, queue_size=10)
+        assert wait_for(lambda: cls.w.truth is not None and cls.w.state and cls.gesture.get_num_connections() > 0, 30.0)
+
+    # -------------------------------------------------------------- helpers
+    def send_gesture(self, label):
+        self.gesture.publish(String(label))
+
+    def wait_state(self, name, timeout=10.0):
+        self.assertTrue(wait_for(lambda: self.w.state == name, timeout), "state %r, wanted %s" % (self.w.state, name))
+
+    def wait_pos_state(self, name, timeout=20.0):
+        self.assertTrue(
+            wait_for(lambda: self.w.pos_state == name, timeout), "pos state %r, wanted %s" % (self.w.pos_state, name)
+        )
+
+    def wait_moving_in(self, pos_state):
+        """Wait for pos_state and for the robot to actually move in it."""
+        self.wait_pos_state(pos_state)
+        self.assertTrue(wait_for(lambda: self.w.moving_since(time.monotonic() - 0.05), 3.0), pos_state)
+        self.assertEqual(self.w.pos_state, pos_state)
+
+    def assert_stops(self, t0, label):
+        """Zero velocity reaches the robot promptly and the robot stays still."""
+        self.assertTrue(wait_for(lambda: self.w.first_zero_after(t0) is not None, 2.0), label)
+        delay = self.w.first_zero_after(t0)
+        rospy.loginfo("%s: zero velocity at the robot %.3f s after the request", label, delay)
+        self.assertLess(delay, CONTROL_PERIOD + MARGIN + self.w.stop_time, label)
+        time.sleep(0.3)
+        t1 = time.monotonic()
+        x0, y0, yaw0 = self.w.pose()
+        time.sleep(0.5)
+        x1, y1, yaw1 = self.w.pose()
+        self.assertEqual(self.w.moving_since(t1), [], label)
+        self.assertLess(math.hypot(x1 - x0, y1 - y0) + abs(yaw1 - yaw0), 1e-3, label)
+
+    def assert_back_at_start(self, start):
+        x, y, yaw = self.w.pose()
+        self.assertLess(math.hypot(x - start[0], y - start[1]), 0.05)
+        self.assertLess(abs(math.atan2(math.sin(yaw - start[2]), math.cos(yaw - start[2]))), math.radians(3.0))
+
+    # -------------------------------------------------------------- tests (run in name order)
+    def test_0_power_up_in_estop_ignores_gestures(self):
+        self.assertEqual(self.w.state, "EMERGENCY_STOP")
+        self.assertTrue(wait_for(lambda: self.w.estop is True, 5.0))
+        start = time.monotonic()
+        self.send_gesture("walk")
+        time.sleep(1.0)
+        self.assertEqual(self.w.state, "EMERGENCY_STOP")
+        self.assertEqual(self.w.moving_since(start), [])
+
+    def test_1_cli_release_then_gesture_runs_trick(self):
+        out = subprocess.run(
+            ["rosrun", "rbd_controller", "estop", "off"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=30
+        )
+        self.assertEqual(out.returncode, 0, out.stdout)
+        self.wait_state("WAITING_FOR_GESTURE")
+        self.assertTrue(wait_for(lambda: self.w.estop is False, 2.0))
+        self.assertTrue(wait_for(lambda: self.w.body is not None and self.w.body.y < -0.1, 5.0), "attentive pitch")
+        time.sleep(0.5)
+        self.assertEqual(self.w.state, "WAITING_FOR_GESTURE", "the gesture made during the e-stop must be dropped")
+        start = self.w.pose()
+        n = len(self.w.states)
+        self.send_gesture("walk")
+        self.wait_state("EXECUTING", 5.0)
+        self.assertTrue(wait_for(lambda: self.w.queue is not None and len(self.w.queue.names) == 2, 3.0))
+        self.assertEqual(self.w.queue.command, "walk")
+        self.assertEqual(self.w.queue.names[0], "out 0.45 m, turn left")
+        self.assertTrue(wait_for(lambda: self.w.path is not None and len(self.w.path.poses) == 2, 2.0), "nav_msgs/Path")
+        self.assertEqual(self.w.cstate.state_name, "EXECUTING")
+        self.assertTrue(wait_for(lambda: abs(self.w.body.y) < 0.02, 3.0), "neutral body before moving")
+        self.wait_state("WAITING_FOR_GESTURE", 40.0)
+        self.assertEqual(self.w.states[n:], ["GENERATING_PATH", "EXECUTING", "WAITING_FOR_GESTURE"])
+        self.assert_back_at_start(start)
+        self.assertEqual(len(self.w.queue.names), 0)
+
+    def test_2_unknown_gesture_no_motion(self):
+        self.wait_state("WAITING_FOR_GESTURE", 40.0)
+        t0 = time.monotonic()
+        self.send_gesture("backflip")
+        time.sleep(1.0)
+        self.assertEqual(self.w.state, "WAITING_FOR_GESTURE")
+        self.assertEqual(self.w.moving_since(t0), [])
+
+    def test_3_estop_in_every_motion_state_then_resume(self):
+        self.wait_state("WAITING_FOR_GESTURE", 40.0)
+        time.sleep(0.5)
+        start = self.w.pose()
+        self.send_gesture("walk")
+        for pos_state in ("LINEAR", "POST_ROTATION", "PRE_ROTATION"):
+            self.wait_moving_in(pos_state)
+            self.assertEqual(self.w.state, "EXECUTING")
+            t0 = time.monotonic()
+            self.em_stop(data=True)
+            self.assertTrue(wait_for(lambda: self.w.estop is True, 1.0), "latched /rbd_controller/estop")
+            self.wait_state("EMERGENCY_STOP", 1.0)
+            self.assert_stops(t0, "e-stop in " + pos_state)
+            self.em_stop(data=False)
+            self.wait_state("EXECUTING", 2.0)
+        self.wait_state("WAITING_FOR_GESTURE", 40.0)
+        self.assert_back_at_start(start)
+
+    def test_4_estop_while_waiting(self):
+        self.wait_state("WAITING_FOR_GESTURE", 40.0)
+        t0 = time.monotonic()
+        self.em_stop(data=True)
+        self.wait_state("EMERGENCY_STOP", 1.0)
+        self.send_gesture("spin")
+        time.sleep(1.0)
+        self.assertEqual(self.w.moving_since(t0), [])
+        self.em_stop(data=False)
+        self.wait_state("WAITING_FOR_GESTURE", 2.0)
+        time.sleep(0.6)
+        self.assertEqual(self.w.state, "WAITING_FOR_GESTURE")
+
+    def test_5_collision_stops_and_clear_resumes(self):
+        self.wait_state("WAITING_FOR_GESTURE", 40.0)
+        time.sleep(0.5)  # past the first (flushing) gesture poll
+        start = self.w.pose()
+        self.send_gesture("walk")
+        self.wait_moving_in("LINEAR")
+        t0 = time.monotonic()
+        self.collision(data=True)
+        self.wait_state("COLLISION_DETECTED", 1.0)
+        self.assert_stops(t0, "collision in LINEAR")
+        # an e-stop on top of the collision; releasing it keeps the collision stop
+        self.em_stop(data=True)
+        self.wait_state("EMERGENCY_STOP", 1.0)
+        self.em_stop(data=False)
+        self.wait_state("COLLISION_DETECTED", 1.0)
+        time.sleep(0.3)
+        self.assertEqual(self.w.moving_since(time.monotonic() - 0.2), [])
+        self.collision(data=False)
+        self.wait_state("EXECUTING", 2.0)
+        self.wait_state("WAITING_FOR_GESTURE", 40.0)
+        self.assert_back_at_start(start)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("rbd_controller", "control_system_wiring", TestControlSystem)

@@ -1,0 +1,248 @@
+import pytest
+
+from rbd_controller.core import MainController, Ports
+from rbd_controller.fsm import State
+
+
+class FakeWorld:
+    """Fake gestrec, navigation, position controller and publishers."""
+
+    def __init__(self, path=("p1", "p2", "p3")):
+        self.gestures = []
+        self.path = list(path)
+        self.path_ok = True
+        self.sent = []
+        self.body_poses = []
+        self.calls = []  # order of stop-related calls
+        self.refuse = False
+        self.pos_busy = 0  # ticks until the running pose finishes
+        self.pos_stopped = False
+        self.estop_flag = None
+        self.logs = []
+        self.ctl = None
+        self.ticks_per_pose = 3
+        self.published = 0
+        self.t = 0.0
+
+    def ports(self):
+        return Ports(
+            get_gesture=lambda: self.gestures.pop(0) if self.gestures else "",
+            generate_path=self.generate,
+            set_position=self.set_position,
+            set_body_pose=lambda r, p, h: self.body_poses.append((r, p, h)) or True,
+            pos_emergency=lambda on: self.calls.append(("pos_emergency", on)),
+            pos_collision=lambda on: self.calls.append(("pos_collision", on)),
+            publish_estop=self.publish_estop,
+            publish=self.publish,
+            log=lambda level, msg: self.logs.append((level, msg)),
+        )
+
+    def publish(self, _ctl):
+        self.published += 1
+
+    def publish_estop(self, on):
+        self.estop_flag = on
+        self.calls.append(("estop", on))
+
+    def generate(self, command):
+        if command != "walk" or not self.path_ok:
+            return False, "unknown command %r" % command, [], []
+        return True, "ok", list(self.path), ["name-" + p for p in self.path]
+
+    def set_position(self, pose):
+        if self.refuse:
+            return False, "refused"
+        self.sent.append(pose)
+        self.pos_busy = self.ticks_per_pose
+        self.ctl.on_pos_status("running")
+        return True, "ok"
+
+    def step_pos(self):
+        if self.pos_busy > 0:
+            self.pos_busy -= 1
+            if self.pos_busy == 0:
+                self.ctl.on_pos_status("idle")
+
+
+def make(**kwargs):
+    world = FakeWorld(**kwargs)
+    ctl = MainController(world.ports())
+    world.ctl = ctl
+    ctl.start()
+    return world, ctl
+
+
+def release(world, ctl):
+    """Release the e-stop and let the first (flushing) gesture poll happen."""
+    ctl.set_emergency(False)
+    run(world, ctl, 1)
+
+
+def run(world, ctl, ticks):
+    for _ in range(ticks):
+        ctl.tick(world.t)
+        world.step_pos()
+        world.t += 0.25
+
+
+def test_starts_in_estop_and_publishes_gate():
+    world, ctl = make()
+    assert ctl.state == State.EMERGENCY_STOP
+    assert world.estop_flag is True
+    assert ("pos_emergency", True) in world.calls
+    run(world, ctl, 5)
+    assert world.sent == [] and ctl.state == State.EMERGENCY_STOP
+
+
+def test_release_sets_attentive_pose_then_gesture_runs_trick_then_waits():
+    world, ctl = make()
+    world.gestures.append("walk")  # made during the e-stop: dropped
+    ctl.set_emergency(False)
+    assert world.estop_flag is False
+    assert ctl.state == State.WAITING_FOR_GESTURE
+    run(world, ctl, 2)
+    assert world.gestures == [] and world.sent == []
+    assert world.body_poses[0][1] < 0.0  # attentive: pitch nose-up
+    world.gestures.append("walk")
+    run(world, ctl, 3)
+    assert world.body_poses[1] == (0.0, 0.0, 0.0)  # neutral before moving
+    run(world, ctl, 20)
+    assert world.sent == ["p1", "p2", "p3"]
+    assert ctl.state == State.WAITING_FOR_GESTURE
+    assert ctl.remaining() == []
+
+
+def test_unknown_command_goes_back_to_waiting_without_motion():
+    world, ctl = make()
+    release(world, ctl)
+    world.gestures.append("fly")
+    run(world, ctl, 5)
+    assert ctl.state == State.WAITING_FOR_GESTURE
+    assert world.sent == []
+    assert any(level == "warn" and "fly" in msg for level, msg in world.logs)
+
+
+def test_refused_pose_aborts_trick():
+    world, ctl = make()
+    release(world, ctl)
+    world.refuse = True
+    world.gestures.append("walk")
+    run(world, ctl, 6)
+    assert ctl.state == State.WAITING_FOR_GESTURE
+    assert any(level == "error" for level, _ in world.logs)
+
+
+def test_pose_timeout_aborts_trick():
+    world, ctl = make()
+    ctl.pose_timeout = 2.0
+    release(world, ctl)
+    world.ticks_per_pose = 1000
+    world.gestures.append("walk")
+    run(world, ctl, 20)
+    assert ctl.state == State.WAITING_FOR_GESTURE
+    assert world.sent == ["p1"]
+
+
+def test_no_running_report_aborts():
+    world, ctl = make()
+    release(world, ctl)
+    world.set_position = lambda pose: (True, "ok")
+    ctl.ports.set_position = world.set_position
+    world.gestures.append("walk")
+    run(world, ctl, 30)
+    assert ctl.state == State.WAITING_FOR_GESTURE
+    assert any("never reported running" in msg for _, msg in world.logs)
+
+
+def test_queue_shows_current_then_remaining_names():
+    world, ctl = make()
+    release(world, ctl)
+    world.gestures.append("walk")
+    run(world, ctl, 4)
+    assert ctl.state == State.EXECUTING
+    assert [name for _, name in ctl.remaining()] == ["name-p1", "name-p2", "name-p3"]
+
+
+def _drive_to(world, ctl, state):
+    release(world, ctl)
+    if state == State.WAITING_FOR_GESTURE:
+        return
+    world.gestures.append("walk")
+    if state == State.GENERATING_PATH:
+        run(world, ctl, 1)
+    else:
+        run(world, ctl, 4)  # poll, generate, send p1
+        world.step_pos()  # p1 half done
+    assert ctl.state == state
+
+
+@pytest.mark.parametrize("state", [State.WAITING_FOR_GESTURE, State.GENERATING_PATH, State.EXECUTING])
+@pytest.mark.parametrize("stop", ["estop", "collision"])
+def test_preemption_and_resume_from_every_work_state(state, stop):
+    world, ctl = make()
+    _drive_to(world, ctl, state)
+    sent_before = list(world.sent)
+    world.calls.clear()
+    if stop == "estop":
+        ctl.set_emergency(True)
+        assert ctl.state == State.EMERGENCY_STOP
+        assert world.calls[:2] == [("estop", True), ("pos_emergency", True)]
+    else:
+        ctl.set_collision(True)
+        assert ctl.state == State.COLLISION_DETECTED
+        assert world.calls == [("pos_collision", True)]
+    # while stopped: no new poses; a gesture made now is dropped after the release
+    world.gestures.append("walk")
+    run(world, ctl, 10)
+    assert world.sent == sent_before
+    world.calls.clear()
+    if stop == "estop":
+        ctl.set_emergency(False)
+        assert world.calls == [("estop", False), ("pos_emergency", False)]
+    else:
+        ctl.set_collision(False)
+        assert world.calls == [("pos_collision", False)]
+    assert ctl.state == state
+    if state == State.WAITING_FOR_GESTURE:
+        run(world, ctl, 10)
+        assert world.sent == [] and world.gestures == []  # the early gesture was dropped
+        world.gestures.append("walk")
+    run(world, ctl, 30)
+    assert ctl.state == State.WAITING_FOR_GESTURE
+    if state == State.EXECUTING:
+        # the interrupted pose is re-sent, then the rest
+        assert world.sent == ["p1", "p1", "p2", "p3"]
+    else:
+        assert world.sent == ["p1", "p2", "p3"]
+
+
+def test_stale_path_result_dropped_after_preemption():
+    world, ctl = make()
+    release(world, ctl)
+    world.gestures.append("walk")
+    run(world, ctl, 1)
+    assert ctl.state == State.GENERATING_PATH
+    original = world.generate
+
+    def generate_and_get_stopped(command):
+        ctl.set_emergency(True)  # e-stop arrives while the service call is in flight
+        return original(command)
+
+    ctl.ports.generate_path = generate_and_get_stopped
+    ctl.tick(world.t)
+    assert ctl.state == State.EMERGENCY_STOP
+    assert ctl.queue == []
+
+
+def test_estop_then_collision_then_release_order():
+    world, ctl = make()
+    _drive_to(world, ctl, State.EXECUTING)
+    ctl.set_emergency(True)
+    ctl.set_collision(True)
+    world.calls.clear()
+    ctl.set_emergency(False)
+    assert ctl.state == State.COLLISION_DETECTED
+    # engage the collision stop before releasing the e-stop
+    assert world.calls == [("pos_collision", True), ("estop", False), ("pos_emergency", False)]
+    ctl.set_collision(False)
+    assert ctl.state == State.EXECUTING

@@ -1,0 +1,142 @@
+import pytest
+
+from rbd_controller.fsm import RESUME, STOP_STATES, TRANSITIONS, WORK_STATES, Event, Fsm, State
+
+PATH_TO = {
+    State.EMERGENCY_STOP: [],
+    State.WAITING_FOR_GESTURE: [Event.ESTOP_RELEASE],
+    State.GENERATING_PATH: [Event.ESTOP_RELEASE, Event.GESTURE],
+    State.EXECUTING: [Event.ESTOP_RELEASE, Event.GESTURE, Event.PATH_READY],
+    State.COLLISION_DETECTED: [Event.ESTOP_RELEASE, Event.COLLISION],
+}
+
+
+def fsm_in(state, hooks=None):
+    fsm = Fsm(on_enter=hooks)
+    for event in PATH_TO[state]:
+        assert fsm.fire(event)
+    assert fsm.state == state
+    return fsm
+
+
+def test_power_up_is_emergency_stop():
+    fsm = Fsm()
+    assert fsm.state == State.EMERGENCY_STOP and fsm.estop
+
+
+def test_values_match_controller_state_msg():
+    from rbd_msgs.msg import ControllerState
+
+    for state in State:
+        assert getattr(ControllerState, state.name) == state.value
+
+
+@pytest.mark.parametrize("state", list(State))
+@pytest.mark.parametrize("event", list(Event))
+def test_every_table_entry(state, event):
+    fsm = fsm_in(state)
+    resume_before = fsm.resume
+    accepted = fsm.fire(event)
+    expected = TRANSITIONS.get((state, event))
+    assert accepted == (expected is not None)
+    if expected is None:
+        assert fsm.state == state
+    elif expected == RESUME:
+        assert fsm.state == resume_before
+    else:
+        assert fsm.state == expected
+
+
+@pytest.mark.parametrize("state", WORK_STATES)
+def test_estop_preempts_and_resumes(state):
+    fsm = fsm_in(state)
+    fsm.fire(Event.ESTOP)
+    assert fsm.state == State.EMERGENCY_STOP and fsm.resume == state
+    fsm.fire(Event.COLLISION_CLEAR)  # does not release an e-stop
+    assert fsm.state == State.EMERGENCY_STOP
+    fsm.fire(Event.ESTOP_RELEASE)
+    assert fsm.state == state
+
+
+@pytest.mark.parametrize("state", WORK_STATES)
+def test_collision_preempts_and_resumes(state):
+    fsm = fsm_in(state)
+    fsm.fire(Event.COLLISION)
+    assert fsm.state == State.COLLISION_DETECTED and fsm.resume == state
+    fsm.fire(Event.ESTOP_RELEASE)  # not an e-stop: nothing happens
+    assert fsm.state == State.COLLISION_DETECTED
+    fsm.fire(Event.COLLISION_CLEAR)
+    assert fsm.state == state
+
+
+@pytest.mark.parametrize("state", WORK_STATES)
+def test_estop_during_collision_keeps_original_resume(state):
+    fsm = fsm_in(state)
+    fsm.fire(Event.COLLISION)
+    fsm.fire(Event.ESTOP)
+    assert fsm.state == State.EMERGENCY_STOP and fsm.resume == state
+    fsm.fire(Event.ESTOP_RELEASE)  # collision still active
+    assert fsm.state == State.COLLISION_DETECTED
+    fsm.fire(Event.COLLISION_CLEAR)
+    assert fsm.state == state
+
+
+def test_collision_cleared_while_estop_engaged():
+    fsm = fsm_in(State.EXECUTING)
+    fsm.fire(Event.COLLISION)
+    fsm.fire(Event.ESTOP)
+    fsm.fire(Event.COLLISION_CLEAR)
+    assert fsm.state == State.EMERGENCY_STOP
+    fsm.fire(Event.ESTOP_RELEASE)
+    assert fsm.state == State.EXECUTING
+
+
+def test_collision_during_estop_takes_over_on_release():
+    fsm = fsm_in(State.GENERATING_PATH)
+    fsm.fire(Event.ESTOP)
+    assert fsm.fire(Event.COLLISION)
+    assert fsm.state == State.EMERGENCY_STOP
+    fsm.fire(Event.ESTOP_RELEASE)
+    assert fsm.state == State.COLLISION_DETECTED and fsm.resume == State.GENERATING_PATH
+
+
+def test_repeated_estop_does_not_overwrite_resume():
+    fsm = fsm_in(State.EXECUTING)
+    fsm.fire(Event.ESTOP)
+    fsm.fire(Event.ESTOP)
+    fsm.fire(Event.ESTOP_RELEASE)
+    assert fsm.state == State.EXECUTING
+
+
+def test_normal_cycle_and_hooks():
+    entered = []
+    hooks = {s: (lambda prev, s=s: entered.append((prev, s))) for s in State}
+    fsm = Fsm(on_enter=hooks)
+    for event in (Event.ESTOP_RELEASE, Event.GESTURE, Event.PATH_READY, Event.QUEUE_EMPTY):
+        fsm.fire(event)
+    assert fsm.state == State.WAITING_FOR_GESTURE
+    assert entered == [
+        (State.EMERGENCY_STOP, State.WAITING_FOR_GESTURE),
+        (State.WAITING_FOR_GESTURE, State.GENERATING_PATH),
+        (State.GENERATING_PATH, State.EXECUTING),
+        (State.EXECUTING, State.WAITING_FOR_GESTURE),
+    ]
+    assert fsm.epoch == 4
+
+
+def test_failed_path_and_abort_go_back_to_waiting():
+    fsm = fsm_in(State.GENERATING_PATH)
+    fsm.fire(Event.PATH_FAILED)
+    assert fsm.state == State.WAITING_FOR_GESTURE
+    fsm = fsm_in(State.EXECUTING)
+    fsm.fire(Event.ABORT)
+    assert fsm.state == State.WAITING_FOR_GESTURE
+
+
+def test_stop_states_reachable_from_every_state():
+    for state in State:
+        for stop in STOP_STATES:
+            event = Event.ESTOP if stop == State.EMERGENCY_STOP else Event.COLLISION
+            fsm = fsm_in(state)
+            fsm.fire(event)
+            assert fsm.state in STOP_STATES

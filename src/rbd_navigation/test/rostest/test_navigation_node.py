@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""rostest: /rbd_navigation/generate_path answers around the current pose; unknown => no poses."""
+
+import math
+import time
+import unittest
+
+import rospy
+import rostest
+from geometry_msgs.msg import PoseStamped
+
+from rbd_msgs.srv import GeneratePath
+from rbd_navigation.tricks import quaternion_from_rpy, yaw_from_quaternion
+
+
+class TestNavigation(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("test_navigation", anonymous=True)
+        rospy.wait_for_service("/rbd_navigation/generate_path", timeout=60.0)
+        cls.srv = rospy.ServiceProxy("/rbd_navigation/generate_path", GeneratePath)
+        cls.pub = rospy.Publisher("/test/pose", PoseStamped, queue_size=1)
+
+    def publish_pose(self, x, y, yaw):
+        msg = PoseStamped()
+        msg.header.frame_id = "map"
+        msg.pose.position.x, msg.pose.position.y = x, y
+        o = msg.pose.orientation
+        o.x, o.y, o.z, o.w = quaternion_from_rpy(0.0, 0.0, yaw)
+        deadline = time.monotonic() + 10.0
+        while self.pub.get_num_connections() == 0 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        for _ in range(3):
+            self.pub.publish(msg)
+            time.sleep(0.1)
+
+    def test_0_no_pose_no_path(self):
+        res = self.srv(command="walk")
+        self.assertFalse(res.success)
+        self.assertIn("pose", res.message)
+        self.assertEqual(res.count, 0)
+
+    def test_1_walk_relative_to_pose(self):
+        self.publish_pose(1.0, 2.0, math.pi / 2)
+        res = self.srv(command="walk")
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(res.count, len(res.poses))
+        self.assertEqual(len(res.names), res.count)
+        self.assertTrue(all(res.names))
+        first = res.poses[0]
+        self.assertAlmostEqual(first.position.x, 1.0, places=6)
+        self.assertAlmostEqual(first.position.y, 2.6, places=6)
+        o = first.orientation
+        self.assertAlmostEqual(yaw_from_quaternion(o.x, o.y, o.z, o.w), math.pi / 2, places=6)
+
+    def test_2_unknown_command(self):
+        self.publish_pose(0.0, 0.0, 0.0)
+        res = self.srv(command="fly")
+        self.assertFalse(res.success)
+        self.assertIn("unknown command", res.message)
+        self.assertIn("walk", res.message)
+        self.assertEqual((res.count, len(res.poses), len(res.names)), (0, 0, 0))
+
+    def test_3_body_pose_tricks(self):
+        self.publish_pose(0.0, 0.0, 0.0)
+        res = self.srv(command="lie_down")
+        self.assertTrue(res.success)
+        self.assertAlmostEqual(res.poses[0].position.z, -0.16, places=6)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("rbd_navigation", "navigation_wiring", TestNavigation)

@@ -1,0 +1,59 @@
+"""Closed-loop runs of the controller on the kinematic robot, recorded as a RunLog. ROS-free."""
+
+import math
+from typing import Optional, Sequence
+
+from rbd_pos_controller.controller import Goal, Params, PositionController, State
+from rbd_pos_controller.kinematic_sim import KinematicRobot
+from rbd_pos_controller.runlog import RunLog
+
+
+def run_goals(
+    goals: Sequence[Goal],
+    params: Optional[Params] = None,
+    drift_per_rad: float = 0.0,
+    drift_heading: float = math.pi / 2,
+    latency: float = 0.08,
+    rate: float = 20.0,
+    pose_rate: float = 20.0,
+    dt: float = 0.005,
+    limit: float = 120.0,
+    label: str = "",
+) -> RunLog:
+    """Drive the kinematic robot from the origin through goals; return the recorded run.
+
+    Raises:
+        RuntimeError: if the goals are not all reached within limit seconds.
+    """
+    robot = KinematicRobot(latency=latency, drift_per_rad=drift_per_rad, drift_heading=drift_heading)
+    ctl = PositionController(params)
+    log = RunLog((0.0, 0.0, 0.0))
+    log.label = label
+    t, next_ctl, next_pose = 0.0, 0.0, 0.0
+    for goal in goals:
+        ctl.update_pose(robot.x, robot.y, robot.yaw, t)
+        log.goals.append((t, goal.x, goal.y, goal.yaw))
+        ctl.set_goal(goal, t)
+        while ctl.state != State.WAITING_FOR_POSE:
+            if t >= next_pose - 1e-9:
+                ctl.update_pose(robot.x, robot.y, robot.yaw, t)
+                log.poses.append((t, robot.x, robot.y, robot.yaw))
+                next_pose += 1.0 / pose_rate
+            if t >= next_ctl - 1e-9:
+                if ctl.body_pose_request is not None:
+                    ctl.body_pose_done(t)
+                cmd = ctl.step(t)
+                robot.command(*cmd)
+                log.cmds.append((t,) + tuple(cmd))
+                next_ctl += 1.0 / rate
+            robot.advance(dt)
+            t += dt
+            if t > limit:
+                raise RuntimeError("goals not reached within %.0f s" % limit)
+    log.done = t
+    log.poses.append((t, robot.x, robot.y, robot.yaw))
+    return log
+
+
+THESIS_PATH = (Goal(1.0, 0.0, 0.0), Goal(-1.0, 0.0, math.pi), Goal(0.0, 0.0, 0.0))
+ROTATION_180 = (Goal(0.0, 0.0, math.pi - 1e-3),)

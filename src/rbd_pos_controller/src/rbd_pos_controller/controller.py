@@ -1,0 +1,352 @@
+"""Position controller FSM (thesis Fig. 9) around the control law. ROS-free.
+
+The node feeds poses, stop/release events and the clock in; step() returns the velocity to
+command. Transitions are one explicit table; the stop states zero the velocity on entry.
+"""
+
+import enum
+import math
+from typing import Callable, Optional
+
+from rbd_pos_controller.control_law import (
+    Errors,
+    Gains,
+    Twist2D,
+    hold_command,
+    linear_command,
+    rotation_command,
+    wrap_angle,
+)
+
+
+class State(enum.Enum):
+    """States of the position controller."""
+
+    WAITING_FOR_POSE = "WAITING_FOR_POSE"
+    PRE_ROTATION = "PRE_ROTATION"
+    LINEAR = "LINEAR"
+    POST_ROTATION = "POST_ROTATION"
+    BODY_POSE = "BODY_POSE"
+    EMERGENCY_STOP = "EMERGENCY_STOP"
+    COLLISION_DETECTED = "COLLISION_DETECTED"
+
+
+class Event(enum.Enum):
+    """Events that move the position controller FSM."""
+
+    GOAL_FAR = "GOAL_FAR"  # new goal, rho >= skip distance: turn towards it first
+    GOAL_NEAR = "GOAL_NEAR"  # new goal, rho < skip distance: no pre-rotation
+    ALIGNED = "ALIGNED"  # |gamma| within tolerance
+    REACHED = "REACHED"  # rho within tolerance
+    ORIENTED = "ORIENTED"  # |delta| within tolerance
+    BODY_POSE_DONE = "BODY_POSE_DONE"  # set_body_pose answered (or failed) and settled
+    ESTOP = "ESTOP"
+    ESTOP_RELEASE = "ESTOP_RELEASE"
+    COLLISION = "COLLISION"
+    COLLISION_CLEAR = "COLLISION_CLEAR"
+
+
+MOTION_STATES = (State.PRE_ROTATION, State.LINEAR, State.POST_ROTATION, State.BODY_POSE)
+STOP_STATES = (State.EMERGENCY_STOP, State.COLLISION_DETECTED)
+
+TRANSITIONS = {}  # type: Dict[Tuple[State, Event], State]
+TRANSITIONS.update(
+    {
+        (State.PRE_ROTATION, Event.ALIGNED): State.LINEAR,
+        (State.LINEAR, Event.REACHED): State.POST_ROTATION,
+        (State.POST_ROTATION, Event.ORIENTED): State.BODY_POSE,
+        (State.BODY_POSE, Event.BODY_POSE_DONE): State.WAITING_FOR_POSE,
+        (State.EMERGENCY_STOP, Event.ESTOP_RELEASE): State.WAITING_FOR_POSE,
+        (State.COLLISION_DETECTED, Event.COLLISION_CLEAR): State.WAITING_FOR_POSE,
+        (State.COLLISION_DETECTED, Event.ESTOP): State.EMERGENCY_STOP,
+        # A collision while the e-stop is engaged keeps the e-stop (it needs explicit release).
+        (State.EMERGENCY_STOP, Event.COLLISION): State.EMERGENCY_STOP,
+    }
+)
+for _state in (State.WAITING_FOR_POSE,) + MOTION_STATES:
+    # A new goal is accepted when idle and replaces the current one while moving.
+    TRANSITIONS[(_state, Event.GOAL_FAR)] = State.PRE_ROTATION
+    TRANSITIONS[(_state, Event.GOAL_NEAR)] = State.LINEAR
+    TRANSITIONS[(_state, Event.ESTOP)] = State.EMERGENCY_STOP
+    TRANSITIONS[(_state, Event.COLLISION)] = State.COLLISION_DETECTED
+
+STATUS = {
+    State.WAITING_FOR_POSE: "idle",
+    State.PRE_ROTATION: "running",
+    State.LINEAR: "running",
+    State.POST_ROTATION: "running",
+    State.BODY_POSE: "running",
+    State.EMERGENCY_STOP: "emergency",
+    State.COLLISION_DETECTED: "collision",
+}
+
+
+class Goal:
+    """A goal pose: position [m], heading [rad], body roll/pitch [rad], body height change [m]."""
+
+    __slots__ = ("x", "y", "yaw", "roll", "pitch", "body_height")
+
+    def __init__(
+        self, x: float, y: float, yaw: float, roll: float = 0.0, pitch: float = 0.0, body_height: float = 0.0
+    ) -> None:
+        self.x = x
+        self.y = y
+        self.yaw = yaw
+        self.roll = roll
+        self.pitch = pitch
+        self.body_height = body_height
+
+    def __repr__(self) -> str:
+        """Readable form for logs."""
+        return "Goal(x=%.3f, y=%.3f, yaw=%.3f, roll=%.3f, pitch=%.3f, body_height=%.3f)" % (
+            self.x,
+            self.y,
+            self.yaw,
+            self.roll,
+            self.pitch,
+            self.body_height,
+        )
+
+
+class Params:
+    """Tolerances and options of the position controller (defaults documented in the README)."""
+
+    __slots__ = (
+        "gains",
+        "skip_rotation_distance",
+        "position_tolerance",
+        "align_tolerance",
+        "yaw_tolerance",
+        "pose_timeout",
+        "rotation_x_control",
+        "rotation_y_control",
+        "k_hold",
+        "max_v_hold",
+        "keep_direction",
+        "body_pose_settle",
+    )
+
+    def __init__(
+        self,
+        gains: Optional[Gains] = None,
+        skip_rotation_distance: float = 0.4,
+        position_tolerance: float = 0.02,
+        align_tolerance: float = 0.05,
+        yaw_tolerance: float = 0.02,
+        pose_timeout: float = 0.5,
+        rotation_x_control: bool = True,
+        rotation_y_control: bool = True,
+        k_hold: float = 5.0,
+        max_v_hold: float = 0.2,
+        keep_direction: bool = True,
+        body_pose_settle: float = 0.0,
+    ) -> None:
+        self.gains = gains if gains is not None else Gains()
+        for name, value in (
+            ("skip_rotation_distance", skip_rotation_distance),
+            ("position_tolerance", position_tolerance),
+            ("align_tolerance", align_tolerance),
+            ("yaw_tolerance", yaw_tolerance),
+            ("pose_timeout", pose_timeout),
+            ("k_hold", k_hold),
+            ("max_v_hold", max_v_hold),
+        ):
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+                raise ValueError("%s must be a finite number > 0, got %r" % (name, value))
+        if not isinstance(body_pose_settle, (int, float)) or not 0.0 <= body_pose_settle < 60.0:
+            raise ValueError("body_pose_settle must be in [0, 60) s, got %r" % (body_pose_settle,))
+        self.skip_rotation_distance = float(skip_rotation_distance)
+        self.position_tolerance = float(position_tolerance)
+        self.align_tolerance = float(align_tolerance)
+        self.yaw_tolerance = float(yaw_tolerance)
+        self.pose_timeout = float(pose_timeout)
+        self.rotation_x_control = bool(rotation_x_control)
+        self.rotation_y_control = bool(rotation_y_control)
+        self.k_hold = float(k_hold)
+        self.max_v_hold = float(max_v_hold)
+        self.keep_direction = bool(keep_direction)
+        self.body_pose_settle = float(body_pose_settle)
+
+
+class GoalRejectedError(ValueError):
+    """Raised by set_goal when a goal cannot be accepted; the message says why."""
+
+
+ZERO = (0.0, 0.0, 0.0)  # type: Twist2D
+
+
+class PositionController:
+    """The position controller: FSM + Eq. 1.
+
+    Args:
+        params: tolerances, gains and options.
+        on_enter: optional callback(state) called after every state change (after the
+            controller's own entry actions).
+    """
+
+    def __init__(self, params: Optional[Params] = None, on_enter: Optional[Callable[[State], None]] = None) -> None:
+        self.params = params if params is not None else Params()
+        self.state = State.WAITING_FOR_POSE
+        self.goal = None  # type: Optional[Goal]
+        self.hold = None  # type: Optional[Tuple[float, float]]
+        self.estop = False
+        self.collision = False
+        self.speed_scale = 1.0
+        self.body_pose_request = None  # type: Optional[Goal]
+        self.history = []  # type: List[Tuple[State, Event, State]]
+        self._pose = None  # type: Optional[Tuple[float, float, float]]
+        self._pose_time = None  # type: Optional[float]
+        self._body_pose_since = None  # type: Optional[float]
+        self._last_cmd = ZERO
+        self._on_enter = on_enter
+
+    # ----------------------------------------------------------------- FSM core
+    @property
+    def status(self) -> str:
+        """Status for the GUI / main controller: idle, running, emergency or collision."""
+        return STATUS[self.state]
+
+    def fire(self, event: Event) -> bool:
+        """Apply event; return True if the transition table has an entry for it."""
+        target = TRANSITIONS.get((self.state, event))
+        if target is None:
+            return False
+        source = self.state
+        self.state = target
+        self.history.append((source, event, target))
+        self._enter(target)
+        if self._on_enter is not None:
+            self._on_enter(target)
+        return True
+
+    def _enter(self, state: State) -> None:
+        if state in STOP_STATES or state in (State.WAITING_FOR_POSE, State.BODY_POSE):
+            self._last_cmd = ZERO  # zero velocity on entry
+        if state in STOP_STATES or state == State.WAITING_FOR_POSE:
+            self.goal = None
+            self.hold = None
+            self.body_pose_request = None
+        if state == State.PRE_ROTATION and self._pose is not None:
+            self.hold = (self._pose[0], self._pose[1])
+        if state == State.POST_ROTATION and self.goal is not None:
+            self.hold = (self.goal.x, self.goal.y)
+        if state == State.BODY_POSE:
+            self.body_pose_request = self.goal
+            self._body_pose_since = None
+
+    # ----------------------------------------------------------------- inputs
+    def update_pose(self, x: float, y: float, yaw: float, now: float) -> bool:
+        """Feed a pose measurement received at now [s]; NaN poses are ignored (False)."""
+        if not all(math.isfinite(v) for v in (x, y, yaw, now)):
+            return False
+        self._pose = (x, y, yaw)
+        self._pose_time = now
+        return True
+
+    def pose_fresh(self, now: float) -> bool:
+        """True if a pose arrived within pose_timeout before now."""
+        return self._pose_time is not None and now - self._pose_time <= self.params.pose_timeout
+
+    def set_speed_scale(self, scale: float) -> None:
+        """Slowdown from the LiDAR zone: clamp to [0, 1]; NaN means stop (0)."""
+        self.speed_scale = min(1.0, max(0.0, scale)) if math.isfinite(scale) else 0.0
+
+    def set_emergency(self, engaged: bool) -> None:
+        """Engage or release the emergency stop (release goes to WAITING_FOR_POSE / idle)."""
+        self.estop = bool(engaged)
+        if self.estop:
+            self.fire(Event.ESTOP)
+        elif self.fire(Event.ESTOP_RELEASE) and self.collision:
+            self.fire(Event.COLLISION)
+
+    def set_collision(self, detected: bool) -> None:
+        """Report a collision or its clearance (clear goes to WAITING_FOR_POSE / idle)."""
+        self.collision = bool(detected)
+        self.fire(Event.COLLISION if self.collision else Event.COLLISION_CLEAR)
+
+    def set_goal(self, goal: Goal, now: float) -> None:
+        """Accept a new goal (replaces a running one).
+
+        Raises:
+            GoalRejectedError: NaN/inf values, a stop state, or no fresh pose to start from.
+        """
+        values = (goal.x, goal.y, goal.yaw, goal.roll, goal.pitch, goal.body_height)
+        if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
+            raise GoalRejectedError("goal has non-finite values: %r" % (goal,))
+        if self.state == State.EMERGENCY_STOP:
+            raise GoalRejectedError("emergency stop engaged")
+        if self.state == State.COLLISION_DETECTED:
+            raise GoalRejectedError("collision detected")
+        if not self.pose_fresh(now):
+            raise GoalRejectedError("no robot pose received within %.2f s" % self.params.pose_timeout)
+        x, y, _ = self._pose
+        self.goal = goal
+        far = math.hypot(goal.x - x, goal.y - y) >= self.params.skip_rotation_distance
+        self.fire(Event.GOAL_FAR if far else Event.GOAL_NEAR)
+
+    def body_pose_done(self, now: float) -> None:
+        """The body pose request was answered (success or failure) at now [s]."""
+        if self.state == State.BODY_POSE:
+            self.body_pose_request = None
+            self._body_pose_since = now
+
+    # ----------------------------------------------------------------- control
+    def step(self, now: float) -> Twist2D:
+        """Advance the FSM with the latest pose and return (v_x, v_y, yaw_rate) to command.
+
+        Zero whenever idle, stopped, setting the body pose, or the pose is stale.
+        """
+        if self.state not in MOTION_STATES:
+            return ZERO
+        if self.state == State.BODY_POSE:
+            if self._body_pose_since is not None and now - self._body_pose_since >= self.params.body_pose_settle:
+                self.fire(Event.BODY_POSE_DONE)
+            return ZERO
+        if not self.pose_fresh(now):
+            self._last_cmd = ZERO
+            return ZERO
+        cmd = self._motion_command()
+        # Transitions may chain (e.g. a goal already reached skips straight to BODY_POSE).
+        self._last_cmd = tuple(v * self.speed_scale for v in cmd)
+        return self._last_cmd
+
+    def _motion_command(self) -> Twist2D:
+        p = self.params
+        x, y, yaw = self._pose
+        for _ in range(4):
+            goal = self.goal
+            if self.state == State.PRE_ROTATION:
+                err = Errors(x, y, yaw, goal.x, goal.y, goal.yaw)
+                if abs(err.gamma) <= p.align_tolerance:
+                    self.fire(Event.ALIGNED)
+                    continue
+                return self._rotate(err.gamma, x, y, yaw)
+            if self.state == State.LINEAR:
+                err = Errors(x, y, yaw, goal.x, goal.y, goal.yaw)
+                if err.rho <= p.position_tolerance:
+                    self.fire(Event.REACHED)
+                    continue
+                vx, vy = linear_command(err, p.gains, p.keep_direction)
+                return (vx, vy, 0.0)
+            if self.state == State.POST_ROTATION:
+                delta = wrap_angle(goal.yaw - yaw)
+                if abs(delta) <= p.yaw_tolerance:
+                    self.fire(Event.ORIENTED)
+                    continue
+                return self._rotate(delta, x, y, yaw)
+            return ZERO
+        return ZERO
+
+    def _rotate(self, angle_error: float, x: float, y: float, yaw: float) -> Twist2D:
+        p = self.params
+        wz = rotation_command(angle_error, p.gains)
+        vx = vy = 0.0
+        if self.hold is not None and (p.rotation_x_control or p.rotation_y_control):
+            err = Errors(x, y, yaw, self.hold[0], self.hold[1], yaw)
+            vx, vy = hold_command(err, p.k_hold, p.max_v_hold, p.rotation_x_control, p.rotation_y_control)
+        return (vx, vy, wz)
+
+    @property
+    def last_command(self) -> Twist2D:
+        """The last velocity step() returned."""
+        return self._last_cmd

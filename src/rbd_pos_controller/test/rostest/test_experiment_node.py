@@ -1,0 +1,67 @@
+#!/usr/bin/env python3
+"""rostest: run_experiment on the mock A1 (drift on); thesis path, 180 deg with/without position control.
+
+Thresholds are the issue's goals. Set RBD_EXPERIMENT_OUT to keep the JSON/PNG output.
+"""
+
+import json
+import os
+import subprocess
+import tempfile
+import unittest
+
+import rospy
+import rostest
+
+NODE = "/rbd_pos_controller/"
+
+
+def run_experiment(name, out, label):
+    proc = subprocess.run(
+        ["rosrun", "rbd_pos_controller", "run_experiment", name, "--out", out, "--label", label],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        universal_newlines=True,
+        timeout=150,
+    )
+    assert proc.returncode == 0, proc.stdout
+    with open(os.path.join(out, name + "_metrics.json")) as fh:
+        return json.load(fh)
+
+
+class TestExperiment(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("test_experiment", anonymous=True)
+        rospy.wait_for_service(NODE + "set_position", timeout=60.0)
+        cls.out = os.environ.get("RBD_EXPERIMENT_OUT") or tempfile.mkdtemp(prefix="rbd-experiment.")
+
+    def test_1_thesis_path(self):
+        m = run_experiment("thesis_path", os.path.join(self.out, "default"), "thesis path (default gains)")
+        rospy.loginfo("thesis path: %s", m)
+        self.assertTrue(m["reached"])
+        self.assertLessEqual(m["max_deviation_m"], 0.05)
+        self.assertLessEqual(m["total_time_s"], 26.0)
+        self.assertLessEqual(m["final_position_error_m"], 0.03)
+        self.assertLessEqual(m["final_yaw_error_deg"], 2.0)
+        for suffix in ("_path.png", "_velocities.png"):
+            self.assertTrue(os.path.getsize(os.path.join(self.out, "default", "thesis_path" + suffix)) > 5000)
+
+    def test_2_rotation_with_and_without_position_control(self):
+        rospy.set_param(NODE + "rotation_x_control", False)
+        rospy.set_param(NODE + "rotation_y_control", False)
+        without = run_experiment("rotation180", os.path.join(self.out, "rotation_off"), "180 deg, no position control")
+        rospy.set_param(NODE + "rotation_x_control", True)
+        rospy.set_param(NODE + "rotation_y_control", True)
+        with_pc = run_experiment("rotation180", os.path.join(self.out, "rotation_xy"), "180 deg, x+y position control")
+        rospy.loginfo(
+            "180 deg drift: without %.3f m, with position control %.3f m",
+            without["drift_from_start_m"],
+            with_pc["drift_from_start_m"],
+        )
+        self.assertGreater(without["drift_from_start_m"], 0.2)  # the drift is really there
+        self.assertLessEqual(with_pc["drift_from_start_m"] * 2.0, without["drift_from_start_m"])
+
+
+if __name__ == "__main__":
+    rostest.rosrun("rbd_pos_controller", "experiment_mock_a1", TestExperiment)

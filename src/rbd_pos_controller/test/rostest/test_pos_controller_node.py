@@ -1,0 +1,186 @@
+#!/usr/bin/env python3
+"""rostest: the position controller node drives the kinematic robot; stops on e-stop, stale pose."""
+
+import math
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from geometry_msgs.msg import Pose, PoseStamped, Twist, Vector3
+from std_msgs.msg import Float32, String
+from std_srvs.srv import SetBool
+
+from rbd_msgs.srv import SetPosition
+from rbd_pos_controller.geometry import quaternion_from_rpy, rpy_from_quaternion
+
+PERIOD = 1.0 / 20.0  # the controller's rate
+
+
+def make_pose(x, y, yaw, roll=0.0, pitch=0.0, z=0.0):
+    pose = Pose()
+    pose.position.x, pose.position.y, pose.position.z = x, y, z
+    o = pose.orientation
+    o.x, o.y, o.z, o.w = quaternion_from_rpy(roll, pitch, yaw)
+    return pose
+
+
+class Recorder:
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.truth = None
+        self.cmds = []  # (receipt time, Twist)
+        self.status = []
+        self.body = None
+        rospy.Subscriber("/rbd_sim/ground_truth_pose", PoseStamped, self.on_truth)
+        rospy.Subscriber("/cmd_vel", Twist, self.on_cmd)
+        rospy.Subscriber("/rbd_pos_controller/status", String, lambda m: self.status.append(m.data))
+        rospy.Subscriber("/kinematic_robot/body_pose", Vector3, self.on_body)
+
+    def on_truth(self, msg):
+        with self.lock:
+            self.truth = msg.pose
+
+    def on_cmd(self, msg):
+        with self.lock:
+            self.cmds.append((time.monotonic(), msg))
+
+    def on_body(self, msg):
+        self.body = msg
+
+    def xy_yaw(self):
+        with self.lock:
+            p = self.truth
+        return (
+            p.position.x,
+            p.position.y,
+            rpy_from_quaternion(p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w)[2],
+        )
+
+
+def wait_for(predicate, timeout, step=0.02):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(step)
+    return predicate()
+
+
+class TestPosController(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("test_pos_controller", anonymous=True)
+        cls.rec = Recorder()
+        for name in (
+            "/rbd_pos_controller/set_position",
+            "/rbd_pos_controller/emergency",
+            "/kinematic_robot/pause_pose",
+        ):
+            rospy.wait_for_service(name, timeout=60.0)
+        cls.set_position = rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)
+        cls.emergency = rospy.ServiceProxy("/rbd_pos_controller/emergency", SetBool)
+        cls.pause = rospy.ServiceProxy("/kinematic_robot/pause_pose", SetBool)
+        cls.scale_pub = rospy.Publisher("/rbd_lidar/speed_scale", Float32, queue_size=1, latch=True)
+        assert wait_for(lambda: cls.rec.truth is not None and cls.rec.status, 30.0)
+
+    def idle(self):
+        return self.rec.status and self.rec.status[-1] == "idle"
+
+    def go(self, pose, timeout=40.0):
+        res = self.set_position(pose=pose)
+        self.assertTrue(res.accepted, res.message)
+        self.assertTrue(wait_for(lambda: self.rec.status[-1] == "running", 5.0))
+        self.assertTrue(wait_for(self.idle, timeout), "goal not reached, status %s" % self.rec.status[-3:])
+
+    def last_cmd_after(self, t0):
+        with self.rec.lock:
+            return [m for t, m in self.rec.cmds if t > t0]
+
+    def assert_robot_stopped(self, window=0.5):
+        x0, y0, yaw0 = self.rec.xy_yaw()
+        time.sleep(window)
+        x1, y1, yaw1 = self.rec.xy_yaw()
+        self.assertLess(math.hypot(x1 - x0, y1 - y0), 0.005)
+        self.assertLess(abs(yaw1 - yaw0), 0.005)
+
+    def test_1_reaches_goal_with_body_pose(self):
+        self.go(make_pose(0.6, 0.3, 1.2, pitch=0.1, z=-0.05))
+        x, y, yaw = self.rec.xy_yaw()
+        self.assertLess(math.hypot(x - 0.6, y - 0.3), 0.03)
+        self.assertLess(abs(yaw - 1.2), math.radians(2.0))
+        self.assertAlmostEqual(self.rec.body.y, 0.1, places=3)
+        self.assertAlmostEqual(self.rec.body.z, -0.05, places=3)
+        # idle means zero velocity
+        t0 = time.monotonic()
+        time.sleep(0.3)
+        cmds = self.last_cmd_after(t0)
+        self.assertGreaterEqual(len(cmds), 3, "cmd_vel must keep coming at >= 10 Hz")
+        self.assertTrue(all(c.linear.x == 0 and c.linear.y == 0 and c.angular.z == 0 for c in cmds))
+
+    def test_2_bad_goals_rejected_without_motion(self):
+        x0, y0, _ = self.rec.xy_yaw()
+        for pose in (make_pose(float("nan"), 0.0, 0.0), make_pose(0.0, 0.0, 0.0)):
+            if pose.position.x == 0.0:
+                pose.orientation.w = 3.0  # non-unit quaternion
+            res = self.set_position(pose=pose)
+            self.assertFalse(res.accepted)
+            self.assertTrue(res.message)
+        self.assertTrue(self.idle())
+        self.assert_robot_stopped()
+
+    def test_3_emergency_zeroes_within_one_period_and_releases_to_idle(self):
+        x, y, _ = self.rec.xy_yaw()
+        res = self.set_position(pose=make_pose(x - 1.0, y, math.pi))
+        self.assertTrue(res.accepted)
+        self.assertTrue(
+            wait_for(lambda: any(abs(c.angular.z) > 0.1 for c in self.last_cmd_after(time.monotonic() - 0.1)), 5.0)
+        )
+        t0 = time.monotonic()
+        self.emergency(data=True)
+        self.assertTrue(wait_for(lambda: self.rec.status[-1] == "emergency", 2.0))
+        # every cmd_vel received more than one period after the call is zero
+        time.sleep(0.5)
+        late = [c for t, c in self.rec.cmds if t > t0 + PERIOD + 0.05]
+        self.assertTrue(late)
+        self.assertTrue(all(c.angular.z == 0.0 and c.linear.x == 0.0 for c in late))
+        self.assert_robot_stopped()
+        self.assertFalse(self.set_position(pose=make_pose(x, y, 0.0)).accepted)
+        self.emergency(data=False)
+        self.assertTrue(wait_for(self.idle, 2.0))
+
+    def test_4_stale_pose_stops_then_continues(self):
+        x, y, yaw = self.rec.xy_yaw()
+        goal = make_pose(x + 0.8 * math.cos(yaw), y + 0.8 * math.sin(yaw), yaw)
+        self.assertTrue(self.set_position(pose=goal).accepted)
+        self.assertTrue(
+            wait_for(lambda: any(abs(c.linear.x) > 0.1 for c in self.last_cmd_after(time.monotonic() - 0.1)), 5.0)
+        )
+        t0 = time.monotonic()
+        self.pause(data=True)
+        time.sleep(1.0)
+        late = [c for t, c in self.rec.cmds if t > t0 + 0.5 + PERIOD + 0.1]
+        self.assertTrue(late)
+        self.assertTrue(all(c.linear.x == 0.0 for c in late))
+        self.assertEqual(self.rec.status[-1], "running")
+        self.pause(data=False)
+        self.assertTrue(wait_for(self.idle, 30.0))
+        x1, y1, _ = self.rec.xy_yaw()
+        self.assertLess(math.hypot(x1 - goal.position.x, y1 - goal.position.y), 0.03)
+
+    def test_5_speed_scale_zero_holds_robot(self):
+        self.scale_pub.publish(Float32(0.0))
+        time.sleep(0.3)
+        x, y, yaw = self.rec.xy_yaw()
+        self.assertTrue(
+            self.set_position(pose=make_pose(x + 0.5 * math.cos(yaw), y + 0.5 * math.sin(yaw), yaw)).accepted
+        )
+        time.sleep(0.5)
+        self.assert_robot_stopped()
+        self.scale_pub.publish(Float32(1.0))
+        self.assertTrue(wait_for(self.idle, 30.0))
+
+
+if __name__ == "__main__":
+    rostest.rosrun("rbd_pos_controller", "pos_controller_wiring", TestPosController)
