@@ -4,12 +4,13 @@ import base64
 import os
 import socket
 import struct
+from typing import Any, Optional
 
 
-class RawWs(object):
+class RawWs:
     """Blocking client: ``send_text``, ``send_binary``, ``recv`` (returns str or bytes)."""
 
-    def __init__(self, host, port, timeout=10.0):
+    def __init__(self, host: str, port: int, timeout: Optional[float] = 10.0) -> None:
         """Connect and do the opening handshake."""
         self.sock = socket.create_connection((host, port), timeout=timeout)
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
@@ -30,7 +31,7 @@ class RawWs(object):
             raise ConnectionError(status.decode(errors="replace"))
         self.buf = bytearray(rest)
 
-    def _send(self, opcode, payload):
+    def _send(self, opcode: Any, payload: Any) -> None:
         n = len(payload)
         if n < 126:
             head = struct.pack("!BB", 0x80 | opcode, 0x80 | n)
@@ -41,22 +42,22 @@ class RawWs(object):
         # zero mask: valid per RFC 6455 and avoids a Python-speed XOR loop
         self.sock.sendall(head + b"\x00\x00\x00\x00" + payload)
 
-    def send_text(self, text):
+    def send_text(self, text: str) -> None:
         """Send a text frame."""
         self._send(1, text.encode("utf-8"))
 
-    def send_binary(self, data):
+    def send_binary(self, data: Any) -> None:
         """Send a binary frame."""
         self._send(2, bytes(data))
 
-    def _need(self, n):
+    def _need(self, n: int) -> None:
         while len(self.buf) < n:
             chunk = self.sock.recv(max(65536, n - len(self.buf)))
             if not chunk:
                 raise ConnectionError("connection closed")
             self.buf += chunk
 
-    def recv(self):
+    def recv(self) -> Any:
         """Return the next data frame (str for text, bytes for binary); answers pings."""
         message = bytearray()
         first_opcode = None
@@ -91,7 +92,7 @@ class RawWs(object):
                 break
         return bytes(message).decode("utf-8") if first_opcode == 1 else bytes(message)
 
-    def close(self):
+    def close(self) -> None:
         """Close the TCP connection (no closing handshake)."""
         try:
             self.sock.close()

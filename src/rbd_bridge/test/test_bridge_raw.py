@@ -80,11 +80,26 @@ def echo_until_received(c, text, timeout=10.0):
     raise AssertionError("echo of %r never arrived" % text)
 
 
-GARBAGE = ["", "{", "null", "42", "[1, 2]", '"text"', "true", '{"op": null}', '{"op": "bogus"}',
-           '{"op": "publish", "topic": "/echo/in", "msg": {"data": 5}}',
-           '{"op": "publish", "topic": "/echo/in", "msg": {"data": "x", "extra": 1}}',
-           '{"op": "subscribe", "topic": ["/x"]}', '{"op": "call_service", "service": "/echo/set_bool", "args": 3}',
-           "[" * 5000 + "]" * 5000, b"\x00\xff\xfe garbage", b"\x9f\x9f", b"", bytes(range(256)) * 10]
+GARBAGE = [
+    "",
+    "{",
+    "null",
+    "42",
+    "[1, 2]",
+    '"text"',
+    "true",
+    '{"op": null}',
+    '{"op": "bogus"}',
+    '{"op": "publish", "topic": "/echo/in", "msg": {"data": 5}}',
+    '{"op": "publish", "topic": "/echo/in", "msg": {"data": "x", "extra": 1}}',
+    '{"op": "subscribe", "topic": ["/x"]}',
+    '{"op": "call_service", "service": "/echo/set_bool", "args": 3}',
+    "[" * 5000 + "]" * 5000,
+    b"\x00\xff\xfe garbage",
+    b"\x9f\x9f",
+    b"",
+    bytes(range(256)) * 10,
+]
 
 
 def test_malformed_input_never_kills_the_session_and_errors_are_opt_in(client):
@@ -145,8 +160,15 @@ def test_fragmented_input_and_fragmented_output(client):
 def test_compressions_cbor_cbor_raw_png(client):
     c = client()
     for compression in ("cbor", "cbor-raw", "png"):
-        c.send({"op": "subscribe", "id": compression, "topic": "/echo/tick", "type": "std_msgs/Header",
-                "compression": compression})
+        c.send(
+            {
+                "op": "subscribe",
+                "id": compression,
+                "topic": "/echo/tick",
+                "type": "std_msgs/Header",
+                "compression": compression,
+            }
+        )
         frame = c.recv_until(lambda f: True)
         c.send({"op": "unsubscribe", "id": compression, "topic": "/echo/tick"})
         c.drain(0.3)
@@ -173,7 +195,7 @@ def test_call_service_list_dict_and_missing_args(client):
         if args is not None:
             frame["args"] = args
         c.send(frame)
-        reply = c.recv_until(lambda f: f.get("id") == call_id)
+        reply = c.recv_until(lambda f, want=call_id: f.get("id") == want)
         assert reply["op"] == "service_response" and reply["result"] is True
         assert reply["values"] == {"success": call_id in ("list", "dict"), "message": "echo"}
     c.send({"op": "call_service", "id": "too many", "service": "/echo/set_bool", "args": [True, 1]})
@@ -202,12 +224,24 @@ def test_client_hosted_service_answer_and_failure(client):
     for ok in (True, False):
         caller.send({"op": "call_service", "id": "c-%s" % ok, "service": "/web/trig"})
         request = provider.recv_until(lambda f: f.get("op") == "call_service")
-        provider.send({"op": "service_response", "id": request["id"], "service": "/web/trig",
-                       "values": {"success": True, "message": "done"} if ok else "no way", "result": ok})
-        reply = caller.recv_until(lambda f: f.get("id") == "c-%s" % ok)
+        provider.send(
+            {
+                "op": "service_response",
+                "id": request["id"],
+                "service": "/web/trig",
+                "values": {"success": True, "message": "done"} if ok else "no way",
+                "result": ok,
+            }
+        )
+        reply = caller.recv_until(lambda f, want="c-%s" % ok: f.get("id") == want)
         if ok:
-            assert reply == {"op": "service_response", "service": "/web/trig", "id": "c-True", "result": True,
-                             "values": {"success": True, "message": "done"}}
+            assert reply == {
+                "op": "service_response",
+                "service": "/web/trig",
+                "id": "c-True",
+                "result": True,
+                "values": {"success": True, "message": "done"},
+            }
         else:
             assert reply["result"] is False and "no way" in reply["values"]
     provider.send({"op": "unadvertise_service", "service": "/web/trig"})
@@ -228,8 +262,10 @@ def test_oversized_frame_closes_only_that_connection(open_bridge, client):
 def test_stalled_client_does_not_delay_others(open_bridge, client):
     stalled = socket.create_connection(("127.0.0.1", open_bridge.port))
     stalled.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
-    stalled.sendall(b"GET / HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-                    b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")
+    stalled.sendall(
+        b"GET / HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+        b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n"
+    )
     sub = json.dumps({"op": "subscribe", "topic": "/echo/tick", "type": "std_msgs/Header"}).encode()
     stalled.sendall(b"\x81" + bytes([0x80 | len(sub)]) + b"\x00\x00\x00\x00" + sub)  # masked with a zero key
     try:
@@ -251,8 +287,10 @@ def test_stalled_client_does_not_delay_others(open_bridge, client):
 def test_bridge_survives_abrupt_disconnects(open_bridge, client):
     for _ in range(5):
         s = socket.create_connection(("127.0.0.1", open_bridge.port))
-        s.sendall(b"GET / HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-                  b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n\x81\xfe")
+        s.sendall(
+            b"GET / HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+            b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n\x81\xfe"
+        )
         s.close()
         s = socket.create_connection(("127.0.0.1", open_bridge.port))
         s.sendall(b"not http at all\r\n\r\n")

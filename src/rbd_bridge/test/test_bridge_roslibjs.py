@@ -20,15 +20,27 @@ def node_ready():
     if not node or not npm:
         pytest.skip("node/npm not installed")
     if not os.path.isdir(os.path.join(JS, "node_modules", "roslib")):
-        proc = subprocess.run([npm, "ci", "--no-audit", "--no-fund"], cwd=JS, stdout=subprocess.PIPE,
-                              stderr=subprocess.STDOUT, universal_newlines=True, timeout=300)
+        proc = subprocess.run(
+            [npm, "ci", "--no-audit", "--no-fund"],
+            cwd=JS,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            universal_newlines=True,
+            timeout=300,
+        )
         assert proc.returncode == 0, proc.stdout[-3000:]
     return node
 
 
 def test_roslibjs_publish_subscribe_services_rosapi(node_ready, open_bridge):
-    proc = subprocess.run([node_ready, os.path.join(JS, "roslibjs_client.js"), open_bridge.url], cwd=JS,
-                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True, timeout=60)
+    proc = subprocess.run(  # noqa: UP022 (Python 3.6 has no capture_output)
+        [node_ready, os.path.join(JS, "roslibjs_client.js"), open_bridge.url],
+        cwd=JS,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        universal_newlines=True,
+        timeout=60,
+    )
     lines = [line for line in proc.stdout.splitlines() if line.startswith("{")]
     assert proc.returncode == 0 and lines, proc.stdout[-2000:] + proc.stderr[-2000:]
     result = json.loads(lines[-1])

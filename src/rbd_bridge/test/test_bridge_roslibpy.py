@@ -137,7 +137,8 @@ def test_client_hosted_service_is_a_ros_service_and_disappears_with_its_client(r
     assert wait_until(lambda: master.lookupService("/web/negate"), 10)
     caller = roslibpy_client()
     result = roslibpy.Service(caller, "/web/negate", "std_srvs/SetBool").call(
-        roslibpy.ServiceRequest({"data": True}), timeout=10)
+        roslibpy.ServiceRequest({"data": True}), timeout=10
+    )
     assert result == {"success": False, "message": "from the web"} and seen == [{"data": True}]
     provider.close()
 
@@ -162,7 +163,8 @@ def test_ros_provider_vanishing_mid_call_gives_an_error_not_a_hang(roslibpy_clie
         done.set()
 
     roslibpy.Service(ros, "/victim/echo/slow", "std_srvs/Trigger").call(
-        roslibpy.ServiceRequest(), callback=lambda r: done.set(), errback=errback)
+        roslibpy.ServiceRequest(), callback=lambda r: done.set(), errback=errback
+    )
     time.sleep(1.0)
     start = time.monotonic()
     victim.kill()
@@ -206,5 +208,6 @@ def test_rosapi_calls_roslibpy_uses(roslibpy_client):
     ros.get_action_servers(servers.append)
     assert wait_until(lambda: servers, 10) and servers[0] == {"action_servers": []}
     pubs = roslibpy.Service(ros, "/rosapi/publishers", "rosapi/Publishers").call(
-        roslibpy.ServiceRequest({"topic": "/echo/tick"}), timeout=10)
+        roslibpy.ServiceRequest({"topic": "/echo/tick"}), timeout=10
+    )
     assert pubs == {"publishers": ["/echo_node"]}

@@ -33,8 +33,14 @@ def robodog():
 
 def start_auth(env, secret_file):
     """A second bridge (other node name) that requires the shared secret."""
-    return start_bridge(env, launch="bridge.launch", authenticate="true", secret_file=secret_file,
-                        node_name="rbd_bridge_auth", topics_glob="[*]")
+    return start_bridge(
+        env,
+        launch="bridge.launch",
+        authenticate="true",
+        secret_file=secret_file,
+        node_name="rbd_bridge_auth",
+        topics_glob="[*]",
+    )
 
 
 def test_default_allow_list_denies_cmd_vel_and_allows_gestures(robodog):
@@ -59,8 +65,13 @@ def test_default_allow_list_denies_cmd_vel_and_allows_gestures(robodog):
         pubs = dict(master_of(env).getSystemState()[0])
         assert "/cmd_vel" not in pubs
         # gestures are allowed and reach ROS
-        echo = subprocess.Popen(["rostopic", "echo", "-n", "1", "/rbd_gestrec/gesture"], env=env.env,
-                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
+        echo = subprocess.Popen(
+            ["rostopic", "echo", "-n", "1", "/rbd_gestrec/gesture"],
+            env=env.env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            universal_newlines=True,
+        )
         try:
             ws.send(json.dumps({"op": "advertise", "topic": "/rbd_gestrec/gesture", "type": "std_msgs/String"}))
             deadline = time.monotonic() + 20
@@ -96,8 +107,16 @@ def test_rosapi_lists_only_allowed_names(robodog):
 
 def auth_frame(t, secret=SECRET):
     end = t + 60
-    return {"op": "auth", "mac": make_mac(secret, "127.0.0.1", "127.0.0.1", "rnd", t, "user", end),
-            "client": "127.0.0.1", "dest": "127.0.0.1", "rand": "rnd", "t": t, "level": "user", "end": end}
+    return {
+        "op": "auth",
+        "mac": make_mac(secret, "127.0.0.1", "127.0.0.1", "rnd", t, "user", end),
+        "client": "127.0.0.1",
+        "dest": "127.0.0.1",
+        "rand": "rnd",
+        "t": t,
+        "level": "user",
+        "end": end,
+    }
 
 
 def test_auth_required_then_everything_works(robodog):
@@ -118,8 +137,9 @@ def test_auth_required_then_everything_works(robodog):
     # roslibpy's authenticate() (sent when the connection is ready) works too
     ros = roslibpy.Ros("127.0.0.1", auth_port, transport="asyncio")
     frame = auth_frame(int(time.time()))
-    ros.authenticate(frame["mac"], frame["client"], frame["dest"], frame["rand"], frame["t"], frame["level"],
-                     frame["end"])
+    ros.authenticate(
+        frame["mac"], frame["client"], frame["dest"], frame["rand"], frame["t"], frame["level"], frame["end"]
+    )
     ros.run(timeout=15)
     try:
         assert abs(ros.get_time()["secs"] - time.time()) < 5

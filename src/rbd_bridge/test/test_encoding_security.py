@@ -22,8 +22,19 @@ cbor2 = pytest.importorskip("cbor2")
 
 
 def test_cbor_matches_an_independent_decoder():
-    obj = {"op": "publish", "topic": "/t", "msg": {"i": -5, "big": 2**64 - 1, "f": 1.5, "s": "ü", "b": b"\x00\x01",
-                                                 "l": [True, False, None], "nan": math.nan}}
+    obj = {
+        "op": "publish",
+        "topic": "/t",
+        "msg": {
+            "i": -5,
+            "big": 2**64 - 1,
+            "f": 1.5,
+            "s": "ü",
+            "b": b"\x00\x01",
+            "l": [True, False, None],
+            "nan": math.nan,
+        },
+    }
     data = encoding.cbor_dumps(obj)
     decoded = cbor2.loads(data)
     assert decoded["msg"]["big"] == 2**64 - 1 and decoded["msg"]["b"] == b"\x00\x01"
@@ -41,8 +52,9 @@ def test_cbor_typed_arrays_use_little_endian_tags():
     assert encoding.cbor_loads(data) == {"a": [1.0, 2.0], "b": [1, 2]}
 
 
-@pytest.mark.parametrize("garbage", [b"", b"\xff", b"\x5b\xff\xff\xff\xff\xff\xff\xff\xff", b"\xa1\x01",
-                                     b"\x9f", b"\x81" * 100, b"\x82\x01"])
+@pytest.mark.parametrize(
+    "garbage", [b"", b"\xff", b"\x5b\xff\xff\xff\xff\xff\xff\xff\xff", b"\xa1\x01", b"\x9f", b"\x81" * 100, b"\x82\x01"]
+)
 def test_cbor_decoder_rejects_garbage(garbage):
     with pytest.raises(encoding.DecodeError):
         encoding.cbor_loads(garbage)

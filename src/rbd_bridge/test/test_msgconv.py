@@ -8,7 +8,7 @@ import genpy
 import pytest
 from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import CameraInfo, Image, PointCloud2, PointField
-from std_msgs.msg import Duration, Float64, Header, Int64, String, UInt64, UInt8MultiArray
+from std_msgs.msg import Duration, Float64, Header, Int64, String, UInt8MultiArray, UInt64
 
 from rbd_bridge import encoding
 from rbd_bridge.msgconv import (

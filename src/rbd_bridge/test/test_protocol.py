@@ -116,11 +116,31 @@ def string_message(topic, text):
     return TopicMessage(topic, lambda binary: {"data": text}, lambda: (b"raw", 1, 2))
 
 
-GARBAGE = ["", "{", "null", "42", "-1.5", '"op"', "[1, 2, 3]", "[]", "true", '{"op": 5}', '{"no_op": 1}',
-           '{"op": "no_such_op"}', '{"op": "publish"}', '{"op": "subscribe", "topic": 7}',
-           '{"op": "fragment", "id": "x", "data": 1, "num": 0, "total": 1}', "\u0000\u0001",
-           '{"op": "subscribe", "topic": "/a", "compression": "zip"}', "[" * 100000 + "]" * 100000,
-           b"\xff\xfe\x00garbage", b"\x9f\x9f\x9f", b"", bytes(range(256)), b"\xbf" * 200]
+GARBAGE = [
+    "",
+    "{",
+    "null",
+    "42",
+    "-1.5",
+    '"op"',
+    "[1, 2, 3]",
+    "[]",
+    "true",
+    '{"op": 5}',
+    '{"no_op": 1}',
+    '{"op": "no_such_op"}',
+    '{"op": "publish"}',
+    '{"op": "subscribe", "topic": 7}',
+    '{"op": "fragment", "id": "x", "data": 1, "num": 0, "total": 1}',
+    "\u0000\u0001",
+    '{"op": "subscribe", "topic": "/a", "compression": "zip"}',
+    "[" * 100000 + "]" * 100000,
+    b"\xff\xfe\x00garbage",
+    b"\x9f\x9f\x9f",
+    b"",
+    bytes(range(256)),
+    b"\xbf" * 200,
+]
 
 
 def test_garbage_never_raises_and_is_silent_by_default():
@@ -145,8 +165,9 @@ def test_status_only_after_set_level_and_up_to_that_level():
     session.receive('{"op": "set_level", "level": "warning"}')
     session.receive('{"op": "publish", "id": "p1", "topic": "/a", "msg": {}}')
     frames = drain(out)
-    assert frames == [{"op": "status", "level": "warning", "id": "p1",
-                       "msg": "publish /a: fields filled with defaults: data"}]
+    assert frames == [
+        {"op": "status", "level": "warning", "id": "p1", "msg": "publish /a: fields filled with defaults: data"}
+    ]
     session.receive('{"op": "set_level", "level": "bogus"}')  # dropped, level unchanged
     session.receive('{"op": "set_level", "level": "none"}')
     session.receive("{")
@@ -154,8 +175,12 @@ def test_status_only_after_set_level_and_up_to_that_level():
 
 
 def test_denied_ops_are_refused_and_reported_to_opted_in_clients():
-    policy = Policy(publish_globs=("/rbd_gestrec/gesture",), subscribe_globs=("/rbd_controller/*",),
-                    service_globs=("/rbd_controller/em_stop",), param_globs=())
+    policy = Policy(
+        publish_globs=("/rbd_gestrec/gesture",),
+        subscribe_globs=("/rbd_controller/*",),
+        service_globs=("/rbd_controller/em_stop",),
+        param_globs=(),
+    )
     session, backend, out, _, _ = make(policy)
     session.receive('{"op": "publish", "topic": "/cmd_vel", "msg": {"linear": {"x": 1}}}')
     session.receive('{"op": "advertise", "topic": "/cmd_vel", "type": "geometry_msgs/Twist"}')
@@ -170,8 +195,14 @@ def test_denied_ops_are_refused_and_reported_to_opted_in_clients():
     session.receive('{"op": "set_level", "level": "error"}')
     session.receive('{"op": "publish", "id": "x", "topic": "/cmd_vel", "msg": {}}')
     frames = drain(out)
-    assert frames == [{"op": "status", "level": "error", "id": "x",
-                       "msg": "publish /cmd_vel: not allowed by this bridge's allow-list"}]
+    assert frames == [
+        {
+            "op": "status",
+            "level": "error",
+            "id": "x",
+            "msg": "publish /cmd_vel: not allowed by this bridge's allow-list",
+        }
+    ]
     session.receive('{"op": "publish", "topic": "/rbd_gestrec/gesture", "msg": {"data": "wave"}}')
     assert backend.calls[-1][0] == "publish"
 
@@ -252,7 +283,7 @@ def test_out_queue_is_bounded_by_frames_and_bytes():
     assert len(q) == 5 and q.dropped == 95
     assert [q.pop() for _ in range(5)] == ["095", "096", "097", "098", "099"]
     assert q.pop() is None and q.bytes == 0
-    for i in range(10):
+    for _ in range(10):
         q.push("x" * 400)
     assert q.bytes <= 1000 and len(q) == 2
 
@@ -275,8 +306,11 @@ def test_fragment_size_and_compressions_on_delivery():
         if compression == "cbor":
             assert encoding.cbor_loads(frame) == {"op": "publish", "topic": "/t", "msg": {"data": "hi"}}
         elif compression == "cbor-raw":
-            assert encoding.cbor_loads(frame) == {"op": "publish", "topic": "/t",
-                                                  "msg": {"secs": 1, "nsecs": 2, "bytes": b"raw"}}
+            assert encoding.cbor_loads(frame) == {
+                "op": "publish",
+                "topic": "/t",
+                "msg": {"secs": 1, "nsecs": 2, "bytes": b"raw"},
+            }
         else:
             png = json.loads(frame)
             assert png["op"] == "png"
@@ -320,8 +354,9 @@ def test_client_hosted_service_ops_and_teardown():
     session.receive('{"op": "advertise_service", "service": "/rosapi/topics", "type": "rosapi/Topics"}')
     session.send_service_request("/mine", "req1", {"data": True})
     assert drain(out) == [{"op": "call_service", "id": "req1", "service": "/mine", "args": {"data": True}}]
-    session.receive('{"op": "service_response", "id": "req1", "service": "/mine", "values": {"success": true},'
-                    ' "result": true}')
+    session.receive(
+        '{"op": "service_response", "id": "req1", "service": "/mine", "values": {"success": true},' ' "result": true}'
+    )
     session.receive('{"op": "subscribe", "topic": "/t"}')
     session.receive('{"op": "advertise", "topic": "/p", "type": "std_msgs/String"}')
     session.close()
@@ -341,8 +376,16 @@ def test_auth_required_before_anything_else():
     session.receive('{"op": "subscribe", "topic": "/t"}')
     assert backend.calls == [] and "not authenticated" in drain(out)[0]["msg"]
     mac = make_mac(secret, "client", "dest", "rand", 1000, "admin", 2000)
-    good = {"op": "auth", "mac": mac, "client": "client", "dest": "dest", "rand": "rand", "t": 1000,
-            "level": "admin", "end": 2000}
+    good = {
+        "op": "auth",
+        "mac": mac,
+        "client": "client",
+        "dest": "dest",
+        "rand": "rand",
+        "t": 1000,
+        "level": "admin",
+        "end": 2000,
+    }
     session.receive(json.dumps(good))
     assert session.authenticated and not closed
     session.receive('{"op": "subscribe", "topic": "/t"}')

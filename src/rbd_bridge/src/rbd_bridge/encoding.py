@@ -9,6 +9,7 @@ import json
 import math
 import struct
 import zlib
+from typing import Any
 
 from rbd_bridge.msgconv import TypedArray
 
@@ -30,7 +31,7 @@ class DecodeError(ValueError):
 _json_encoder = json.JSONEncoder(ensure_ascii=False, separators=(",", ":"), allow_nan=False)
 
 
-def _sanitize(value):
+def _sanitize(value: Any) -> Any:
     if isinstance(value, float):
         return value if math.isfinite(value) else None
     if isinstance(value, dict):
@@ -40,7 +41,7 @@ def _sanitize(value):
     return value
 
 
-def json_dumps(obj):
+def json_dumps(obj: Any) -> Any:
     """Serialize obj compactly; non-finite floats become null (never the NaN literal).
 
     Args:
@@ -75,7 +76,7 @@ _TYPED_TAGS = {
 _TAG_FORMATS = {tag: fmt for tag, fmt in _TYPED_TAGS.values()}
 
 
-def _head(major, value):
+def _head(major: int, value: Any) -> Any:
     if value < 24:
         return struct.pack("B", (major << 5) | value)
     if value < 0x100:
@@ -87,7 +88,7 @@ def _head(major, value):
     return struct.pack(">BQ", (major << 5) | 27, value)
 
 
-def _cbor_encode(value, out):
+def _cbor_encode(value: Any, out: Any) -> None:
     if value is None:
         out.append(b"\xf6")
     elif value is True:
@@ -135,7 +136,7 @@ def _cbor_encode(value, out):
         raise ValueError("cannot CBOR-encode %s" % type(value).__name__)
 
 
-def cbor_dumps(obj):
+def cbor_dumps(obj: Any) -> Any:
     """Encode obj as CBOR bytes (typed arrays get draft array tags).
 
     Args:
@@ -149,15 +150,15 @@ def cbor_dumps(obj):
     return b"".join(out)
 
 
-class _Reader(object):
+class _Reader:
     __slots__ = ("data", "pos", "depth")
 
-    def __init__(self, data):
+    def __init__(self, data: Any) -> None:
         self.data = data
         self.pos = 0
         self.depth = 0
 
-    def take(self, n):
+    def take(self, n: int) -> Any:
         if n < 0 or self.pos + n > len(self.data):
             raise DecodeError("truncated CBOR")
         chunk = self.data[self.pos : self.pos + n]
@@ -165,7 +166,7 @@ class _Reader(object):
         return chunk
 
 
-def _read_arg(reader, info):
+def _read_arg(reader: Any, info: int) -> Any:
     if info < 24:
         return info
     if info == 24:
@@ -179,7 +180,7 @@ def _read_arg(reader, info):
     raise DecodeError("unsupported CBOR length encoding %d" % info)
 
 
-def _cbor_decode(reader):
+def _cbor_decode(reader: Any) -> Any:
     reader.depth += 1
     if reader.depth > 64:
         raise DecodeError("CBOR nested too deeply")
@@ -241,7 +242,7 @@ def _cbor_decode(reader):
     return value
 
 
-def _half(bits):
+def _half(bits: int) -> Any:
     sign = -1.0 if bits & 0x8000 else 1.0
     exp = (bits >> 10) & 0x1F
     frac = bits & 0x3FF
@@ -252,7 +253,7 @@ def _half(bits):
     return sign * (1 + frac / 1024.0) * 2.0 ** (exp - 15)
 
 
-def cbor_loads(data):
+def cbor_loads(data: Any) -> Any:
     """Decode one CBOR item that fills the whole buffer.
 
     Args:
@@ -274,12 +275,12 @@ def cbor_loads(data):
 # --------------------------------------------------------------------------- PNG
 
 
-def _png_chunk(kind, payload):
+def _png_chunk(kind: str, payload: Any) -> Any:
     body = kind + payload
     return struct.pack(">I", len(payload)) + body + struct.pack(">I", zlib.crc32(body) & 0xFFFFFFFF)
 
 
-def png_encode(text):
+def png_encode(text: str) -> Any:
     """Pack the UTF-8 bytes of text into an 8-bit RGB PNG (zero padded) and base64 it.
 
     Args:
@@ -306,7 +307,7 @@ def png_encode(text):
     return base64.b64encode(png).decode("ascii")
 
 
-def png_decode(data):
+def png_decode(data: Any) -> Any:
     """Inverse of :func:`png_encode` (for tests and tools; filter type 0 only).
 
     Args:
@@ -337,7 +338,7 @@ def png_decode(data):
 # --------------------------------------------------------------------------- fragments
 
 
-def fragment(text, size, frag_id):
+def fragment(text: str, size: int, frag_id: Any) -> Any:
     """Split a frame's JSON text into ``fragment`` op frames of at most size characters of data.
 
     Args:

@@ -18,6 +18,7 @@ import base64
 import binascii
 import math
 import threading
+from typing import Any, Callable, Optional
 
 import genpy
 import roslib.message
@@ -51,7 +52,7 @@ class ConversionError(ValueError):
     """A JSON value does not fit the ROS message type; the text names the field."""
 
 
-def normalize_type(type_name):
+def normalize_type(type_name: str) -> Any:
     """Return the ROS 1 spelling ``pkg/Name`` of a type (accepts ``pkg/msg/Name``, ``pkg/srv/Name``).
 
     Args:
@@ -78,7 +79,7 @@ _msg_classes = {}
 _srv_classes = {}
 
 
-def get_message_class(type_name):
+def get_message_class(type_name: str) -> Any:
     """Load a message class by name.
 
     Args:
@@ -104,7 +105,7 @@ def get_message_class(type_name):
     return cls
 
 
-def get_service_class(type_name):
+def get_service_class(type_name: str) -> Any:
     """Load a service class by name.
 
     Args:
@@ -130,7 +131,7 @@ def get_service_class(type_name):
     return cls
 
 
-def _split_array(slot_type):
+def _split_array(slot_type: str) -> Any:
     """Return (base type, is_array, fixed length or None)."""
     if slot_type.endswith("]"):
         base, _, rest = slot_type.partition("[")
@@ -139,7 +140,7 @@ def _split_array(slot_type):
     return slot_type, False, None
 
 
-def _nested_class(base):
+def _nested_class(base: str) -> Any:
     if base == "Header":
         base = "std_msgs/Header"
     return get_message_class(base)
@@ -148,33 +149,33 @@ def _nested_class(base):
 # --------------------------------------------------------------------------- outgoing
 
 
-def _finite(value):
+def _finite(value: Any) -> Any:
     # inf - inf and nan - nan are nan; finite - finite is 0.0
     return value if value - value == 0 else None
 
 
-def _time_out(value):
+def _time_out(value: Any) -> Any:
     return {"secs": value.secs, "nsecs": value.nsecs}
 
 
-def _b64(value):
+def _b64(value: Any) -> Any:
     if isinstance(value, str):  # old genpy hands out str for uint8[]
         value = value.encode("latin-1")
     return base64.b64encode(bytes(value)).decode("ascii")
 
 
-def _raw_bytes(value):
+def _raw_bytes(value: Any) -> Any:
     if isinstance(value, str):
         value = value.encode("latin-1")
     return bytes(value)
 
 
-class TypedArray(object):
+class TypedArray:
     """A homogeneous numeric array for the CBOR encoder (typed-array tags)."""
 
     __slots__ = ("kind", "values")
 
-    def __init__(self, kind, values):
+    def __init__(self, kind: str, values: Any) -> None:
         """Wrap values of ROS element type kind (e.g. ``float32``)."""
         self.kind = kind
         self.values = values
@@ -183,7 +184,7 @@ class TypedArray(object):
 _out_cache = {}
 
 
-def _compile_out(cls, binary):
+def _compile_out(cls: Any, binary: bool) -> Any:
     key = (cls, binary)
     plan = _out_cache.get(key)
     if plan is not None:
@@ -215,16 +216,16 @@ def _compile_out(cls, binary):
     return plan
 
 
-def _typed(kind):
+def _typed(kind: str) -> Any:
     return lambda v: TypedArray(kind, v)
 
 
-def _float_list(values):
+def _float_list(values: Any) -> Any:
     return [v if v - v == 0 else None for v in values]
 
 
-def _nested_out(nested_cls, binary, is_array):
-    def one(value):
+def _nested_out(nested_cls: Any, binary: bool, is_array: bool) -> Any:
+    def one(value: Any) -> Any:
         return _convert_out(value, _compile_out(nested_cls, binary))
 
     if is_array:
@@ -232,7 +233,7 @@ def _nested_out(nested_cls, binary, is_array):
     return one
 
 
-def _convert_out(msg, plan):
+def _convert_out(msg: Any, plan: Any) -> Any:
     out = {}
     for name, conv in plan:
         value = getattr(msg, name)
@@ -240,7 +241,7 @@ def _convert_out(msg, plan):
     return out
 
 
-def msg_to_dict(msg, binary=False):
+def msg_to_dict(msg: Any, binary: bool = False) -> Any:
     """Convert a genpy message into a JSON-ready dict (rosbridge mapping).
 
     Args:
@@ -257,26 +258,26 @@ def msg_to_dict(msg, binary=False):
 # --------------------------------------------------------------------------- incoming
 
 
-class _Context(object):
+class _Context:
     __slots__ = ("now", "missing")
 
-    def __init__(self, now):
+    def __init__(self, now: Callable[..., Any]) -> None:
         self.now = now
         self.missing = []
 
 
-def _is_int(value):
+def _is_int(value: Any) -> Any:
     return isinstance(value, int) and not isinstance(value, bool)
 
 
-def _int_in(base):
+def _int_in(base: str) -> Any:
     low, high = _INT_RANGES[base]
 
-    def conv(value, path, ctx):
+    def conv(value: Any, path: str, ctx: Any) -> Any:
         if not _is_int(value):
             if isinstance(value, bool):
                 value = int(value)
-            elif isinstance(value, float) and value.is_integer():
+            elif isinstance(value, float) and math.isfinite(value) and value == int(value):
                 value = int(value)
             else:
                 raise ConversionError("%s: expected %s, got %s" % (path, base, _describe(value)))
@@ -287,7 +288,7 @@ def _int_in(base):
     return conv
 
 
-def _float_in(value, path, ctx):
+def _float_in(value: Any, path: str, ctx: Any) -> Any:
     if isinstance(value, float):
         return value
     if _is_int(value):
@@ -297,7 +298,7 @@ def _float_in(value, path, ctx):
     raise ConversionError("%s: expected a number, got %s" % (path, _describe(value)))
 
 
-def _bool_in(value, path, ctx):
+def _bool_in(value: Any, path: str, ctx: Any) -> Any:
     if isinstance(value, bool):
         return value
     if _is_int(value) and value in (0, 1):
@@ -305,18 +306,18 @@ def _bool_in(value, path, ctx):
     raise ConversionError("%s: expected a bool, got %s" % (path, _describe(value)))
 
 
-def _string_in(value, path, ctx):
+def _string_in(value: Any, path: str, ctx: Any) -> Any:
     if isinstance(value, str):
         return value
     raise ConversionError("%s: expected a string, got %s" % (path, _describe(value)))
 
 
-def _time_in(kind):
+def _time_in(kind: str) -> Any:
     cls = genpy.Time if kind == "time" else genpy.Duration
     low = 0 if kind == "time" else -(2**31)
     high = 2**32 - 1 if kind == "time" else 2**31 - 1
 
-    def conv(value, path, ctx):
+    def conv(value: Any, path: str, ctx: Any) -> Any:
         if value == "now" and kind == "time":
             return ctx.now()
         if isinstance(value, dict):
@@ -339,8 +340,8 @@ def _time_in(kind):
     return conv
 
 
-def _binary_in(fixed):
-    def conv(value, path, ctx):
+def _binary_in(fixed: Optional[int]) -> Any:
+    def conv(value: Any, path: str, ctx: Any) -> Any:
         if isinstance(value, str):
             try:
                 data = base64.b64decode(value.encode("ascii"), validate=True)
@@ -360,8 +361,8 @@ def _binary_in(fixed):
     return conv
 
 
-def _array_in(elem, fixed):
-    def conv(value, path, ctx):
+def _array_in(elem: Any, fixed: Optional[int]) -> Any:
+    def conv(value: Any, path: str, ctx: Any) -> Any:
         if not isinstance(value, list):
             raise ConversionError("%s: expected a list, got %s" % (path, _describe(value)))
         if fixed is not None and len(value) != fixed:
@@ -374,7 +375,7 @@ def _array_in(elem, fixed):
 _in_cache = {}
 
 
-def _compile_in(cls):
+def _compile_in(cls: Any) -> Any:
     plan = _in_cache.get(cls)
     if plan is not None:
         return plan
@@ -406,14 +407,14 @@ def _compile_in(cls):
     return plan
 
 
-def _nested_in(nested_cls):
-    def conv(value, path, ctx):
+def _nested_in(nested_cls: Any) -> Any:
+    def conv(value: Any, path: str, ctx: Any) -> Any:
         return _fill(nested_cls, value, path, ctx)
 
     return conv
 
 
-def _fill(cls, data, path, ctx):
+def _fill(cls: Any, data: Any, path: str, ctx: Any) -> Any:
     if not isinstance(data, dict):
         raise ConversionError("%s: expected an object for %s, got %s" % (path or "msg", cls._type, _describe(data)))
     fields, header_slot = _compile_in(cls)
@@ -434,7 +435,7 @@ def _fill(cls, data, path, ctx):
     return msg
 
 
-def dict_to_msg(cls, data, now=None):
+def dict_to_msg(cls: Any, data: Any, now: Callable[..., Any] = None) -> Any:
     """Build a message of class cls from a JSON object (rosbridge mapping, strict).
 
     Args:
@@ -456,20 +457,20 @@ def dict_to_msg(cls, data, now=None):
     return msg, ctx.missing
 
 
-def _wall_now():
+def _wall_now() -> Any:
     import time
 
     return genpy.Time.from_sec(time.time())
 
 
-def _describe(value):
+def _describe(value: Any) -> str:
     text = repr(value)
     if len(text) > 40:
         text = text[:37] + "..."
     return "%s %s" % (type(value).__name__, text)
 
 
-def message_typedefs(cls):
+def message_typedefs(cls: Any) -> Any:
     """Describe cls and every nested type as rosapi ``TypeDef`` dicts (message_details).
 
     Args:
@@ -481,7 +482,7 @@ def message_typedefs(cls):
     out = []
     seen = set()
 
-    def visit(c):
+    def visit(c: Any) -> None:
         if c._type in seen:
             return
         seen.add(c._type)
@@ -508,11 +509,17 @@ def message_typedefs(cls):
             else:
                 examples.append("{}")
                 nested.append(_nested_class(base))
-            if is_array and base not in _INT_RANGES and base not in _FLOATS and base not in (
-                "bool",
-                "string",
-                "time",
-                "duration",
+            if (
+                is_array
+                and base not in _INT_RANGES
+                and base not in _FLOATS
+                and base
+                not in (
+                    "bool",
+                    "string",
+                    "time",
+                    "duration",
+                )
             ):
                 nested.append(_nested_class(base))
         constnames, constvalues = [], []

@@ -11,6 +11,7 @@ import itertools
 import json
 import logging
 import time
+from typing import Any, Callable, Dict, NoReturn, Optional
 
 from rbd_bridge import encoding
 from rbd_bridge.msgconv import ConversionError, normalize_type
@@ -30,57 +31,59 @@ _log = logging.getLogger("rbd_bridge")
 class BridgeError(Exception):
     """An op that cannot be done; sent to the client as a status (when it opted in)."""
 
-    def __init__(self, text, level="error"):
+    def __init__(self, text: str, level: str = "error") -> None:
         """Keep the status level with the text."""
-        super(BridgeError, self).__init__(text)
+        super().__init__(text)
         self.level = level
 
 
-class Backend(object):
+class Backend:
     """The ROS side a Session talks to (all methods are called on the session's thread)."""
 
-    def advertise(self, session, topic, type_name, latch, queue_size):
+    def advertise(self, session: Any, topic: str, type_name: str, latch: bool, queue_size: int) -> NoReturn:
         """Register session as a publisher of topic."""
         raise NotImplementedError
 
-    def unadvertise(self, session, topic):
+    def unadvertise(self, session: Any, topic: str) -> NoReturn:
         """Drop session's publisher registration for topic."""
         raise NotImplementedError
 
-    def publish(self, session, topic, msg):
+    def publish(self, session: Any, topic: str, msg: Any) -> NoReturn:
         """Publish msg (a dict) on topic; return the list of fields filled with defaults."""
         raise NotImplementedError
 
-    def subscribe(self, session, topic, type_name):
+    def subscribe(self, session: Any, topic: str, type_name: str) -> NoReturn:
         """Start delivering topic to session (``session.deliver``); return the resolved type."""
         raise NotImplementedError
 
-    def unsubscribe(self, session, topic):
+    def unsubscribe(self, session: Any, topic: str) -> NoReturn:
         """Stop delivering topic to session."""
         raise NotImplementedError
 
-    def call_service(self, session, service, args, timeout, done):
+    def call_service(
+        self, session: Any, service: str, args: Any, timeout: Optional[float], done: Callable[..., Any]
+    ) -> NoReturn:
         """Call service; later invoke ``done(ok, values)`` on the session's thread."""
         raise NotImplementedError
 
-    def advertise_service(self, session, service, type_name):
+    def advertise_service(self, session: Any, service: str, type_name: str) -> NoReturn:
         """Host service in ROS, forwarding requests to session (``session.send_service_request``)."""
         raise NotImplementedError
 
-    def unadvertise_service(self, session, service):
+    def unadvertise_service(self, session: Any, service: str) -> NoReturn:
         """Stop hosting service for session."""
         raise NotImplementedError
 
-    def service_response(self, session, service, call_id, values, ok):
+    def service_response(self, session: Any, service: str, call_id: Any, values: Any, ok: bool) -> NoReturn:
         """Answer a request previously forwarded to session."""
         raise NotImplementedError
 
-    def session_closed(self, session):
+    def session_closed(self, session: Any) -> NoReturn:
         """Release everything session held."""
         raise NotImplementedError
 
 
-class TopicMessage(object):
+class TopicMessage:
     """One ROS message on its way to clients, encoded at most once per compression.
 
     Args:
@@ -92,7 +95,9 @@ class TopicMessage(object):
 
     __slots__ = ("topic", "_to_dict", "_raw", "_frames", "latched")
 
-    def __init__(self, topic, to_dict, raw=None, latched=False):
+    def __init__(
+        self, topic: str, to_dict: Callable[..., Any], raw: Callable[..., Any] = None, latched: Any = False
+    ) -> None:
         """Wrap one message."""
         self.topic = topic
         self._to_dict = to_dict
@@ -100,7 +105,7 @@ class TopicMessage(object):
         self._frames = {}
         self.latched = latched
 
-    def frame(self, compression):
+    def frame(self, compression: str) -> Any:
         """Return the whole ``publish`` frame (str for none/png, bytes for cbor*)."""
         frame = self._frames.get(compression)
         if frame is None:
@@ -108,7 +113,7 @@ class TopicMessage(object):
             self._frames[compression] = frame
         return frame
 
-    def _encode(self, compression):
+    def _encode(self, compression: str) -> Any:
         if compression == "none":
             return '{"op":"publish","topic":%s,"msg":%s}' % (
                 json.dumps(self.topic),
@@ -126,7 +131,7 @@ class TopicMessage(object):
         raise ValueError(compression)
 
 
-class OutQueue(object):
+class OutQueue:
     """Bounded FIFO of frames for one client.
 
     Over ``max_frames`` or ``max_bytes`` the oldest frames are dropped (a stalled client
@@ -135,7 +140,9 @@ class OutQueue(object):
     that topic are kept.
     """
 
-    def __init__(self, max_frames=1000, max_bytes=16 * 1024 * 1024, notify=None):
+    def __init__(
+        self, max_frames: int = 1000, max_bytes: int = 16 * 1024 * 1024, notify: Callable[..., Any] = None
+    ) -> None:
         """Create an empty queue; notify() is called when a frame arrives in an empty queue."""
         self.max_frames = max_frames
         self.max_bytes = max_bytes
@@ -146,11 +153,11 @@ class OutQueue(object):
         self.frames = 0
         self.dropped = 0
 
-    def __len__(self):
+    def __len__(self) -> int:
         """Number of live frames."""
         return self.frames
 
-    def push(self, frame, topic=None, topic_limit=0):
+    def push(self, frame: Dict[str, Any], topic: str = None, topic_limit: int = 0) -> None:
         """Append frame; drop old frames to respect the bounds."""
         entry = [frame, topic, True]
         was_empty = self.frames == 0
@@ -170,7 +177,7 @@ class OutQueue(object):
         if was_empty and self.notify is not None:
             self.notify()
 
-    def _kill(self, entry):
+    def _kill(self, entry: Any) -> None:
         if entry[2]:
             entry[2] = False
             self.frames -= 1
@@ -178,7 +185,7 @@ class OutQueue(object):
             self.dropped += 1
             entry[0] = None
 
-    def _drop_oldest(self):
+    def _drop_oldest(self) -> None:
         while self._queue:
             entry = self._queue.popleft()
             if entry[2]:
@@ -186,7 +193,7 @@ class OutQueue(object):
                 self._kill(entry)
                 return
 
-    def _forget(self, entry):
+    def _forget(self, entry: Any) -> None:
         topic = entry[1]
         if topic is not None:
             per = self._per_topic.get(topic)
@@ -198,7 +205,7 @@ class OutQueue(object):
                 if not per:
                     del self._per_topic[topic]
 
-    def pop(self):
+    def pop(self) -> Any:
         """Return the oldest live frame, or None when empty."""
         while self._queue:
             entry = self._queue.popleft()
@@ -211,13 +218,23 @@ class OutQueue(object):
         return None
 
 
-class _TopicSub(object):
+class _TopicSub:
     """A client's merged subscriptions to one topic."""
 
-    __slots__ = ("topic", "type", "by_id", "throttle", "queue_length", "fragment_size", "compression", "last",
-                 "pending", "timer")
+    __slots__ = (
+        "topic",
+        "type",
+        "by_id",
+        "throttle",
+        "queue_length",
+        "fragment_size",
+        "compression",
+        "last",
+        "pending",
+        "timer",
+    )
 
-    def __init__(self, topic, type_name):
+    def __init__(self, topic: str, type_name: str) -> None:
         self.topic = topic
         self.type = type_name
         self.by_id = collections.OrderedDict()
@@ -229,7 +246,7 @@ class _TopicSub(object):
         self.pending = collections.deque()
         self.timer = None
 
-    def merge(self):
+    def merge(self) -> None:
         opts = list(self.by_id.values())
         self.throttle = min(o["throttle_rate"] for o in opts) / 1000.0
         self.queue_length = max(o["queue_length"] for o in opts)
@@ -243,7 +260,7 @@ class _TopicSub(object):
             self.pending.clear()
 
 
-def _get(frame, key, kinds, default=None, required=False):
+def _get(frame: Dict[str, Any], key: str, kinds: Any, default: Any = None, required: Any = False) -> Any:
     value = frame.get(key, default)
     if value is None:
         if required:
@@ -256,21 +273,21 @@ def _get(frame, key, kinds, default=None, required=False):
     return value
 
 
-def _name(frame, key):
+def _name(frame: Dict[str, Any], key: str) -> Any:
     value = _get(frame, key, (str,), required=True)
     if not value or len(value) > 1024 or any(c.isspace() for c in value):
         raise BridgeError("%s: invalid %s name %r" % (frame.get("op"), key, value[:80]))
     return value if value.startswith("/") else "/" + value
 
 
-def _nonneg_int(frame, key):
+def _nonneg_int(frame: Dict[str, Any], key: str) -> Any:
     value = _get(frame, key, (int, float), default=0)
     if value != value or value < 0:
         raise BridgeError("%s: %r must be >= 0" % (frame.get("op"), key))
     return value
 
 
-class Session(object):
+class Session:
     """One WebSocket client speaking rosbridge v2.
 
     Args:
@@ -285,8 +302,18 @@ class Session(object):
         wall: Wall clock in seconds (auth time window).
     """
 
-    def __init__(self, client_id, backend, policy, out, call_later, close=None, peer="?", clock=time.monotonic,
-                 wall=time.time):
+    def __init__(
+        self,
+        client_id: int,
+        backend: Any,
+        policy: Any,
+        out: Any,
+        call_later: Callable[..., Any],
+        close: Callable[..., Any] = None,
+        peer: str = "?",
+        clock: Callable[..., Any] = time.monotonic,
+        wall: Callable[..., Any] = time.time,
+    ) -> None:
         """Create a session; nothing is sent until the client asks."""
         self.client_id = client_id
         self.backend = backend
@@ -325,7 +352,7 @@ class Session(object):
 
     # ----------------------------------------------------------------- input
 
-    def receive(self, data, _depth=0):
+    def receive(self, data: Any, _depth: int = 0) -> None:
         """Handle one frame from the client (str or bytes). Never raises."""
         if self.closed:
             return
@@ -342,7 +369,7 @@ class Session(object):
             _log.exception("client %s: internal error", self.client_id)
             self.status("error", "internal error: %s" % exc)
 
-    def _decode(self, data):
+    def _decode(self, data: Any) -> Any:
         if isinstance(data, (bytes, bytearray, memoryview)):
             try:
                 frame = encoding.cbor_loads(data)
@@ -360,7 +387,7 @@ class Session(object):
             raise BridgeError("a frame must be a JSON object with an 'op' field, got %s" % type(frame).__name__)
         return frame
 
-    def _dispatch(self, frame, depth):
+    def _dispatch(self, frame: Dict[str, Any], depth: int) -> None:
         op = frame.get("op")
         if not isinstance(op, str):
             raise BridgeError("frame without a string 'op' field")
@@ -383,7 +410,7 @@ class Session(object):
 
     # ----------------------------------------------------------------- output
 
-    def status(self, level, text, frame_id=None):
+    def status(self, level: str, text: str, frame_id: Any = None) -> None:
         """Send a status frame if the client asked for this level (set_level)."""
         if self.level == 0 or LEVELS.get(level, 3) > self.level:
             return
@@ -392,20 +419,25 @@ class Session(object):
             frame["id"] = frame_id
         self.out.push(encoding.json_dumps(frame))
 
-    def send(self, frame_dict, fragment_size=None, compression="none"):
+    def send(self, frame_dict: Any, fragment_size: Optional[int] = None, compression: str = "none") -> None:
         """Queue a control/service frame with optional fragmentation or PNG compression."""
         text = encoding.json_dumps(frame_dict)
         self._push_text(text, fragment_size, compression, None, 0)
 
-    def _push_text(self, text, fragment_size, compression, topic, limit):
+    def _push_text(self, text: str, fragment_size: Optional[int], compression: str, topic: str, limit: int) -> None:
         if compression == "png":
             data = encoding.png_encode(text)
             if fragment_size and len(data) > fragment_size:
                 frag_id = "png:%d" % next(self._ids)
                 total = (len(data) + fragment_size - 1) // fragment_size
                 for i in range(total):
-                    part = {"op": "png", "id": frag_id, "data": data[i * fragment_size : (i + 1) * fragment_size],
-                            "num": i, "total": total}
+                    part = {
+                        "op": "png",
+                        "id": frag_id,
+                        "data": data[i * fragment_size : (i + 1) * fragment_size],
+                        "num": i,
+                        "total": total,
+                    }
                     self.out.push(encoding.json_dumps(part), topic, 0)
                 return
             self.out.push(encoding.json_dumps({"op": "png", "data": data}), topic, limit)
@@ -416,7 +448,7 @@ class Session(object):
             return
         self.out.push(text, topic, limit)
 
-    def deliver(self, topic, message):
+    def deliver(self, topic: str, message: Any) -> None:
         """Take one :class:`TopicMessage` of a subscribed topic (applies throttle/queue)."""
         sub = self.subs.get(topic)
         if sub is None or self.closed:
@@ -437,7 +469,7 @@ class Session(object):
         if sub.timer is None:
             sub.timer = self.call_later(max(0.0, sub.last + sub.throttle - now), lambda: self._flush(topic))
 
-    def _flush(self, topic):
+    def _flush(self, topic: str) -> None:
         sub = self.subs.get(topic)
         if sub is None or self.closed:
             return
@@ -449,7 +481,7 @@ class Session(object):
         if sub.pending:
             sub.timer = self.call_later(sub.throttle, lambda: self._flush(topic))
 
-    def _emit(self, sub, message, limit):
+    def _emit(self, sub: Any, message: Any, limit: int) -> None:
         compression = sub.compression
         if compression in ("cbor", "cbor-raw"):
             self.out.push(message.frame(compression), sub.topic, limit)
@@ -458,13 +490,13 @@ class Session(object):
         else:
             self.out.push(message.frame("none"), sub.topic, limit)
 
-    def send_service_request(self, service, call_id, args):
+    def send_service_request(self, service: str, call_id: Any, args: Any) -> None:
         """Forward a ROS call of a client-hosted service to the client."""
         self.out.push(encoding.json_dumps({"op": "call_service", "id": call_id, "service": service, "args": args}))
 
     # ----------------------------------------------------------------- ops
 
-    def _op_fragment(self, frame, depth):
+    def _op_fragment(self, frame: Dict[str, Any], depth: int) -> None:
         frag_id = frame.get("id")
         data = frame.get("data")
         num = frame.get("num")
@@ -500,12 +532,12 @@ class Session(object):
             inner = self._decode(text)
             self._dispatch(inner, depth + 1)
 
-    def _op_set_level(self, frame):
+    def _op_set_level(self, frame: Dict[str, Any]) -> None:
         level = frame.get("level")
         if level in LEVELS:
             self.level = LEVELS[level]
 
-    def _op_auth(self, frame):
+    def _op_auth(self, frame: Dict[str, Any]) -> None:
         if not self.policy.authenticate:
             self.status("info", "auth: this bridge does not require authentication", frame.get("id"))
             return
@@ -523,11 +555,11 @@ class Session(object):
         _log.info("client %s (%s) authenticated", self.client_id, self.peer)
         self.status("info", "authenticated", frame.get("id"))
 
-    def _denied(self, what, name):
+    def _denied(self, what: str, name: str) -> NoReturn:
         _log.warning("client %s (%s): %s %s denied by the allow-list", self.client_id, self.peer, what, name)
         raise BridgeError("%s %s: not allowed by this bridge's allow-list" % (what, name))
 
-    def _op_advertise(self, frame):
+    def _op_advertise(self, frame: Dict[str, Any]) -> None:
         topic = _name(frame, "topic")
         type_name = _get(frame, "type", (str,), required=True)
         latch = bool(_get(frame, "latch", (bool, int), default=False))
@@ -538,14 +570,14 @@ class Session(object):
         self.advertised.add(topic)
         self.status("info", "advertised %s" % topic, frame.get("id"))
 
-    def _op_unadvertise(self, frame):
+    def _op_unadvertise(self, frame: Dict[str, Any]) -> None:
         topic = _name(frame, "topic")
         if topic not in self.advertised:
             raise BridgeError("unadvertise: %s is not advertised by this client" % topic, "warning")
         self.advertised.discard(topic)
         self.backend.unadvertise(self, topic)
 
-    def _op_publish(self, frame):
+    def _op_publish(self, frame: Dict[str, Any]) -> None:
         topic = _name(frame, "topic")
         msg = _get(frame, "msg", (dict,), default={})
         if not self.policy.may_publish(topic):
@@ -555,10 +587,13 @@ class Session(object):
         if implicit:
             self.advertised.add(topic)
         if missing:
-            self.status("warning", "publish %s: fields filled with defaults: %s" % (topic, ", ".join(missing[:20])),
-                        frame.get("id"))
+            self.status(
+                "warning",
+                "publish %s: fields filled with defaults: %s" % (topic, ", ".join(missing[:20])),
+                frame.get("id"),
+            )
 
-    def _op_subscribe(self, frame):
+    def _op_subscribe(self, frame: Dict[str, Any]) -> None:
         topic = _name(frame, "topic")
         type_name = _get(frame, "type", (str,))
         if type_name == "":
@@ -593,7 +628,7 @@ class Session(object):
         sub.merge()
         self.status("info", "subscribed to %s" % topic, sub_id)
 
-    def _op_unsubscribe(self, frame):
+    def _op_unsubscribe(self, frame: Dict[str, Any]) -> None:
         topic = _name(frame, "topic")
         sub = self.subs.get(topic)
         if sub is None:
@@ -610,14 +645,14 @@ class Session(object):
             return
         self._drop_sub(sub)
 
-    def _drop_sub(self, sub):
+    def _drop_sub(self, sub: Any) -> None:
         del self.subs[sub.topic]
         if sub.timer is not None:
             sub.timer.cancel()
             sub.timer = None
         self.backend.unsubscribe(self, sub.topic)
 
-    def _op_call_service(self, frame):
+    def _op_call_service(self, frame: Dict[str, Any]) -> None:
         service = _name(frame, "service")
         args = frame.get("args")
         if args is not None and not isinstance(args, (list, dict)):
@@ -631,14 +666,19 @@ class Session(object):
             compression = "none"
         call_id = frame.get("id")
         if not self.policy.may_call(service):
-            _log.warning("client %s (%s): call_service %s denied by the allow-list", self.client_id, self.peer,
-                         service)
+            _log.warning("client %s (%s): call_service %s denied by the allow-list", self.client_id, self.peer, service)
             self.status("error", "call_service %s: not allowed by this bridge's allow-list" % service, call_id)
-            self._service_done(service, call_id, fragment_size, compression, False,
-                               "service %s is not allowed by this bridge's allow-list" % service)
+            self._service_done(
+                service,
+                call_id,
+                fragment_size,
+                compression,
+                False,
+                "service %s is not allowed by this bridge's allow-list" % service,
+            )
             return
 
-        def done(ok, values):
+        def done(ok: bool, values: Any) -> None:
             self._service_done(service, call_id, fragment_size, compression, ok, values)
 
         try:
@@ -647,7 +687,9 @@ class Session(object):
             self.status("error", str(exc), call_id)
             done(False, str(exc))
 
-    def _service_done(self, service, call_id, fragment_size, compression, ok, values):
+    def _service_done(
+        self, service: str, call_id: Any, fragment_size: Optional[int], compression: str, ok: bool, values: Any
+    ) -> None:
         if self.closed:
             return
         frame = {"op": "service_response", "service": service, "values": values, "result": bool(ok)}
@@ -655,7 +697,7 @@ class Session(object):
             frame["id"] = call_id
         self.send(frame, fragment_size, compression)
 
-    def _op_advertise_service(self, frame):
+    def _op_advertise_service(self, frame: Dict[str, Any]) -> None:
         service = _name(frame, "service")
         type_name = _get(frame, "type", (str,), required=True)
         if not self.policy.may_call(service) or service.startswith("/rosapi/"):
@@ -664,14 +706,14 @@ class Session(object):
         self.services.add(service)
         self.status("info", "advertised service %s" % service, frame.get("id"))
 
-    def _op_unadvertise_service(self, frame):
+    def _op_unadvertise_service(self, frame: Dict[str, Any]) -> None:
         service = _name(frame, "service")
         if service not in self.services:
             raise BridgeError("unadvertise_service: %s is not advertised by this client" % service, "warning")
         self.services.discard(service)
         self.backend.unadvertise_service(self, service)
 
-    def _op_service_response(self, frame):
+    def _op_service_response(self, frame: Dict[str, Any]) -> None:
         service = _name(frame, "service")
         call_id = frame.get("id")
         if call_id is None:
@@ -682,7 +724,7 @@ class Session(object):
 
     # ----------------------------------------------------------------- teardown
 
-    def close(self):
+    def close(self) -> None:
         """Release everything this client held in ROS (idempotent)."""
         if self.closed:
             return
@@ -698,7 +740,7 @@ class Session(object):
             _log.exception("client %s: error while releasing ROS resources", self.client_id)
 
 
-def _same_type(a, b):
+def _same_type(a: Any, b: Any) -> Any:
     try:
         return normalize_type(a) == normalize_type(b)
     except ConversionError:

@@ -11,6 +11,7 @@ import itertools
 import logging
 import socket
 import threading
+from typing import Any, Callable, Optional
 
 import rosgraph
 import rospy
@@ -32,10 +33,10 @@ __all__ = ["RosBackend"]
 _log = logging.getLogger("rbd_bridge")
 
 
-class _Pub(object):
+class _Pub:
     __slots__ = ("topic", "type", "cls", "publisher", "clients")
 
-    def __init__(self, topic, type_name, cls, publisher):
+    def __init__(self, topic: str, type_name: str, cls: Any, publisher: Any) -> None:
         self.topic = topic
         self.type = type_name
         self.cls = cls
@@ -43,10 +44,10 @@ class _Pub(object):
         self.clients = set()
 
 
-class _Sub(object):
+class _Sub:
     __slots__ = ("topic", "type", "cls", "subscriber", "sessions", "latched")
 
-    def __init__(self, topic, type_name, cls):
+    def __init__(self, topic: str, type_name: str, cls: Any) -> None:
         self.topic = topic
         self.type = type_name
         self.cls = cls
@@ -55,10 +56,10 @@ class _Sub(object):
         self.latched = {}
 
 
-class _Hosted(object):
+class _Hosted:
     """A service that a WebSocket client provides to ROS."""
 
-    def __init__(self, backend, name, type_name, cls, session):
+    def __init__(self, backend: Any, name: str, type_name: str, cls: Any, session: Any) -> None:
         self.backend = backend
         self.name = name
         self.type = type_name
@@ -69,8 +70,8 @@ class _Hosted(object):
         self.closed = False
         self.server = None
 
-    def handle(self, request):
-        """rospy thread: forward the request to the client and wait for its answer."""
+    def handle(self, request: Any) -> Any:
+        """Rospy thread: forward the request to the client and wait for its answer."""
         call_id = "service_request:%s:%d" % (self.name, next(self.backend.ids))
         waiter = [threading.Event(), None, None]
         with self.lock:
@@ -83,18 +84,21 @@ class _Hosted(object):
         if not waiter[0].wait(self.backend.service_timeout):
             with self.lock:
                 self.pending.pop(call_id, None)
-            raise rospy.ServiceException("service %s: WebSocket provider did not answer in %.1f s"
-                                         % (self.name, self.backend.service_timeout))
+            raise rospy.ServiceException(
+                "service %s: WebSocket provider did not answer in %.1f s" % (self.name, self.backend.service_timeout)
+            )
         ok, values = waiter[1], waiter[2]
         if not ok:
             raise rospy.ServiceException("service %s failed: %s" % (self.name, values))
         try:
             response, _ = dict_to_msg(self.cls._response_class, values if isinstance(values, dict) else {})
         except ConversionError as exc:
-            raise rospy.ServiceException("service %s: bad response from WebSocket provider: %s" % (self.name, exc))
+            raise rospy.ServiceException(
+                "service %s: bad response from WebSocket provider: %s" % (self.name, exc)
+            ) from None
         return response
 
-    def answer(self, call_id, ok, values):
+    def answer(self, call_id: Any, ok: bool, values: Any) -> bool:
         with self.lock:
             waiter = self.pending.pop(call_id, None)
         if waiter is None:
@@ -103,7 +107,7 @@ class _Hosted(object):
         waiter[0].set()
         return True
 
-    def close(self, reason):
+    def close(self, reason: str) -> None:
         with self.lock:
             self.closed = True
             pending, self.pending = self.pending, {}
@@ -114,29 +118,29 @@ class _Hosted(object):
             self.server.shutdown(reason)
 
 
-class _RosParams(object):
+class _RosParams:
     """Parameter adapter for rosapi on the real parameter server."""
 
-    def get(self, name):
+    def get(self, name: str) -> Any:
         return rospy.get_param(name)
 
-    def set(self, name, value):
+    def set(self, name: str, value: Any) -> None:
         rospy.set_param(name, value)
 
-    def has(self, name):
+    def has(self, name: str) -> Any:
         return rospy.has_param(name)
 
-    def delete(self, name):
+    def delete(self, name: str) -> None:
         rospy.delete_param(name)
 
-    def search(self, name):
+    def search(self, name: str) -> Any:
         return rospy.search_param(name)
 
-    def names(self):
+    def names(self) -> Any:
         return rospy.get_param_names()
 
 
-def _is_transport_error(exc):
+def _is_transport_error(exc: Any) -> Any:
     if isinstance(exc, (rospy.exceptions.TransportException, socket.error, EOFError)):
         return True
     text = str(exc).lower()
@@ -154,7 +158,9 @@ class RosBackend(Backend):
         workers: Threads for blocking calls.
     """
 
-    def __init__(self, loop, policy, service_timeout=10.0, call_timeout=30.0, workers=8):
+    def __init__(
+        self, loop: Any, policy: Any, service_timeout: float = 10.0, call_timeout: float = 30.0, workers: int = 8
+    ) -> None:
         """Create the backend (rospy.init_node must have been called)."""
         self.loop = loop
         self.policy = policy
@@ -174,11 +180,11 @@ class RosBackend(Backend):
     # ------------------------------------------------------------ helpers
 
     @staticmethod
-    def _now():
+    def _now() -> Any:
         t = rospy.get_rostime()
         return t.secs, t.nsecs
 
-    def _master_type(self, topic):
+    def _master_type(self, topic: str) -> Any:
         try:
             for name, type_name in self.master.getTopicTypes():
                 if name == topic:
@@ -188,7 +194,7 @@ class RosBackend(Backend):
         return None
 
     @staticmethod
-    def _message_class(type_name):
+    def _message_class(type_name: str) -> Any:
         try:
             return normalize_type(type_name), get_message_class(type_name)
         except ConversionError as exc:
@@ -196,7 +202,7 @@ class RosBackend(Backend):
 
     # ------------------------------------------------------------ topics out to ROS
 
-    def advertise(self, session, topic, type_name, latch, queue_size):
+    def advertise(self, session: Any, topic: str, type_name: str, latch: bool, queue_size: int) -> None:
         """Register session as publisher of topic (one rospy.Publisher per topic)."""
         type_name, cls = self._message_class(type_name)
         pub = self.pubs.get(topic)
@@ -213,7 +219,7 @@ class RosBackend(Backend):
         pub.clients.add(session.client_id)
         self.pubs[topic] = pub
 
-    def unadvertise(self, session, topic):
+    def unadvertise(self, session: Any, topic: str) -> None:
         """Drop session from topic's publishers; unregister when nobody is left."""
         pub = self.pubs.get(topic)
         if pub is None:
@@ -223,7 +229,7 @@ class RosBackend(Backend):
             del self.pubs[topic]
             pub.publisher.unregister()
 
-    def publish(self, session, topic, msg):
+    def publish(self, session: Any, topic: str, msg: Any) -> Any:
         """Publish msg; advertise implicitly with the type known to the master."""
         pub = self.pubs.get(topic)
         if pub is None or session.client_id not in pub.clients:
@@ -247,7 +253,7 @@ class RosBackend(Backend):
 
     # ------------------------------------------------------------ topics in from ROS
 
-    def subscribe(self, session, topic, type_name):
+    def subscribe(self, session: Any, topic: str, type_name: str) -> Any:
         """Share one rospy.Subscriber per topic among all sessions."""
         sub = self.subs.get(topic)
         if sub is not None:
@@ -269,11 +275,12 @@ class RosBackend(Backend):
         sub = _Sub(topic, type_name, cls)
         sub.sessions.add(session)
         self.subs[topic] = sub
-        sub.subscriber = rospy.Subscriber(topic, cls, self._on_message, callback_args=sub, queue_size=100,
-                                          buff_size=1 << 20, tcp_nodelay=True)
+        sub.subscriber = rospy.Subscriber(
+            topic, cls, self._on_message, callback_args=sub, queue_size=100, buff_size=1 << 20, tcp_nodelay=True
+        )
         return type_name
 
-    def unsubscribe(self, session, topic):
+    def unsubscribe(self, session: Any, topic: str) -> None:
         """Remove session; unregister the rospy.Subscriber when nobody is left."""
         sub = self.subs.get(topic)
         if sub is None:
@@ -283,13 +290,13 @@ class RosBackend(Backend):
             del self.subs[topic]
             sub.subscriber.unregister()
 
-    def _on_message(self, msg, sub):
-        """rospy thread: wrap the message, pre-encode what subscribers want, hop to the loop."""
+    def _on_message(self, msg: Any, sub: Any) -> None:
+        """Rospy thread: wrap the message, pre-encode what subscribers want, hop to the loop."""
         header = getattr(msg, "_connection_header", None) or {}
         latched = header.get("latching") == "1"
         stamp = rospy.get_rostime()
 
-        def raw():
+        def raw() -> Any:
             buff = io.BytesIO()
             msg.serialize(buff)
             return buff.getvalue(), stamp.secs, stamp.nsecs
@@ -311,7 +318,7 @@ class RosBackend(Backend):
         self.loop.call_soon_threadsafe(self._fan_out, sub, message)
 
     @staticmethod
-    def _fan_out(sub, message):
+    def _fan_out(sub: Any, message: Any) -> None:
         for session in list(sub.sessions):
             try:
                 session.deliver(sub.topic, message)
@@ -320,11 +327,13 @@ class RosBackend(Backend):
 
     # ------------------------------------------------------------ service calls
 
-    def call_service(self, session, service, args, timeout, done):
+    def call_service(
+        self, session: Any, service: str, args: Any, timeout: Optional[float], done: Callable[..., Any]
+    ) -> None:
         """Run the call in the pool; done(ok, values) is called on the loop (at most once)."""
         state = {"done": False}
 
-        def finish(ok, values):
+        def finish(ok: bool, values: Any) -> None:
             if not state["done"]:
                 state["done"] = True
                 done(ok, values)
@@ -333,10 +342,11 @@ class RosBackend(Backend):
             timeout = self.call_timeout
         handle = None
         if timeout:
-            handle = self.loop.call_later(timeout, finish, False, "service %s: no response within %.1f s"
-                                          % (service, timeout))
+            handle = self.loop.call_later(
+                timeout, finish, False, "service %s: no response within %.1f s" % (service, timeout)
+            )
 
-        def work():
+        def work() -> None:
             try:
                 if RosApi.handles(service):
                     result = (True, self.rosapi.call(service, args))
@@ -348,14 +358,14 @@ class RosBackend(Backend):
                 result = (False, "service %s failed: %s" % (service, exc))
             self.loop.call_soon_threadsafe(complete, result)
 
-        def complete(result):
+        def complete(result: Any) -> None:
             if handle is not None:
                 handle.cancel()
             finish(*result)
 
         self.pool.submit(work)
 
-    def _lookup_service_type(self, service):
+    def _lookup_service_type(self, service: str) -> Any:
         type_name = self._srv_types.get(service)
         if type_name is None:
             hosted = self.hosted.get(service)
@@ -368,12 +378,14 @@ class RosBackend(Backend):
             self._srv_types[service] = type_name
         return type_name
 
-    def _request(self, service, cls, args):
+    def _request(self, service: str, cls: Any, args: Any) -> Any:
         req_cls = cls._request_class
         if isinstance(args, list):
             if len(args) > len(req_cls.__slots__):
-                raise BridgeError("service %s: %d arguments given, request has %d fields"
-                                  % (service, len(args), len(req_cls.__slots__)))
+                raise BridgeError(
+                    "service %s: %d arguments given, request has %d fields"
+                    % (service, len(args), len(req_cls.__slots__))
+                )
             args = dict(zip(req_cls.__slots__, args))
         try:
             request, _ = dict_to_msg(req_cls, args, rospy.Time.now)
@@ -381,7 +393,7 @@ class RosBackend(Backend):
             raise BridgeError("service %s: %s" % (service, exc)) from None
         return request
 
-    def _call_ros(self, service, args):
+    def _call_ros(self, service: str, args: Any) -> Any:
         try:
             type_name = self._lookup_service_type(service)
         except rosservice.ROSServiceIOException as exc:
@@ -414,7 +426,7 @@ class RosBackend(Backend):
             lock.release()
         return msg_to_dict(response)
 
-    def _drop_proxy(self, service, entry):
+    def _drop_proxy(self, service: str, entry: Any) -> None:
         with self._proxy_lock:
             if self._proxies.get(service) is entry:
                 del self._proxies[service]
@@ -426,7 +438,7 @@ class RosBackend(Backend):
 
     # ------------------------------------------------------------ client-hosted services
 
-    def advertise_service(self, session, service, type_name):
+    def advertise_service(self, session: Any, service: str, type_name: str) -> None:
         """Serve service in ROS on behalf of session."""
         try:
             type_name = normalize_type(type_name)
@@ -450,19 +462,19 @@ class RosBackend(Backend):
         self.hosted[service] = hosted
         self._srv_types.pop(service, None)
 
-    def _unhost(self, hosted, reason):
+    def _unhost(self, hosted: Any, reason: str) -> None:
         if self.hosted.get(hosted.name) is hosted:
             del self.hosted[hosted.name]
         self._srv_types.pop(hosted.name, None)
         hosted.close(reason)
 
-    def unadvertise_service(self, session, service):
+    def unadvertise_service(self, session: Any, service: str) -> None:
         """Stop serving service for session."""
         hosted = self.hosted.get(service)
         if hosted is not None and hosted.session is session:
             self._unhost(hosted, "unadvertised by its WebSocket provider")
 
-    def service_response(self, session, service, call_id, values, ok):
+    def service_response(self, session: Any, service: str, call_id: Any, values: Any, ok: bool) -> None:
         """Pass a client's answer to the waiting ROS caller."""
         hosted = self.hosted.get(service)
         if hosted is None or hosted.session is not session:
@@ -472,7 +484,7 @@ class RosBackend(Backend):
 
     # ------------------------------------------------------------ teardown
 
-    def session_closed(self, session):
+    def session_closed(self, session: Any) -> None:
         """Release publishers, subscriptions and hosted services of a gone client."""
         for topic in list(session.advertised):
             self.unadvertise(session, topic)
@@ -483,7 +495,7 @@ class RosBackend(Backend):
             if hosted.session is session:
                 self._unhost(hosted, "its WebSocket provider disconnected")
 
-    def shutdown(self):
+    def shutdown(self) -> None:
         """Stop everything (node exit)."""
         for hosted in list(self.hosted.values()):
             self._unhost(hosted, "bridge shutting down")

@@ -12,6 +12,7 @@ filtered through the bridge's allow-lists. Parameter values travel as JSON strin
 """
 
 import json
+from typing import Any, Callable
 
 from rbd_bridge.msgconv import ConversionError, get_message_class, get_service_class, message_typedefs
 
@@ -52,7 +53,7 @@ class RosApiError(Exception):
     """A rosapi request that fails (sent back as ``result: false``)."""
 
 
-def _str_arg(args, key, default=""):
+def _str_arg(args: Any, key: str, default: Any = "") -> Any:
     value = args.get(key, default)
     if value is None:
         return default
@@ -61,7 +62,7 @@ def _str_arg(args, key, default=""):
     return value
 
 
-class RosApi(object):
+class RosApi:
     """Dispatch ``/rosapi/*`` calls.
 
     Args:
@@ -72,7 +73,7 @@ class RosApi(object):
         service_type: Callable(service) -> type name of a ROS service (may raise).
     """
 
-    def __init__(self, policy, graph, params, now, service_type):
+    def __init__(self, policy: Any, graph: Any, params: Any, now: Callable[..., Any], service_type: Any) -> None:
         """Keep the adapters."""
         self.policy = policy
         self.graph = graph
@@ -81,11 +82,11 @@ class RosApi(object):
         self.lookup_service_type = service_type
 
     @staticmethod
-    def handles(service):
+    def handles(service: str) -> Any:
         """Return True if service is one of ours."""
         return service.startswith("/rosapi/") and service[len("/rosapi/") :] in ROSAPI_TYPES
 
-    def call(self, service, args):
+    def call(self, service: str, args: Any) -> Any:
         """Serve one call.
 
         Args:
@@ -105,7 +106,7 @@ class RosApi(object):
             args = {}
         return getattr(self, "_" + name)(args)
 
-    def _positional(self, name, args):
+    def _positional(self, name: str, args: Any) -> Any:
         order = {
             "topic_type": ["topic"],
             "topics_for_type": ["type"],
@@ -132,19 +133,19 @@ class RosApi(object):
 
     # ------------------------------------------------------------ graph helpers
 
-    def _topic_types(self):
+    def _topic_types(self) -> Any:
         return [(t, ty) for t, ty in self.graph.getTopicTypes() if self.policy.may_see_topic(t)]
 
-    def _state(self):
+    def _state(self) -> Any:
         return self.graph.getSystemState()
 
-    def _ros_services(self):
+    def _ros_services(self) -> Any:
         return sorted(s for s, _ in self._state()[2] if self.policy.may_call(s))
 
-    def _own_services(self):
+    def _own_services(self) -> Any:
         return sorted("/rosapi/" + n for n in ROSAPI_TYPES if self.policy.may_call("/rosapi/" + n))
 
-    def _service_type_of(self, service):
+    def _service_type_of(self, service: str) -> Any:
         if self.handles(service):
             return ROSAPI_TYPES[service[len("/rosapi/") :]]
         if not self.policy.may_call(service):
@@ -156,22 +157,22 @@ class RosApi(object):
 
     # ------------------------------------------------------------ topics
 
-    def _topics(self, args):
+    def _topics(self, args: Any) -> Any:
         pairs = sorted(self._topic_types())
         return {"topics": [t for t, _ in pairs], "types": [ty for _, ty in pairs]}
 
-    def _topic_type(self, args):
+    def _topic_type(self, args: Any) -> Any:
         topic = _str_arg(args, "topic")
         for t, ty in self._topic_types():
             if t == topic:
                 return {"type": ty}
         return {"type": ""}
 
-    def _topics_for_type(self, args):
+    def _topics_for_type(self, args: Any) -> Any:
         wanted = _str_arg(args, "type")
         return {"topics": sorted(t for t, ty in self._topic_types() if ty == wanted)}
 
-    def _topics_and_raw_types(self, args):
+    def _topics_and_raw_types(self, args: Any) -> Any:
         pairs = sorted(self._topic_types())
         texts = []
         for _, ty in pairs:
@@ -182,7 +183,7 @@ class RosApi(object):
                 texts.append("")
         return {"topics": [t for t, _ in pairs], "types": [ty for _, ty in pairs], "typedefs_full_text": texts}
 
-    def _publishers(self, args):
+    def _publishers(self, args: Any) -> Any:
         topic = _str_arg(args, "topic")
         if not self.policy.may_see_topic(topic):
             return {"publishers": []}
@@ -191,7 +192,7 @@ class RosApi(object):
                 return {"publishers": sorted(nodes)}
         return {"publishers": []}
 
-    def _subscribers(self, args):
+    def _subscribers(self, args: Any) -> Any:
         topic = _str_arg(args, "topic")
         if not self.policy.may_see_topic(topic):
             return {"subscribers": []}
@@ -202,18 +203,18 @@ class RosApi(object):
 
     # ------------------------------------------------------------ services
 
-    def _services(self, args):
+    def _services(self, args: Any) -> Any:
         return {"services": sorted(set(self._ros_services()) | set(self._own_services()))}
 
-    def _service_type(self, args):
+    def _service_type(self, args: Any) -> Any:
         return {"type": self._service_type_of(_str_arg(args, "service"))}
 
-    def _services_for_type(self, args):
+    def _services_for_type(self, args: Any) -> Any:
         wanted = _str_arg(args, "type")
         names = self._ros_services() + self._own_services()
         return {"services": sorted(s for s in names if self._service_type_of(s) == wanted)}
 
-    def _providers(self, service):
+    def _providers(self, service: str) -> Any:
         if not self.policy.may_call(service):
             return []
         for s, nodes in self._state()[2]:
@@ -221,14 +222,14 @@ class RosApi(object):
                 return sorted(nodes)
         return []
 
-    def _service_providers(self, args):
+    def _service_providers(self, args: Any) -> Any:
         return {"providers": self._providers(_str_arg(args, "service"))}
 
-    def _service_node(self, args):
+    def _service_node(self, args: Any) -> Any:
         nodes = self._providers(_str_arg(args, "service"))
         return {"node": nodes[0] if nodes else ""}
 
-    def _service_host(self, args):
+    def _service_host(self, args: Any) -> Any:
         service = _str_arg(args, "service")
         if not self.policy.may_call(service):
             return {"host": ""}
@@ -241,14 +242,14 @@ class RosApi(object):
 
     # ------------------------------------------------------------ nodes
 
-    def _nodes(self, args):
+    def _nodes(self, args: Any) -> Any:
         names = set()
         for group in self._state():
             for _, nodes in group:
                 names.update(nodes)
         return {"nodes": sorted(names)}
 
-    def _node_details(self, args):
+    def _node_details(self, args: Any) -> Any:
         node = _str_arg(args, "node")
         pubs, subs, srvs = self._state()
         return {
@@ -257,7 +258,7 @@ class RosApi(object):
             "services": sorted(s for s, n in srvs if node in n and self.policy.may_call(s)),
         }
 
-    def _action_servers(self, args):
+    def _action_servers(self, args: Any) -> Any:
         topics = set(t for t, _ in self._topic_types())
         bases = set()
         for t in topics:
@@ -270,28 +271,28 @@ class RosApi(object):
 
     # ------------------------------------------------------------ types
 
-    def _message_details(self, args):
+    def _message_details(self, args: Any) -> Any:
         try:
             return {"typedefs": message_typedefs(get_message_class(_str_arg(args, "type")))}
         except ConversionError as exc:
             raise RosApiError(str(exc)) from None
 
-    def _srv_details(self, args, part):
+    def _srv_details(self, args: Any, part: Any) -> Any:
         try:
             cls = get_service_class(_str_arg(args, "type"))
         except ConversionError as exc:
             raise RosApiError(str(exc)) from None
         return {"typedefs": message_typedefs(getattr(cls, part))}
 
-    def _service_request_details(self, args):
+    def _service_request_details(self, args: Any) -> Any:
         return self._srv_details(args, "_request_class")
 
-    def _service_response_details(self, args):
+    def _service_response_details(self, args: Any) -> Any:
         return self._srv_details(args, "_response_class")
 
     # ------------------------------------------------------------ params
 
-    def _param_name(self, args, write=False):
+    def _param_name(self, args: Any, write: bool = False) -> Any:
         name = _str_arg(args, "name")
         if not name:
             raise RosApiError("rosapi: parameter name missing")
@@ -303,7 +304,7 @@ class RosApi(object):
             raise RosApiError("parameter %s is read-only through this bridge" % name)
         return name
 
-    def _get_param(self, args):
+    def _get_param(self, args: Any) -> Any:
         name = self._param_name(args)
         default = args.get("default", args.get("default_value", ""))
         if self.params.has(name):
@@ -315,7 +316,7 @@ class RosApi(object):
                 return {"value": json.dumps(default)}
         return {"value": "null"}
 
-    def _set_param(self, args):
+    def _set_param(self, args: Any) -> Any:
         name = self._param_name(args, write=True)
         text = _str_arg(args, "value")
         try:
@@ -325,26 +326,26 @@ class RosApi(object):
         self.params.set(name, value)
         return {}
 
-    def _has_param(self, args):
+    def _has_param(self, args: Any) -> Any:
         name = self._param_name(args)
         return {"exists": bool(self.params.has(name))}
 
-    def _delete_param(self, args):
+    def _delete_param(self, args: Any) -> Any:
         name = self._param_name(args, write=True)
         if self.params.has(name):
             self.params.delete(name)
         return {}
 
-    def _search_param(self, args):
+    def _search_param(self, args: Any) -> Any:
         name = _str_arg(args, "name")
         found = self.params.search(name) or ""
         if found and not self.policy.may_read_param(found):
             found = ""
         return {"global_name": found}
 
-    def _get_param_names(self, args):
+    def _get_param_names(self, args: Any) -> Any:
         return {"names": sorted(n for n in self.params.names() if self.policy.may_read_param(n))}
 
-    def _get_time(self, args):
+    def _get_time(self, args: Any) -> Any:
         secs, nsecs = self.now()
         return {"time": {"secs": secs, "nsecs": nsecs}}

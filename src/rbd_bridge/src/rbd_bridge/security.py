@@ -9,6 +9,7 @@ import fnmatch
 import hashlib
 import hmac
 import math
+from typing import Any, Callable, Dict
 
 __all__ = [
     "AuthError",
@@ -39,7 +40,7 @@ class AuthError(ValueError):
     """An ``auth`` op that does not authenticate the client."""
 
 
-def parse_glob_list(text):
+def parse_glob_list(text: str) -> Any:
     """Parse a rosbridge-style glob list parameter.
 
     Accepts ``"[*]"``, ``"['/a', '/b/*']"``, ``"[/a, /b]"``, ``"/a /b"``, a Python list, or
@@ -71,7 +72,7 @@ def parse_glob_list(text):
     return tuple(out)
 
 
-def _matches(name, globs):
+def _matches(name: str, globs: Any) -> bool:
     if globs is None:
         return True
     for pattern in globs:
@@ -80,18 +81,18 @@ def _matches(name, globs):
     return False
 
 
-class Policy(object):
+class Policy:
     """What a client may do. ``None`` for a glob list means "everything"."""
 
     def __init__(
         self,
-        publish_globs=ROBODOG_PUBLISH,
-        subscribe_globs=ROBODOG_SUBSCRIBE,
-        service_globs=ROBODOG_SERVICES,
-        param_globs=ROBODOG_PARAMS,
-        params_writable=False,
-        secret=None,
-    ):
+        publish_globs: Any = ROBODOG_PUBLISH,
+        subscribe_globs: Any = ROBODOG_SUBSCRIBE,
+        service_globs: Any = ROBODOG_SERVICES,
+        param_globs: Any = ROBODOG_PARAMS,
+        params_writable: bool = False,
+        secret: str = None,
+    ) -> None:
         """Build a policy.
 
         Args:
@@ -111,36 +112,36 @@ class Policy(object):
         self.secret = secret
 
     @property
-    def authenticate(self):
+    def authenticate(self) -> Any:
         """True when clients must authenticate."""
         return bool(self.secret)
 
-    def may_publish(self, topic):
+    def may_publish(self, topic: str) -> Any:
         """Return True if a client may publish topic into ROS."""
         return _matches(topic, self.publish_globs)
 
-    def may_subscribe(self, topic):
+    def may_subscribe(self, topic: str) -> Any:
         """Return True if a client may receive topic."""
         return _matches(topic, self.subscribe_globs)
 
-    def may_see_topic(self, topic):
+    def may_see_topic(self, topic: str) -> Any:
         """Return True if rosapi may list topic (allowed in either direction)."""
         return self.may_publish(topic) or self.may_subscribe(topic)
 
-    def may_call(self, service):
+    def may_call(self, service: str) -> Any:
         """Return True if a client may call or advertise service."""
         return _matches(service, self.service_globs)
 
-    def may_read_param(self, name):
+    def may_read_param(self, name: str) -> Any:
         """Return True if rosapi may reveal parameter name."""
         return _matches(name, self.param_globs)
 
-    def may_write_param(self, name):
+    def may_write_param(self, name: str) -> Any:
         """Return True if rosapi may set or delete parameter name."""
         return self.params_writable and _matches(name, self.param_globs)
 
 
-def _secs(value, field):
+def _secs(value: Any, field: str) -> Any:
     if isinstance(value, dict):
         value = value.get("secs", value.get("sec"))
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
@@ -148,7 +149,7 @@ def _secs(value, field):
     return int(value)
 
 
-def make_mac(secret, client, dest, rand, t, level, end):
+def make_mac(secret: str, client: str, dest: str, rand: str, t: Any, level: str, end: Any) -> Any:
     """Compute the rosauth MAC: sha512 hex of secret+client+dest+rand+t.secs+level+end.secs.
 
     Args:
@@ -167,7 +168,7 @@ def make_mac(secret, client, dest, rand, t, level, end):
     return hashlib.sha512(text.encode("utf-8")).hexdigest()
 
 
-def check_mac(secret, frame, now, max_skew=5.0):
+def check_mac(secret: str, frame: Dict[str, Any], now: Callable[..., Any], max_skew: float = 5.0) -> None:
     """Validate an ``auth`` op the way rosauth's ros_mac_authentication does.
 
     Args:
@@ -196,7 +197,7 @@ def check_mac(secret, frame, now, max_skew=5.0):
         raise AuthError("auth: MAC does not match")
 
 
-def policy_from_params(get, secret=None):
+def policy_from_params(get: Callable[..., Any], secret: str = None) -> Any:
     """Build the Policy from node parameters (rosbridge names plus RoboDog extensions).
 
     ``topics_glob`` (rosbridge) sets both directions; ``publish_topics_glob`` /

@@ -10,12 +10,14 @@ loopback/LAN for JSON frames.
 import asyncio
 import itertools
 import logging
+import os
+from typing import Any, Callable
 
 import websockets
 
-import os
 try:
     from websockets.asyncio.server import serve as _serve
+
     if os.environ.get("RBD_WS_LEGACY"):
         _serve = websockets.serve
 except ImportError:  # websockets < 13 (Python 3.6 robots)
@@ -28,7 +30,7 @@ __all__ = ["BridgeServer"]
 _log = logging.getLogger("rbd_bridge")
 
 
-class BridgeServer(object):
+class BridgeServer:
     """Serve rosbridge v2 over WebSocket.
 
     Args:
@@ -46,9 +48,20 @@ class BridgeServer(object):
         on_clients: Callable(count) called when the number of clients changes.
     """
 
-    def __init__(self, loop, backend, policy, host="127.0.0.1", port=9090, max_message_size=10000000,
-                 max_queue_frames=1000, max_queue_bytes=16 * 1024 * 1024, ping_interval=20.0, ping_timeout=20.0,
-                 on_clients=None):
+    def __init__(
+        self,
+        loop: Any,
+        backend: Any,
+        policy: Any,
+        host: str = "127.0.0.1",
+        port: int = 9090,
+        max_message_size: int = 10000000,
+        max_queue_frames: int = 1000,
+        max_queue_bytes: int = 16 * 1024 * 1024,
+        ping_interval: float = 20.0,
+        ping_timeout: float = 20.0,
+        on_clients: Callable[..., Any] = None,
+    ) -> None:
         """Configure; nothing listens until start()."""
         self.loop = loop
         self.backend = backend
@@ -65,7 +78,7 @@ class BridgeServer(object):
         self._ids = itertools.count(1)
         self._server = None
 
-    async def start(self):
+    async def start(self) -> Any:
         """Bind and listen; returns when the socket is open."""
         self._server = await _serve(
             self._handle,
@@ -84,26 +97,27 @@ class BridgeServer(object):
             self.port = sockets[0].getsockname()[1]
         return self.port
 
-    async def stop(self):
+    async def stop(self) -> None:
         """Close every connection and the listening socket."""
         if self._server is not None:
             self._server.close()
             await self._server.wait_closed()
             self._server = None
 
-    def _closer(self, ws):
-        def close(code, reason):
+    def _closer(self, ws: Any) -> Any:
+        def close(code: int, reason: str) -> None:
             asyncio.ensure_future(ws.close(code, reason))
 
         return close
 
-    async def _handle(self, ws, path=None):
+    async def _handle(self, ws: Any, path: str = None) -> None:
         client_id = next(self._ids)
         peer = "%s:%s" % tuple(ws.remote_address[:2]) if ws.remote_address else "?"
         wake = asyncio.Event()
         out = OutQueue(self.max_queue_frames, self.max_queue_bytes, notify=wake.set)
-        session = Session(client_id, self.backend, self.policy, out, self.loop.call_later, close=self._closer(ws),
-                          peer=peer)
+        session = Session(
+            client_id, self.backend, self.policy, out, self.loop.call_later, close=self._closer(ws), peer=peer
+        )
         session.max_message_size = self.max_message_size
         self.sessions[client_id] = session
         self._clients_changed()
@@ -125,7 +139,7 @@ class BridgeServer(object):
                 _log.warning("client %d: %d outgoing frames dropped (slow client)", client_id, out.dropped)
             _log.info("client %d disconnected (%d connected)", client_id, len(self.sessions))
 
-    def _clients_changed(self):
+    def _clients_changed(self) -> None:
         if self.on_clients is not None:
             try:
                 self.on_clients(len(self.sessions))
@@ -133,7 +147,7 @@ class BridgeServer(object):
                 _log.exception("client count callback failed")
 
     @staticmethod
-    async def _write(ws, out, wake):
+    async def _write(ws: Any, out: Any, wake: Any) -> None:
         try:
             while True:
                 frame = out.pop()
