@@ -4,6 +4,7 @@ import base64
 import os
 import socket
 import struct
+import threading
 from typing import Any, Optional
 
 
@@ -30,6 +31,7 @@ class RawWs:
         if b" 101 " not in status.split(b"\r\n")[0]:
             raise ConnectionError(status.decode(errors="replace"))
         self.buf = bytearray(rest)
+        self.send_lock = threading.Lock()
 
     def _send(self, opcode: Any, payload: Any) -> None:
         n = len(payload)
@@ -40,7 +42,8 @@ class RawWs:
         else:
             head = struct.pack("!BBQ", 0x80 | opcode, 0x80 | 127, n)
         # zero mask: valid per RFC 6455 and avoids a Python-speed XOR loop
-        self.sock.sendall(head + b"\x00\x00\x00\x00" + payload)
+        with self.send_lock:
+            self.sock.sendall(head + b"\x00\x00\x00\x00" + payload)
 
     def send_text(self, text: str) -> None:
         """Send a text frame."""

@@ -275,8 +275,10 @@ class RosBackend(Backend):
         sub = _Sub(topic, type_name, cls)
         sub.sessions.add(session)
         self.subs[topic] = sub
+        # queue_size=None: rospy hands over everything one socket read holds (bounded by
+        # buff_size); a slow WebSocket client is bounded later, in its own OutQueue.
         sub.subscriber = rospy.Subscriber(
-            topic, cls, self._on_message, callback_args=sub, queue_size=100, buff_size=1 << 20, tcp_nodelay=True
+            topic, cls, self._on_message, callback_args=sub, queue_size=None, buff_size=1 << 20, tcp_nodelay=True
         )
         return type_name
 
