@@ -5,6 +5,7 @@ rospy callbacks run on rospy's threads and hop to the loop with ``call_soon_thre
 Blocking ROS calls (services, master look-ups for rosapi, parameters) run in a thread pool.
 """
 
+import collections
 import concurrent.futures
 import io
 import itertools
@@ -175,6 +176,8 @@ class RosBackend(Backend):
         self._proxies = {}
         self._proxy_lock = threading.Lock()
         self._srv_types = {}
+        self._inbox = collections.deque()
+        self._inbox_lock = threading.Lock()
         self.rosapi = RosApi(policy, self.master, _RosParams(), self._now, self._lookup_service_type)
 
     # ------------------------------------------------------------ helpers
@@ -317,7 +320,24 @@ class RosBackend(Backend):
             return
         if latched:
             sub.latched[header.get("callerid", "")] = message
-        self.loop.call_soon_threadsafe(self._fan_out, sub, message)
+        with self._inbox_lock:
+            wake = not self._inbox
+            self._inbox.append((sub, message))
+        if wake:  # one loop wake-up per burst, not per message
+            try:
+                self.loop.call_soon_threadsafe(self._drain_inbox)
+            except RuntimeError:  # loop closed: shutting down
+                pass
+
+    def _drain_inbox(self) -> None:
+        while True:
+            with self._inbox_lock:
+                if not self._inbox:
+                    return
+                items = list(self._inbox)
+                self._inbox.clear()
+            for sub, message in items:
+                self._fan_out(sub, message)
 
     @staticmethod
     def _fan_out(sub: Any, message: Any) -> None:
