@@ -160,7 +160,12 @@ class RosBackend(Backend):
     """
 
     def __init__(
-        self, loop: Any, policy: Any, service_timeout: float = 10.0, call_timeout: float = 30.0, workers: int = 8
+        self,
+        loop: Any,
+        policy: Any,
+        service_timeout: float = 10.0,
+        call_timeout: float = 30.0,
+        workers: int = 8,
     ) -> None:
         """Create the backend (rospy.init_node must have been called)."""
         self.loop = loop
