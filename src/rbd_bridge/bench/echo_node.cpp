@@ -6,8 +6,7 @@
 #include <std_msgs/String.h>
 #include <std_srvs/SetBool.h>
 
-namespace
-{
+namespace {
 ros::Publisher g_out;
 ros::Publisher g_cloud_out;
 
@@ -15,16 +14,14 @@ void onString(const std_msgs::String::ConstPtr& msg) { g_out.publish(msg); }
 
 void onCloud(const sensor_msgs::PointCloud2::ConstPtr& msg) { g_cloud_out.publish(msg); }
 
-bool onSetBool(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res)
-{
+bool onSetBool(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
   res.success = req.data;
   res.message = "echo";
   return true;
 }
 }  // namespace
 
-int main(int argc, char** argv)
-{
+int main(int argc, char** argv) {
   ros::init(argc, argv, "echo_node");
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
@@ -38,12 +35,10 @@ int main(int argc, char** argv)
   ros::Publisher tick = nh.advertise<std_msgs::Header>("/echo/tick", 10);
   ros::AsyncSpinner spinner(1);
   spinner.start();
-  if (rate > 0.0)
-  {
+  if (rate > 0.0) {
     ros::WallRate r(rate);
     uint32_t seq = 0;
-    while (ros::ok())
-    {
+    while (ros::ok()) {
       std_msgs::Header h;
       h.seq = ++seq;
       ros::WallTime now = ros::WallTime::now();
