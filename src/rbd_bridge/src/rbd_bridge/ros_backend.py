@@ -119,6 +119,20 @@ class _Hosted:
             self.server.shutdown(reason)
 
 
+class _ThreadLocalMaster:
+    """rosgraph.Master per thread (an XML-RPC ServerProxy must not be shared by threads)."""
+
+    def __init__(self, caller_id: str) -> None:
+        self._caller_id = caller_id
+        self._local = threading.local()
+
+    def __getattr__(self, name: str) -> Any:
+        master = getattr(self._local, "master", None)
+        if master is None:
+            master = self._local.master = rosgraph.Master(self._caller_id)
+        return getattr(master, name)
+
+
 class _RosParams:
     """Parameter adapter for rosapi on the real parameter server."""
 
@@ -177,7 +191,7 @@ class RosBackend(Backend):
         self.hosted = {}
         self.ids = itertools.count(1)
         self.pool = concurrent.futures.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rbd_bridge_call")
-        self.master = rosgraph.Master(rospy.get_name())
+        self.master = _ThreadLocalMaster(rospy.get_name())
         self._proxies = {}
         self._proxy_lock = threading.Lock()
         self._srv_types = {}
