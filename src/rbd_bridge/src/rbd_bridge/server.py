@@ -111,6 +111,7 @@ class _Connection(asyncio.Protocol):
         self.flush()
 
     def connection_lost(self, exc: Optional[Exception]) -> None:
+        self.closing = True  # nothing more is written to this transport
         if self.timer is not None:
             self.timer.cancel()
             self.timer = None
