@@ -335,6 +335,8 @@ class Session:
         self.received = 0
         self.errors = 0
         self.max_message_size = None
+        self._rejected = 0
+        self._rejected_logged = -1e18
         self._handlers = {
             "fragment": self._op_fragment,
             "set_level": self._op_set_level,
@@ -362,12 +364,27 @@ class Session:
             self._dispatch(frame, _depth)
         except BridgeError as exc:
             self.errors += 1
-            _log.debug("client %s: %s", self.client_id, exc)
+            self._log_rejected(exc)
             self.status(exc.level, str(exc))
         except Exception as exc:  # a bug must not end the session
             self.errors += 1
             _log.exception("client %s: internal error", self.client_id)
             self.status("error", "internal error: %s" % exc)
+
+    def _log_rejected(self, exc: Exception) -> None:
+        """Log a rejected frame (at most one line per second per client, with a count)."""
+        now = self.clock()
+        self._rejected += 1
+        if now - self._rejected_logged >= 1.0:
+            _log.warning(
+                "client %s (%s): frame rejected (%d since last report): %s",
+                self.client_id,
+                self.peer,
+                self._rejected,
+                exc,
+            )
+            self._rejected = 0
+            self._rejected_logged = now
 
     def _decode(self, data: Any) -> Any:
         if isinstance(data, (bytes, bytearray, memoryview)):
@@ -403,9 +420,11 @@ class Session:
                 handler(frame)
         except BridgeError as exc:
             self.errors += 1
+            self._log_rejected(exc)
             self.status(exc.level, str(exc), frame.get("id"))
         except ConversionError as exc:
             self.errors += 1
+            self._log_rejected(exc)
             self.status("error", "%s: %s" % (op, exc), frame.get("id"))
 
     # ----------------------------------------------------------------- output
@@ -556,7 +575,6 @@ class Session:
         self.status("info", "authenticated", frame.get("id"))
 
     def _denied(self, what: str, name: str) -> NoReturn:
-        _log.warning("client %s (%s): %s %s denied by the allow-list", self.client_id, self.peer, what, name)
         raise BridgeError("%s %s: not allowed by this bridge's allow-list" % (what, name))
 
     def _op_advertise(self, frame: Dict[str, Any]) -> None:
