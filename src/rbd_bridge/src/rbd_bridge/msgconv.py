@@ -1,0 +1,549 @@
+"""ROS message <-> JSON-ready dict conversion with rosbridge v2 semantics.
+
+Needs only genpy message classes (no master). Rules (as rosbridge does them):
+
+- ``time`` / ``duration`` <-> ``{"secs": int, "nsecs": int}``;
+- ``uint8[]`` / ``char[]`` (also fixed-size) go out as base64 strings and come in as base64
+  strings or lists of ints;
+- NaN / +-Inf go out as ``null`` (``null`` coming in for a float field means NaN);
+- an int is accepted for a float field; 64-bit ints stay exact (Python ints);
+- missing fields take their defaults (reported back as a warning), unknown fields are
+  rejected, ``header.stamp`` is filled with the current time when the header or its stamp is
+  missing.
+
+Converters are compiled once per message class and cached.
+"""
+
+import base64
+import binascii
+import math
+import threading
+from typing import Any, Callable, Optional
+
+import genpy
+import roslib.message
+
+__all__ = [
+    "ConversionError",
+    "get_message_class",
+    "get_service_class",
+    "msg_to_dict",
+    "dict_to_msg",
+    "normalize_type",
+]
+
+_INT_RANGES = {
+    "int8": (-(2**7), 2**7 - 1),
+    "byte": (-(2**7), 2**7 - 1),
+    "uint8": (0, 2**8 - 1),
+    "char": (0, 2**8 - 1),
+    "int16": (-(2**15), 2**15 - 1),
+    "uint16": (0, 2**16 - 1),
+    "int32": (-(2**31), 2**31 - 1),
+    "uint32": (0, 2**32 - 1),
+    "int64": (-(2**63), 2**63 - 1),
+    "uint64": (0, 2**64 - 1),
+}
+_FLOATS = ("float32", "float64")
+_BINARY = ("uint8", "char")
+
+
+class ConversionError(ValueError):
+    """A JSON value does not fit the ROS message type; the text names the field."""
+
+
+def normalize_type(type_name: str) -> Any:
+    """Return the ROS 1 spelling ``pkg/Name`` of a type (accepts ``pkg/msg/Name``, ``pkg/srv/Name``).
+
+    Args:
+        type_name: Type as a client wrote it.
+
+    Returns:
+        str: ``pkg/Name``.
+
+    Raises:
+        ConversionError: If the text is not a type name.
+    """
+    if not isinstance(type_name, str) or not type_name:
+        raise ConversionError("type must be a non-empty string, got %r" % (type_name,))
+    parts = type_name.strip("/").split("/")
+    if len(parts) == 3 and parts[1] in ("msg", "srv", "action"):
+        parts = [parts[0], parts[2]]
+    if len(parts) != 2 or not all(p.replace("_", "a").isalnum() for p in parts):
+        raise ConversionError("invalid type name %r" % (type_name,))
+    return "/".join(parts)
+
+
+_class_lock = threading.Lock()
+_msg_classes = {}
+_srv_classes = {}
+
+
+def get_message_class(type_name: str) -> Any:
+    """Load a message class by name.
+
+    Args:
+        type_name: e.g. ``std_msgs/String``.
+
+    Returns:
+        The genpy message class.
+
+    Raises:
+        ConversionError: If the type cannot be loaded.
+    """
+    name = normalize_type(type_name)
+    cls = _msg_classes.get(name)
+    if cls is None:
+        with _class_lock:
+            try:
+                cls = roslib.message.get_message_class(name)
+            except Exception as exc:  # roslib raises many kinds on bad packages
+                raise ConversionError("cannot load message type %s: %s" % (name, exc)) from None
+            if cls is None:
+                raise ConversionError("unknown message type %s" % name)
+            _msg_classes[name] = cls
+    return cls
+
+
+def get_service_class(type_name: str) -> Any:
+    """Load a service class by name.
+
+    Args:
+        type_name: e.g. ``std_srvs/SetBool``.
+
+    Returns:
+        The genpy service class (with ``_request_class`` and ``_response_class``).
+
+    Raises:
+        ConversionError: If the type cannot be loaded.
+    """
+    name = normalize_type(type_name)
+    cls = _srv_classes.get(name)
+    if cls is None:
+        with _class_lock:
+            try:
+                cls = roslib.message.get_service_class(name)
+            except Exception as exc:
+                raise ConversionError("cannot load service type %s: %s" % (name, exc)) from None
+            if cls is None:
+                raise ConversionError("unknown service type %s" % name)
+            _srv_classes[name] = cls
+    return cls
+
+
+def _split_array(slot_type: str) -> Any:
+    """Return (base type, is_array, fixed length or None)."""
+    if slot_type.endswith("]"):
+        base, _, rest = slot_type.partition("[")
+        length = rest[:-1]
+        return base, True, (int(length) if length else None)
+    return slot_type, False, None
+
+
+def _nested_class(base: str) -> Any:
+    if base == "Header":
+        base = "std_msgs/Header"
+    return get_message_class(base)
+
+
+# --------------------------------------------------------------------------- outgoing
+
+
+def _finite(value: Any) -> Any:
+    # inf - inf and nan - nan are nan; finite - finite is 0.0
+    return value if value - value == 0 else None
+
+
+def _time_out(value: Any) -> Any:
+    return {"secs": value.secs, "nsecs": value.nsecs}
+
+
+def _b64(value: Any) -> Any:
+    if isinstance(value, str):  # old genpy hands out str for uint8[]
+        value = value.encode("latin-1")
+    return base64.b64encode(bytes(value)).decode("ascii")
+
+
+def _raw_bytes(value: Any) -> Any:
+    if isinstance(value, str):
+        value = value.encode("latin-1")
+    return bytes(value)
+
+
+class TypedArray:
+    """A homogeneous numeric array for the CBOR encoder (typed-array tags)."""
+
+    __slots__ = ("kind", "values")
+
+    def __init__(self, kind: str, values: Any) -> None:
+        """Wrap values of ROS element type kind (e.g. ``float32``)."""
+        self.kind = kind
+        self.values = values
+
+
+_out_cache = {}
+
+
+def _compile_out(cls: Any, binary: bool) -> Any:
+    key = (cls, binary)
+    plan = _out_cache.get(key)
+    if plan is not None:
+        return plan
+    plan = []
+    for name, slot_type in zip(cls.__slots__, cls._slot_types):
+        base, is_array, _ = _split_array(slot_type)
+        conv = None
+        if base in _BINARY and is_array:
+            conv = _raw_bytes if binary else _b64
+        elif base in _FLOATS:
+            if is_array:
+                if binary:
+                    conv = _typed(base)
+                else:
+                    conv = _float_list
+            elif not binary:
+                conv = _finite
+        elif base in ("time", "duration"):
+            conv = (lambda v: [_time_out(x) for x in v]) if is_array else _time_out
+        elif base in _INT_RANGES or base in ("bool", "string"):
+            if is_array:
+                conv = _typed(base) if (binary and base in _INT_RANGES) else list
+        else:
+            conv = _nested_out(_nested_class(base), binary, is_array)
+        plan.append((name, conv))
+    plan = tuple(plan)
+    _out_cache[key] = plan
+    return plan
+
+
+def _typed(kind: str) -> Any:
+    return lambda v: TypedArray(kind, v)
+
+
+def _float_list(values: Any) -> Any:
+    return [v if v - v == 0 else None for v in values]
+
+
+def _nested_out(nested_cls: Any, binary: bool, is_array: bool) -> Any:
+    def one(value: Any) -> Any:
+        return _convert_out(value, _compile_out(nested_cls, binary))
+
+    if is_array:
+        return lambda v: [one(x) for x in v]
+    return one
+
+
+def _convert_out(msg: Any, plan: Any) -> Any:
+    out = {}
+    for name, conv in plan:
+        value = getattr(msg, name)
+        out[name] = value if conv is None else conv(value)
+    return out
+
+
+def msg_to_dict(msg: Any, binary: bool = False) -> Any:
+    """Convert a genpy message into a JSON-ready dict (rosbridge mapping).
+
+    Args:
+        msg: A genpy message instance.
+        binary: True for the CBOR encoding: byte arrays stay ``bytes``, numeric arrays become
+            :class:`TypedArray`, floats keep NaN/Inf.
+
+    Returns:
+        dict: Field name to JSON-ready value.
+    """
+    return _convert_out(msg, _compile_out(type(msg), binary))
+
+
+# --------------------------------------------------------------------------- incoming
+
+
+class _Context:
+    __slots__ = ("now", "missing")
+
+    def __init__(self, now: Callable[..., Any]) -> None:
+        self.now = now
+        self.missing = []
+
+
+def _is_int(value: Any) -> Any:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _int_in(base: str) -> Any:
+    low, high = _INT_RANGES[base]
+
+    def conv(value: Any, path: str, ctx: Any) -> Any:
+        if not _is_int(value):
+            if isinstance(value, bool):
+                value = int(value)
+            elif isinstance(value, float) and math.isfinite(value) and value == int(value):
+                value = int(value)
+            else:
+                raise ConversionError("%s: expected %s, got %s" % (path, base, _describe(value)))
+        if value < low or value > high:
+            raise ConversionError("%s: %d out of range for %s" % (path, value, base))
+        return value
+
+    return conv
+
+
+def _float_in(value: Any, path: str, ctx: Any) -> Any:
+    if isinstance(value, float):
+        return value
+    if _is_int(value):
+        return float(value)
+    if value is None:
+        return math.nan
+    raise ConversionError("%s: expected a number, got %s" % (path, _describe(value)))
+
+
+def _bool_in(value: Any, path: str, ctx: Any) -> Any:
+    if isinstance(value, bool):
+        return value
+    if _is_int(value) and value in (0, 1):
+        return bool(value)
+    raise ConversionError("%s: expected a bool, got %s" % (path, _describe(value)))
+
+
+def _string_in(value: Any, path: str, ctx: Any) -> Any:
+    if isinstance(value, str):
+        return value
+    raise ConversionError("%s: expected a string, got %s" % (path, _describe(value)))
+
+
+def _time_in(kind: str) -> Any:
+    cls = genpy.Time if kind == "time" else genpy.Duration
+    low = 0 if kind == "time" else -(2**31)
+    high = 2**32 - 1 if kind == "time" else 2**31 - 1
+
+    def conv(value: Any, path: str, ctx: Any) -> Any:
+        if value == "now" and kind == "time":
+            return ctx.now()
+        if isinstance(value, dict):
+            unknown = set(value) - {"secs", "nsecs", "sec", "nanosec"}
+            if unknown:
+                raise ConversionError("%s: unknown field(s) %s in %s" % (path, sorted(unknown), kind))
+            secs = value.get("secs", value.get("sec", 0))
+            nsecs = value.get("nsecs", value.get("nanosec", 0))
+            if not (_is_int(secs) and _is_int(nsecs)):
+                raise ConversionError("%s: secs/nsecs must be integers" % path)
+            if not (low <= secs <= high) or not (0 <= nsecs < 10**9 or kind == "duration"):
+                raise ConversionError("%s: %s out of range" % (path, kind))
+            return cls(secs, nsecs)
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
+            if not (low <= value <= high):
+                raise ConversionError("%s: %s out of range" % (path, kind))
+            return cls.from_sec(value) if isinstance(value, float) else cls(value, 0)
+        raise ConversionError("%s: expected {secs, nsecs}, got %s" % (path, _describe(value)))
+
+    return conv
+
+
+def _binary_in(fixed: Optional[int]) -> Any:
+    def conv(value: Any, path: str, ctx: Any) -> Any:
+        if isinstance(value, str):
+            try:
+                data = base64.b64decode(value.encode("ascii"), validate=True)
+            except (binascii.Error, UnicodeEncodeError, ValueError):
+                raise ConversionError("%s: invalid base64 string" % path) from None
+        elif isinstance(value, list):
+            try:
+                data = bytes(value)
+            except (TypeError, ValueError):
+                raise ConversionError("%s: expected a list of ints 0..255" % path) from None
+        else:
+            raise ConversionError("%s: expected base64 string or list, got %s" % (path, _describe(value)))
+        if fixed is not None and len(data) != fixed:
+            raise ConversionError("%s: expected %d bytes, got %d" % (path, fixed, len(data)))
+        return data
+
+    return conv
+
+
+def _array_in(elem: Any, fixed: Optional[int]) -> Any:
+    def conv(value: Any, path: str, ctx: Any) -> Any:
+        if not isinstance(value, list):
+            raise ConversionError("%s: expected a list, got %s" % (path, _describe(value)))
+        if fixed is not None and len(value) != fixed:
+            raise ConversionError("%s: expected %d elements, got %d" % (path, fixed, len(value)))
+        return [elem(v, "%s[%d]" % (path, i), ctx) for i, v in enumerate(value)]
+
+    return conv
+
+
+_in_cache = {}
+
+
+def _compile_in(cls: Any) -> Any:
+    plan = _in_cache.get(cls)
+    if plan is not None:
+        return plan
+    fields = {}
+    header_slot = None
+    for name, slot_type in zip(cls.__slots__, cls._slot_types):
+        base, is_array, fixed = _split_array(slot_type)
+        if base in _BINARY and is_array:
+            fields[name] = _binary_in(fixed)
+            continue
+        if base in _INT_RANGES:
+            elem = _int_in(base)
+        elif base in _FLOATS:
+            elem = _float_in
+        elif base == "bool":
+            elem = _bool_in
+        elif base == "string":
+            elem = _string_in
+        elif base in ("time", "duration"):
+            elem = _time_in(base)
+        else:
+            nested = _nested_class(base)
+            elem = _nested_in(nested)
+            if nested._type == "std_msgs/Header" and not is_array:
+                header_slot = name
+        fields[name] = _array_in(elem, fixed) if is_array else elem
+    plan = (fields, header_slot)
+    _in_cache[cls] = plan
+    return plan
+
+
+def _nested_in(nested_cls: Any) -> Any:
+    def conv(value: Any, path: str, ctx: Any) -> Any:
+        return _fill(nested_cls, value, path, ctx)
+
+    return conv
+
+
+def _fill(cls: Any, data: Any, path: str, ctx: Any) -> Any:
+    if not isinstance(data, dict):
+        raise ConversionError("%s: expected an object for %s, got %s" % (path or "msg", cls._type, _describe(data)))
+    fields, header_slot = _compile_in(cls)
+    unknown = [k for k in data if k not in fields]
+    if unknown:
+        raise ConversionError(
+            "%s: unknown field(s) %s for %s" % (path or "msg", ", ".join(sorted(map(str, unknown))), cls._type)
+        )
+    msg = cls()
+    for key, value in data.items():
+        setattr(msg, key, fields[key](value, (path + "." + key) if path else key, ctx))
+    if len(data) < len(fields):
+        ctx.missing.extend((path + "." + k) if path else k for k in fields if k not in data)
+    if cls._type == "std_msgs/Header" and "stamp" not in data:
+        msg.stamp = ctx.now()
+    elif header_slot is not None and header_slot not in data:
+        getattr(msg, header_slot).stamp = ctx.now()
+    return msg
+
+
+def dict_to_msg(cls: Any, data: Any, now: Callable[..., Any] = None) -> Any:
+    """Build a message of class cls from a JSON object (rosbridge mapping, strict).
+
+    Args:
+        cls: genpy message class (also a service request/response class).
+        data: The decoded JSON object (``None`` means an empty object).
+        now: Callable returning the current ``genpy.Time`` for header stamps
+            (defaults to wall clock).
+
+    Returns:
+        tuple: (message, list of missing field paths filled with defaults).
+
+    Raises:
+        ConversionError: On wrong types, unknown fields, out-of-range values.
+    """
+    if data is None:
+        data = {}
+    ctx = _Context(now or _wall_now)
+    msg = _fill(cls, data, "", ctx)
+    return msg, ctx.missing
+
+
+def _wall_now() -> Any:
+    import time
+
+    return genpy.Time.from_sec(time.time())
+
+
+def _describe(value: Any) -> str:
+    text = repr(value)
+    if len(text) > 40:
+        text = text[:37] + "..."
+    return "%s %s" % (type(value).__name__, text)
+
+
+def message_typedefs(cls: Any) -> Any:
+    """Describe cls and every nested type as rosapi ``TypeDef`` dicts (message_details).
+
+    Args:
+        cls: genpy message class.
+
+    Returns:
+        list: One dict per type, cls first.
+    """
+    out = []
+    seen = set()
+
+    def visit(c: Any) -> None:
+        if c._type in seen:
+            return
+        seen.add(c._type)
+        names, types, lens, examples, nested = [], [], [], [], []
+        for name, slot_type in zip(c.__slots__, c._slot_types):
+            base, is_array, fixed = _split_array(slot_type)
+            if base == "Header":
+                base = "std_msgs/Header"
+            names.append(name)
+            types.append(base)
+            lens.append(-1 if not is_array else (fixed if fixed is not None else 0))
+            if is_array:
+                examples.append("[]")
+            elif base in _INT_RANGES:
+                examples.append("0")
+            elif base in _FLOATS:
+                examples.append("0.0")
+            elif base == "bool":
+                examples.append("False")
+            elif base == "string":
+                examples.append("")
+            elif base in ("time", "duration"):
+                examples.append("{}")
+            else:
+                examples.append("{}")
+                nested.append(_nested_class(base))
+            if (
+                is_array
+                and base not in _INT_RANGES
+                and base not in _FLOATS
+                and base
+                not in (
+                    "bool",
+                    "string",
+                    "time",
+                    "duration",
+                )
+            ):
+                nested.append(_nested_class(base))
+        constnames, constvalues = [], []
+        for line in (getattr(c, "_full_text", "") or "").split("\n"):
+            if line.startswith("==="):
+                break
+            line = line.split("#", 1)[0].strip()
+            if "=" in line and " " in line.split("=", 1)[0].strip():
+                left, value = line.split("=", 1)
+                constnames.append(left.split()[-1])
+                constvalues.append(value.strip())
+        out.append(
+            {
+                "type": c._type,
+                "fieldnames": names,
+                "fieldtypes": types,
+                "fieldarraylen": lens,
+                "examples": examples,
+                "constnames": constnames,
+                "constvalues": constvalues,
+            }
+        )
+        for n in nested:
+            visit(n)
+
+    visit(cls)
+    return out

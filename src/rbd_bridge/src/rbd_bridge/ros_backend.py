@@ -1,0 +1,543 @@
+"""The ROS side of the bridge (rospy): publishers, shared subscribers, service calls/hosting.
+
+All :class:`rbd_bridge.protocol.Backend` methods run on the server's asyncio loop thread;
+rospy callbacks run on rospy's threads and hop to the loop with ``call_soon_threadsafe``.
+Blocking ROS calls (services, master look-ups for rosapi, parameters) run in a thread pool.
+"""
+
+import collections
+import concurrent.futures
+import io
+import itertools
+import logging
+import socket
+import threading
+from typing import Any, Callable, Optional
+
+import rosgraph
+import rospy
+import rosservice
+
+from rbd_bridge.msgconv import (
+    ConversionError,
+    dict_to_msg,
+    get_message_class,
+    get_service_class,
+    msg_to_dict,
+    normalize_type,
+)
+from rbd_bridge.protocol import Backend, BridgeError, TopicMessage
+from rbd_bridge.rosapi import RosApi, RosApiError
+
+__all__ = ["RosBackend"]
+
+_log = logging.getLogger("rbd_bridge")
+
+
+class _Pub:
+    __slots__ = ("topic", "type", "cls", "publisher", "clients")
+
+    def __init__(self, topic: str, type_name: str, cls: Any, publisher: Any) -> None:
+        self.topic = topic
+        self.type = type_name
+        self.cls = cls
+        self.publisher = publisher
+        self.clients = set()
+
+
+class _Sub:
+    __slots__ = ("topic", "type", "cls", "subscriber", "sessions", "latched")
+
+    def __init__(self, topic: str, type_name: str, cls: Any) -> None:
+        self.topic = topic
+        self.type = type_name
+        self.cls = cls
+        self.subscriber = None
+        self.sessions = set()
+        self.latched = {}
+
+
+class _Hosted:
+    """A service that a WebSocket client provides to ROS."""
+
+    def __init__(self, backend: Any, name: str, type_name: str, cls: Any, session: Any) -> None:
+        self.backend = backend
+        self.name = name
+        self.type = type_name
+        self.cls = cls
+        self.session = session
+        self.pending = {}
+        self.lock = threading.Lock()
+        self.closed = False
+        self.server = None
+
+    def handle(self, request: Any) -> Any:
+        """Rospy thread: forward the request to the client and wait for its answer."""
+        call_id = "service_request:%s:%d" % (self.name, next(self.backend.ids))
+        waiter = [threading.Event(), None, None]
+        with self.lock:
+            if self.closed:
+                raise rospy.ServiceException("service %s: its WebSocket provider is gone" % self.name)
+            self.pending[call_id] = waiter
+        args = msg_to_dict(request)
+        loop = self.backend.loop
+        loop.call_soon_threadsafe(self.session.send_service_request, self.name, call_id, args)
+        if not waiter[0].wait(self.backend.service_timeout):
+            with self.lock:
+                self.pending.pop(call_id, None)
+            raise rospy.ServiceException(
+                "service %s: WebSocket provider did not answer in %.1f s" % (self.name, self.backend.service_timeout)
+            )
+        ok, values = waiter[1], waiter[2]
+        if not ok:
+            raise rospy.ServiceException("service %s failed: %s" % (self.name, values))
+        try:
+            response, _ = dict_to_msg(self.cls._response_class, values if isinstance(values, dict) else {})
+        except ConversionError as exc:
+            raise rospy.ServiceException(
+                "service %s: bad response from WebSocket provider: %s" % (self.name, exc)
+            ) from None
+        return response
+
+    def answer(self, call_id: Any, ok: bool, values: Any) -> bool:
+        with self.lock:
+            waiter = self.pending.pop(call_id, None)
+        if waiter is None:
+            return False
+        waiter[1], waiter[2] = ok, values
+        waiter[0].set()
+        return True
+
+    def close(self, reason: str) -> None:
+        with self.lock:
+            self.closed = True
+            pending, self.pending = self.pending, {}
+        for waiter in pending.values():
+            waiter[1], waiter[2] = False, reason
+            waiter[0].set()
+        if self.server is not None:
+            self.server.shutdown(reason)
+
+
+class _ThreadLocalMaster:
+    """rosgraph.Master per thread (an XML-RPC ServerProxy must not be shared by threads)."""
+
+    def __init__(self, caller_id: str) -> None:
+        self._caller_id = caller_id
+        self._local = threading.local()
+
+    def __getattr__(self, name: str) -> Any:
+        master = getattr(self._local, "master", None)
+        if master is None:
+            master = self._local.master = rosgraph.Master(self._caller_id)
+        return getattr(master, name)
+
+
+class _RosParams:
+    """Parameter adapter for rosapi on the real parameter server."""
+
+    def get(self, name: str) -> Any:
+        return rospy.get_param(name)
+
+    def set(self, name: str, value: Any) -> None:
+        rospy.set_param(name, value)
+
+    def has(self, name: str) -> Any:
+        return rospy.has_param(name)
+
+    def delete(self, name: str) -> None:
+        rospy.delete_param(name)
+
+    def search(self, name: str) -> Any:
+        return rospy.search_param(name)
+
+    def names(self) -> Any:
+        return rospy.get_param_names()
+
+
+def _is_transport_error(exc: Any) -> Any:
+    if isinstance(exc, (rospy.exceptions.TransportException, socket.error, EOFError)):
+        return True
+    text = str(exc).lower()
+    return "transport error" in text or "unable to connect" in text or "connection" in text
+
+
+class RosBackend(Backend):
+    """rospy implementation of the protocol backend.
+
+    Args:
+        loop: The asyncio loop the sessions live on.
+        policy: The bridge :class:`rbd_bridge.security.Policy` (for rosapi filtering).
+        service_timeout: Seconds a ROS caller waits for a client-hosted service.
+        call_timeout: Default seconds for ``call_service`` without ``timeout`` (0 = none).
+        workers: Threads for blocking calls.
+    """
+
+    def __init__(
+        self,
+        loop: Any,
+        policy: Any,
+        service_timeout: float = 10.0,
+        call_timeout: float = 30.0,
+        workers: int = 8,
+    ) -> None:
+        """Create the backend (rospy.init_node must have been called)."""
+        self.loop = loop
+        self.policy = policy
+        self.service_timeout = service_timeout
+        self.call_timeout = call_timeout
+        self.pubs = {}
+        self.subs = {}
+        self.hosted = {}
+        self.ids = itertools.count(1)
+        self.pool = concurrent.futures.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rbd_bridge_call")
+        self.master = _ThreadLocalMaster(rospy.get_name())
+        self._proxies = {}
+        self._proxy_lock = threading.Lock()
+        self._srv_types = {}
+        self._inbox = collections.deque()
+        self._inbox_lock = threading.Lock()
+        self.rosapi = RosApi(policy, self.master, _RosParams(), self._now, self._lookup_service_type)
+
+    # ------------------------------------------------------------ helpers
+
+    @staticmethod
+    def _now() -> Any:
+        t = rospy.get_rostime()
+        return t.secs, t.nsecs
+
+    def _master_type(self, topic: str) -> Any:
+        try:
+            for name, type_name in self.master.getTopicTypes():
+                if name == topic:
+                    return type_name
+        except Exception as exc:
+            raise BridgeError("cannot reach the ROS master: %s" % exc) from None
+        return None
+
+    @staticmethod
+    def _message_class(type_name: str) -> Any:
+        try:
+            return normalize_type(type_name), get_message_class(type_name)
+        except ConversionError as exc:
+            raise BridgeError(str(exc)) from None
+
+    # ------------------------------------------------------------ topics out to ROS
+
+    def advertise(self, session: Any, topic: str, type_name: str, latch: bool, queue_size: int) -> None:
+        """Register session as publisher of topic (one rospy.Publisher per topic)."""
+        type_name, cls = self._message_class(type_name)
+        pub = self.pubs.get(topic)
+        if pub is not None:
+            if pub.type != type_name:
+                raise BridgeError("advertise: %s is already advertised with type %s" % (topic, pub.type))
+            pub.clients.add(session.client_id)
+            return
+        existing = self._master_type(topic)
+        if existing and existing != type_name and existing != "*":
+            raise BridgeError("advertise: %s already exists with type %s" % (topic, existing))
+        publisher = rospy.Publisher(topic, cls, queue_size=queue_size, latch=latch)
+        pub = _Pub(topic, type_name, cls, publisher)
+        pub.clients.add(session.client_id)
+        self.pubs[topic] = pub
+
+    def unadvertise(self, session: Any, topic: str) -> None:
+        """Drop session from topic's publishers; unregister when nobody is left."""
+        pub = self.pubs.get(topic)
+        if pub is None:
+            return
+        pub.clients.discard(session.client_id)
+        if not pub.clients:
+            del self.pubs[topic]
+            pub.publisher.unregister()
+
+    def publish(self, session: Any, topic: str, msg: Any) -> Any:
+        """Publish msg; advertise implicitly with the type known to the master."""
+        pub = self.pubs.get(topic)
+        if pub is None or session.client_id not in pub.clients:
+            if pub is None:
+                type_name = self._master_type(topic)
+                if not type_name or type_name == "*":
+                    raise BridgeError("publish: cannot infer the type of %s (advertise it first)" % topic)
+            else:
+                type_name = pub.type
+            self.advertise(session, topic, type_name, False, 100)
+            pub = self.pubs[topic]
+        try:
+            message, missing = dict_to_msg(pub.cls, msg, rospy.Time.now)
+        except ConversionError as exc:
+            raise BridgeError("publish %s: %s" % (topic, exc)) from None
+        try:
+            pub.publisher.publish(message)
+        except rospy.ROSSerializationException as exc:
+            raise BridgeError("publish %s: %s" % (topic, exc)) from None
+        return missing
+
+    # ------------------------------------------------------------ topics in from ROS
+
+    def subscribe(self, session: Any, topic: str, type_name: str) -> Any:
+        """Share one rospy.Subscriber per topic among all sessions."""
+        sub = self.subs.get(topic)
+        if sub is not None:
+            if type_name and normalize_type(type_name) != sub.type:
+                raise BridgeError("subscribe: %s has type %s, not %s" % (topic, sub.type, type_name))
+            sub.sessions.add(session)
+            for message in list(sub.latched.values()):
+                self.loop.call_soon(session.deliver, topic, message)
+            return sub.type
+        existing = self._master_type(topic)
+        if type_name:
+            type_name, cls = self._message_class(type_name)
+            if existing and existing not in (type_name, "*"):
+                raise BridgeError("subscribe: %s has type %s, not %s" % (topic, existing, type_name))
+        else:
+            if not existing or existing == "*":
+                raise BridgeError("subscribe: cannot infer the type of %s (it does not exist yet; give 'type')" % topic)
+            type_name, cls = self._message_class(existing)
+        sub = _Sub(topic, type_name, cls)
+        sub.sessions.add(session)
+        self.subs[topic] = sub
+        # queue_size=None: rospy hands over everything one socket read holds (bounded by
+        # buff_size); a slow WebSocket client is bounded later, in its own OutQueue.
+        sub.subscriber = rospy.Subscriber(
+            topic, cls, self._on_message, callback_args=sub, queue_size=None, buff_size=1 << 20, tcp_nodelay=True
+        )
+        return type_name
+
+    def unsubscribe(self, session: Any, topic: str) -> None:
+        """Remove session; unregister the rospy.Subscriber when nobody is left."""
+        sub = self.subs.get(topic)
+        if sub is None:
+            return
+        sub.sessions.discard(session)
+        if not sub.sessions:
+            del self.subs[topic]
+            sub.subscriber.unregister()
+
+    def _on_message(self, msg: Any, sub: Any) -> None:
+        """Rospy thread: wrap the message, pre-encode what subscribers want, hop to the loop."""
+        header = getattr(msg, "_connection_header", None) or {}
+        latched = header.get("latching") == "1"
+        stamp = rospy.get_rostime()
+
+        def raw() -> Any:
+            buff = io.BytesIO()
+            msg.serialize(buff)
+            return buff.getvalue(), stamp.secs, stamp.nsecs
+
+        message = TopicMessage(sub.topic, lambda binary: msg_to_dict(msg, binary), raw, latched)
+        wanted = set()
+        for session in list(sub.sessions):
+            state = session.subs.get(sub.topic)
+            if state is not None:
+                wanted.add("none" if state.compression == "png" else state.compression)
+        try:
+            for compression in wanted:
+                message.frame(compression)
+        except Exception:
+            _log.exception("cannot encode a message of %s", sub.topic)
+            return
+        if latched:
+            sub.latched[header.get("callerid", "")] = message
+        with self._inbox_lock:
+            wake = not self._inbox
+            self._inbox.append((sub, message))
+        if wake:  # one loop wake-up per burst, not per message
+            try:
+                self.loop.call_soon_threadsafe(self._drain_inbox)
+            except RuntimeError:  # loop closed: shutting down
+                pass
+
+    def _drain_inbox(self) -> None:
+        while True:
+            with self._inbox_lock:
+                if not self._inbox:
+                    return
+                items = list(self._inbox)
+                self._inbox.clear()
+            for sub, message in items:
+                self._fan_out(sub, message)
+
+    @staticmethod
+    def _fan_out(sub: Any, message: Any) -> None:
+        for session in list(sub.sessions):
+            try:
+                session.deliver(sub.topic, message)
+            except Exception:
+                _log.exception("delivery to client %s failed", session.client_id)
+
+    # ------------------------------------------------------------ service calls
+
+    def call_service(
+        self, session: Any, service: str, args: Any, timeout: Optional[float], done: Callable[..., Any]
+    ) -> None:
+        """Run the call in the pool; done(ok, values) is called on the loop (at most once)."""
+        state = {"done": False}
+
+        def finish(ok: bool, values: Any) -> None:
+            if not state["done"]:
+                state["done"] = True
+                done(ok, values)
+
+        if timeout is None and self.call_timeout > 0:
+            timeout = self.call_timeout
+        handle = None
+        if timeout:
+            handle = self.loop.call_later(
+                timeout, finish, False, "service %s: no response within %.1f s" % (service, timeout)
+            )
+
+        def work() -> None:
+            try:
+                if RosApi.handles(service):
+                    result = (True, self.rosapi.call(service, args))
+                else:
+                    result = (True, self._call_ros(service, args))
+            except (RosApiError, BridgeError, ConversionError) as exc:
+                result = (False, str(exc))
+            except Exception as exc:  # rospy raises a zoo of types
+                result = (False, "service %s failed: %s" % (service, exc))
+            self.loop.call_soon_threadsafe(complete, result)
+
+        def complete(result: Any) -> None:
+            if handle is not None:
+                handle.cancel()
+            finish(*result)
+
+        self.pool.submit(work)
+
+    def _lookup_service_type(self, service: str) -> Any:
+        type_name = self._srv_types.get(service)
+        if type_name is None:
+            hosted = self.hosted.get(service)
+            if hosted is not None:
+                type_name = hosted.type
+            else:
+                type_name = rosservice.get_service_type(service)
+            if not type_name:
+                raise BridgeError("service %s does not exist" % service)
+            self._srv_types[service] = type_name
+        return type_name
+
+    def _request(self, service: str, cls: Any, args: Any) -> Any:
+        req_cls = cls._request_class
+        if isinstance(args, list):
+            if len(args) > len(req_cls.__slots__):
+                raise BridgeError(
+                    "service %s: %d arguments given, request has %d fields"
+                    % (service, len(args), len(req_cls.__slots__))
+                )
+            args = dict(zip(req_cls.__slots__, args))
+        try:
+            request, _ = dict_to_msg(req_cls, args, rospy.Time.now)
+        except ConversionError as exc:
+            raise BridgeError("service %s: %s" % (service, exc)) from None
+        return request
+
+    def _call_ros(self, service: str, args: Any) -> Any:
+        try:
+            type_name = self._lookup_service_type(service)
+        except rosservice.ROSServiceIOException as exc:
+            raise BridgeError("service %s: %s" % (service, exc)) from None
+        cls = get_service_class(type_name)
+        request = self._request(service, cls, args)
+        with self._proxy_lock:
+            entry = self._proxies.get(service)
+            if entry is None or entry[0] != type_name:
+                entry = (type_name, rospy.ServiceProxy(service, cls, persistent=True), threading.Lock())
+                self._proxies[service] = entry
+                fresh = True
+            else:
+                fresh = False
+        _, proxy, lock = entry
+        if not lock.acquire(False):
+            # a call on the persistent connection is in flight: use a one-shot connection
+            return msg_to_dict(rospy.ServiceProxy(service, cls).call(request))
+        try:
+            try:
+                response = proxy.call(request)
+            except Exception as exc:
+                self._drop_proxy(service, entry)
+                if fresh or not _is_transport_error(exc):
+                    raise
+                # the provider restarted since the connection was made: retry once on a new one
+                self._srv_types.pop(service, None)
+                response = rospy.ServiceProxy(service, cls).call(request)
+        finally:
+            lock.release()
+        return msg_to_dict(response)
+
+    def _drop_proxy(self, service: str, entry: Any) -> None:
+        with self._proxy_lock:
+            if self._proxies.get(service) is entry:
+                del self._proxies[service]
+        self._srv_types.pop(service, None)
+        try:
+            entry[1].close()
+        except Exception:
+            pass
+
+    # ------------------------------------------------------------ client-hosted services
+
+    def advertise_service(self, session: Any, service: str, type_name: str) -> None:
+        """Serve service in ROS on behalf of session."""
+        try:
+            type_name = normalize_type(type_name)
+            cls = get_service_class(type_name)
+        except ConversionError as exc:
+            raise BridgeError(str(exc)) from None
+        hosted = self.hosted.get(service)
+        if hosted is not None:
+            if hosted.session is not session:
+                raise BridgeError("advertise_service: %s is already provided by another client" % service)
+            self._unhost(hosted, "re-advertised")
+        else:
+            try:
+                uri = self.master.lookupService(service)
+            except Exception:
+                uri = None
+            if uri:
+                raise BridgeError("advertise_service: %s is already provided in ROS (%s)" % (service, uri))
+        hosted = _Hosted(self, service, type_name, cls, session)
+        hosted.server = rospy.Service(service, cls, hosted.handle)
+        self.hosted[service] = hosted
+        self._srv_types.pop(service, None)
+
+    def _unhost(self, hosted: Any, reason: str) -> None:
+        if self.hosted.get(hosted.name) is hosted:
+            del self.hosted[hosted.name]
+        self._srv_types.pop(hosted.name, None)
+        hosted.close(reason)
+
+    def unadvertise_service(self, session: Any, service: str) -> None:
+        """Stop serving service for session."""
+        hosted = self.hosted.get(service)
+        if hosted is not None and hosted.session is session:
+            self._unhost(hosted, "unadvertised by its WebSocket provider")
+
+    def service_response(self, session: Any, service: str, call_id: Any, values: Any, ok: bool) -> None:
+        """Pass a client's answer to the waiting ROS caller."""
+        hosted = self.hosted.get(service)
+        if hosted is None or hosted.session is not session:
+            raise BridgeError("service_response: %s is not advertised by this client" % service)
+        if not hosted.answer(call_id, ok, values):
+            raise BridgeError("service_response: no pending call %r" % (call_id,), "warning")
+
+    # ------------------------------------------------------------ teardown
+
+    def session_closed(self, session: Any) -> None:
+        """Release publishers, subscriptions and hosted services of a gone client."""
+        for topic in list(session.advertised):
+            self.unadvertise(session, topic)
+        for topic, sub in list(self.subs.items()):
+            if session in sub.sessions:
+                self.unsubscribe(session, topic)
+        for hosted in list(self.hosted.values()):
+            if hosted.session is session:
+                self._unhost(hosted, "its WebSocket provider disconnected")
+
+    def shutdown(self) -> None:
+        """Stop everything (node exit)."""
+        for hosted in list(self.hosted.values()):
+            self._unhost(hosted, "bridge shutting down")
+        self.pool.shutdown(wait=False)

@@ -1,0 +1,234 @@
+"""Allow-lists (glob patterns) and rosauth-compatible MAC authentication. ROS-free.
+
+The RoboDog default allow-list lets a WebSocket client send gestures and the operator
+heartbeat, read controller/LiDAR state, call the e-stop service and rosapi — nothing that
+moves the robot (DESIGN.md §5 invariant 4).
+"""
+
+import fnmatch
+import hashlib
+import hmac
+import math
+from typing import Any, Callable, Dict
+
+__all__ = [
+    "AuthError",
+    "Policy",
+    "parse_glob_list",
+    "check_mac",
+    "make_mac",
+    "policy_from_params",
+    "ROBODOG_PUBLISH",
+    "ROBODOG_SUBSCRIBE",
+    "ROBODOG_SERVICES",
+    "ROBODOG_PARAMS",
+]
+
+ROBODOG_PUBLISH = ("/rbd_gestrec/gesture", "/rbd_local/heartbeat")
+ROBODOG_SUBSCRIBE = (
+    "/rbd_controller/state",
+    "/rbd_controller/path_queue",
+    "/rbd_controller/controller_state",
+    "/rbd_pos_controller/status",
+    "/rbd_lidar/state",
+)
+ROBODOG_SERVICES = ("/rbd_controller/em_stop", "/rosapi/*")
+ROBODOG_PARAMS = ()
+
+
+class AuthError(ValueError):
+    """An ``auth`` op that does not authenticate the client."""
+
+
+def parse_glob_list(text: str) -> Any:
+    """Parse a rosbridge-style glob list parameter.
+
+    Accepts ``"[*]"``, ``"['/a', '/b/*']"``, ``"[/a, /b]"``, ``"/a /b"``, a Python list, or
+    an empty value.
+
+    Args:
+        text: The parameter value.
+
+    Returns:
+        tuple: Glob strings (``()`` for an empty list), or ``None`` when text is ``None``
+        or ``""`` (meaning "not given").
+    """
+    if text is None:
+        return None
+    if isinstance(text, (list, tuple)):
+        items = [str(t) for t in text]
+    else:
+        text = str(text).strip()
+        if text == "":
+            return None
+        if text.startswith("[") and text.endswith("]"):
+            text = text[1:-1]
+        items = text.replace(",", " ").split()
+    out = []
+    for item in items:
+        item = item.strip().strip("'\"").strip()
+        if item:
+            out.append(item)
+    return tuple(out)
+
+
+def _matches(name: str, globs: Any) -> bool:
+    if globs is None:
+        return True
+    for pattern in globs:
+        if fnmatch.fnmatchcase(name, pattern):
+            return True
+    return False
+
+
+class Policy:
+    """What a client may do. ``None`` for a glob list means "everything"."""
+
+    def __init__(
+        self,
+        publish_globs: Any = ROBODOG_PUBLISH,
+        subscribe_globs: Any = ROBODOG_SUBSCRIBE,
+        service_globs: Any = ROBODOG_SERVICES,
+        param_globs: Any = ROBODOG_PARAMS,
+        params_writable: bool = False,
+        secret: str = None,
+    ) -> None:
+        """Build a policy.
+
+        Args:
+            publish_globs: Topics a client may advertise/publish (into ROS).
+            subscribe_globs: Topics a client may subscribe to (out of ROS).
+            service_globs: Services a client may call or advertise (rosapi's are
+                ``/rosapi/*``).
+            param_globs: Parameters rosapi may read (and write when params_writable).
+            params_writable: Allow rosapi set_param / delete_param.
+            secret: Shared secret; when set, clients must ``auth`` first.
+        """
+        self.publish_globs = publish_globs
+        self.subscribe_globs = subscribe_globs
+        self.service_globs = service_globs
+        self.param_globs = param_globs
+        self.params_writable = params_writable
+        self.secret = secret
+
+    @property
+    def authenticate(self) -> Any:
+        """True when clients must authenticate."""
+        return bool(self.secret)
+
+    def may_publish(self, topic: str) -> Any:
+        """Return True if a client may publish topic into ROS."""
+        return _matches(topic, self.publish_globs)
+
+    def may_subscribe(self, topic: str) -> Any:
+        """Return True if a client may receive topic."""
+        return _matches(topic, self.subscribe_globs)
+
+    def may_see_topic(self, topic: str) -> Any:
+        """Return True if rosapi may list topic (allowed in either direction)."""
+        return self.may_publish(topic) or self.may_subscribe(topic)
+
+    def may_call(self, service: str) -> Any:
+        """Return True if a client may call or advertise service."""
+        return _matches(service, self.service_globs)
+
+    def may_read_param(self, name: str) -> Any:
+        """Return True if rosapi may reveal parameter name."""
+        return _matches(name, self.param_globs)
+
+    def may_write_param(self, name: str) -> Any:
+        """Return True if rosapi may set or delete parameter name."""
+        return self.params_writable and _matches(name, self.param_globs)
+
+
+def _secs(value: Any, field: str) -> Any:
+    if isinstance(value, dict):
+        value = value.get("secs", value.get("sec"))
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise AuthError("auth: %s must be a time" % field)
+    return int(value)
+
+
+def make_mac(secret: str, client: str, dest: str, rand: str, t: Any, level: str, end: Any) -> Any:
+    """Compute the rosauth MAC: sha512 hex of secret+client+dest+rand+t.secs+level+end.secs.
+
+    Args:
+        secret: Shared secret.
+        client: Client address string.
+        dest: Server address string.
+        rand: Random string.
+        t: Request time in seconds (int).
+        level: User level string.
+        end: Session end time in seconds (int).
+
+    Returns:
+        str: 128 hex characters.
+    """
+    text = "%s%s%s%s%d%s%d" % (secret, client, dest, rand, int(t), level, int(end))
+    return hashlib.sha512(text.encode("utf-8")).hexdigest()
+
+
+def check_mac(secret: str, frame: Dict[str, Any], now: Callable[..., Any], max_skew: float = 5.0) -> None:
+    """Validate an ``auth`` op the way rosauth's ros_mac_authentication does.
+
+    Args:
+        secret: Shared secret.
+        frame: The decoded ``auth`` frame.
+        now: Current time in seconds.
+        max_skew: Allowed |t - now| in seconds.
+
+    Raises:
+        AuthError: If a field is missing, the time window is wrong or the MAC differs.
+    """
+    fields = {}
+    for key in ("mac", "client", "dest", "rand", "level"):
+        value = frame.get(key)
+        if not isinstance(value, str):
+            raise AuthError("auth: field %r must be a string" % key)
+        fields[key] = value
+    t = _secs(frame.get("t"), "t")
+    end = _secs(frame.get("end"), "end")
+    if abs(t - now) > max_skew:
+        raise AuthError("auth: request time is more than %.0f s away from the server clock" % max_skew)
+    if end <= now:
+        raise AuthError("auth: session end time has passed")
+    expected = make_mac(secret, fields["client"], fields["dest"], fields["rand"], t, fields["level"], end)
+    if not hmac.compare_digest(expected, fields["mac"].lower()):
+        raise AuthError("auth: MAC does not match")
+
+
+def policy_from_params(get: Callable[..., Any], secret: str = None) -> Any:
+    """Build the Policy from node parameters (rosbridge names plus RoboDog extensions).
+
+    ``topics_glob`` (rosbridge) sets both directions; ``publish_topics_glob`` /
+    ``subscribe_topics_glob`` override one direction. A list not given at all keeps the
+    RoboDog default; ``"[*]"`` opens it; ``"[]"`` closes it.
+
+    Args:
+        get: Callable(name, default) reading a private parameter.
+        secret: Shared secret when authentication is on.
+
+    Returns:
+        Policy: The policy.
+    """
+    topics = parse_glob_list(get("topics_glob", None))
+    publish = parse_glob_list(get("publish_topics_glob", None))
+    subscribe = parse_glob_list(get("subscribe_topics_glob", None))
+    services = parse_glob_list(get("services_glob", None))
+    params = parse_glob_list(get("params_glob", None))
+    if publish is None:
+        publish = topics if topics is not None else ROBODOG_PUBLISH
+    if subscribe is None:
+        subscribe = topics if topics is not None else ROBODOG_SUBSCRIBE
+    if services is None:
+        services = ROBODOG_SERVICES
+    if params is None:
+        params = ROBODOG_PARAMS
+    return Policy(
+        publish_globs=None if publish == ("*",) else publish,
+        subscribe_globs=None if subscribe == ("*",) else subscribe,
+        service_globs=None if services == ("*",) else services,
+        param_globs=None if params == ("*",) else params,
+        params_writable=bool(get("params_writable", False)),
+        secret=secret,
+    )

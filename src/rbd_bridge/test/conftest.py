@@ -1,0 +1,48 @@
+"""Fixtures for rbd_bridge integration tests: a private master, the echo peer, real bridges.
+
+One master + echo node + bridge per test module (starting them costs seconds); every
+process is stopped by PID by the repo-root RosEnv helper.
+"""
+
+import os
+import sys
+import types
+
+import pytest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from rbd_bridge_testing import OPEN, ROOTCONF, start_bridge, start_echo  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def open_bridge():
+    """Master + echo peer (50 Hz tick) + a bridge with everything allowed."""
+    env = ROOTCONF.RosEnv()
+    try:
+        start_echo(env, tick_rate=50.0)
+        port, proc = start_bridge(env, **OPEN)
+        yield types.SimpleNamespace(env=env, port=port, proc=proc, url="ws://127.0.0.1:%d" % port)
+    finally:
+        env.close()
+
+
+@pytest.fixture
+def roslibpy_client(open_bridge):
+    """A connected roslibpy client (asyncio transport), closed after the test."""
+    import roslibpy
+
+    clients = []
+
+    def connect(port=None):
+        ros = roslibpy.Ros("127.0.0.1", port or open_bridge.port, transport="asyncio")
+        ros.run(timeout=15)
+        clients.append(ros)
+        return ros
+
+    yield connect
+    for ros in clients:
+        try:
+            ros.close()
+        except Exception:
+            pass

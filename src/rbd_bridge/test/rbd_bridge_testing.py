@@ -1,0 +1,67 @@
+"""Helpers for rbd_bridge integration tests (imported by conftest.py and the test modules)."""
+
+import importlib.util
+import os
+import sys
+import time
+
+import rosgraph
+
+PKG = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.dirname(os.path.dirname(PKG))
+ECHO = os.path.join(PKG, "bench", "echo_node")
+
+
+def _root_conftest():
+    spec = importlib.util.spec_from_file_location("rbd_root_conftest", os.path.join(ROOT, "conftest.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+ROOTCONF = _root_conftest()
+free_port = ROOTCONF.free_port
+wait_for_port = ROOTCONF.wait_for_port
+
+
+def master_of(env):
+    return rosgraph.Master("/rbd_bridge_test", master_uri=env.env["ROS_MASTER_URI"])
+
+
+def wait_until(predicate, timeout=15.0, period=0.05):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            value = predicate()
+        except Exception:
+            value = None
+        if value:
+            return value
+        time.sleep(period)
+    return None
+
+
+def wait_for_service(env, name, timeout=20.0):
+    master = master_of(env)
+    assert wait_until(lambda: master.lookupService(name), timeout), "service %s never appeared" % name
+
+
+def start_echo(env, ns=None, tick_rate=0.0):
+    cmd = [sys.executable, ECHO, "_tick_rate:=%s" % tick_rate]
+    if ns:
+        cmd.append("__ns:=%s" % ns)
+    proc = env.start(cmd)
+    wait_for_service(env, (ns or "") + "/echo/slow")
+    return proc
+
+
+def start_bridge(env, launch="bridge.launch", **args):
+    port = free_port()
+    cmd = ["roslaunch", "rbd_bridge", launch, "port:=%d" % port, "address:=127.0.0.1"]
+    cmd += ["%s:=%s" % (k, v) for k, v in args.items()]
+    proc = env.start(cmd)
+    wait_for_port(port, timeout=40.0)
+    return port, proc
+
+
+OPEN = {"topics_glob": "[*]", "services_glob": "[*]", "params_glob": "[*]", "params_writable": "true"}

@@ -1,0 +1,55 @@
+#!/usr/bin/env python3
+"""rostest node: the RoboDog bridge denies /cmd_vel and passes gestures into ROS."""
+
+import json
+import threading
+import time
+import unittest
+
+import rosgraph
+import rospy
+import rostest
+from std_msgs.msg import String
+from websockets.sync.client import connect
+
+
+class AllowListWiring(unittest.TestCase):
+    def setUp(self):
+        rospy.init_node("allowlist_check", anonymous=True)
+        deadline = time.monotonic() + 30
+        self.port = None
+        while self.port is None and time.monotonic() < deadline:
+            self.port = rospy.get_param("/rbd_bridge/actual_port", None)
+            time.sleep(0.1)
+        self.assertIsNotNone(self.port, "the bridge never published ~actual_port")
+
+    def test_cmd_vel_denied_and_gesture_forwarded(self):
+        got = []
+        event = threading.Event()
+
+        def on_gesture(msg):
+            got.append(msg.data)
+            event.set()
+
+        rospy.Subscriber("/rbd_gestrec/gesture", String, on_gesture)
+        ws = connect("ws://127.0.0.1:%d" % self.port, compression=None, open_timeout=15)
+        try:
+            ws.send(json.dumps({"op": "set_level", "level": "error"}))
+            ws.send(json.dumps({"op": "advertise", "id": "a", "topic": "/cmd_vel", "type": "geometry_msgs/Twist"}))
+            status = json.loads(ws.recv(timeout=10))
+            self.assertEqual(status["op"], "status")
+            self.assertIn("allow-list", status["msg"])
+            ws.send(json.dumps({"op": "advertise", "topic": "/rbd_gestrec/gesture", "type": "std_msgs/String"}))
+            deadline = time.monotonic() + 20
+            while not event.is_set() and time.monotonic() < deadline:
+                ws.send(json.dumps({"op": "publish", "topic": "/rbd_gestrec/gesture", "msg": {"data": "wave"}}))
+                event.wait(0.2)
+        finally:
+            ws.close()
+        self.assertEqual(got[0], "wave")
+        publishers = dict(rosgraph.Master("/allowlist_check").getSystemState()[0])
+        self.assertNotIn("/cmd_vel", publishers)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("rbd_bridge", "bridge_allowlist", AllowListWiring)

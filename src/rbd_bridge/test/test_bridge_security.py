@@ -1,0 +1,157 @@
+"""The RoboDog launch file's allow-list and shared-secret authentication, end to end."""
+
+import json
+import os
+import subprocess
+import time
+
+import pytest
+import roslibpy
+from rbd_bridge_testing import ROOTCONF, master_of, start_bridge, wait_until
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
+
+from rbd_bridge.security import make_mac
+
+SECRET = "0123456789abcdef"
+
+
+@pytest.fixture(scope="module")
+def robodog():
+    """Master + the bridge exactly as rbd_bridge.launch starts it (RoboDog allow-list)."""
+    env = ROOTCONF.RosEnv()
+    try:
+        port, _ = start_bridge(env, launch="rbd_bridge.launch")
+        secret_file = os.path.join(env.home, "secret")
+        with open(secret_file, "w") as f:
+            f.write(SECRET + "\n")
+        auth_port, _ = start_auth(env, secret_file)
+        yield env, port, auth_port
+    finally:
+        env.close()
+
+
+def start_auth(env, secret_file):
+    """A second bridge (other node name) that requires the shared secret."""
+    return start_bridge(
+        env,
+        launch="bridge.launch",
+        authenticate="true",
+        secret_file=secret_file,
+        node_name="rbd_bridge_auth",
+        topics_glob="[*]",
+    )
+
+
+def test_default_allow_list_denies_cmd_vel_and_allows_gestures(robodog):
+    env, port, _ = robodog
+    ws = connect("ws://127.0.0.1:%d" % port, compression=None, open_timeout=15)
+    try:
+        ws.send(json.dumps({"op": "set_level", "level": "error"}))
+        twist = {"linear": {"x": 1.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.5}}
+        ws.send(json.dumps({"op": "advertise", "id": "a", "topic": "/cmd_vel", "type": "geometry_msgs/Twist"}))
+        ws.send(json.dumps({"op": "publish", "id": "p", "topic": "/cmd_vel", "msg": twist}))
+        ws.send(json.dumps({"op": "call_service", "id": "c", "service": "/set_body_pose", "args": {}}))
+        ws.send(json.dumps({"op": "subscribe", "id": "s", "topic": "/rbd_sim/ground_truth"}))
+        frames = {}
+        while len(frames) < 5:
+            f = json.loads(ws.recv(timeout=10))
+            frames[(f["op"], f.get("id"))] = f
+        assert "allow-list" in frames[("status", "a")]["msg"]
+        assert "allow-list" in frames[("status", "p")]["msg"]
+        assert "allow-list" in frames[("status", "s")]["msg"]
+        assert frames[("service_response", "c")]["result"] is False
+        # ground truth: nothing from the bridge publishes /cmd_vel in ROS
+        pubs = dict(master_of(env).getSystemState()[0])
+        assert "/cmd_vel" not in pubs
+        # gestures are allowed and reach ROS
+        echo = subprocess.Popen(
+            ["rostopic", "echo", "-n", "1", "/rbd_gestrec/gesture"],
+            env=env.env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            universal_newlines=True,
+        )
+        try:
+            ws.send(json.dumps({"op": "advertise", "topic": "/rbd_gestrec/gesture", "type": "std_msgs/String"}))
+            deadline = time.monotonic() + 20
+            while echo.poll() is None and time.monotonic() < deadline:
+                ws.send(json.dumps({"op": "publish", "topic": "/rbd_gestrec/gesture", "msg": {"data": "wave"}}))
+                time.sleep(0.2)
+            out = echo.communicate(timeout=5)[0] if echo.poll() is not None else ""
+        finally:
+            if echo.poll() is None:
+                echo.kill()
+                echo.wait()
+        assert 'data: "wave"' in out
+    finally:
+        ws.close()
+
+
+def test_rosapi_lists_only_allowed_names(robodog):
+    env, port, _ = robodog
+    ros = roslibpy.Ros("127.0.0.1", port, transport="asyncio")
+    ros.run(timeout=15)
+    try:
+        assert wait_until(lambda: "/rbd_gestrec/gesture" in ros.get_topics(), 10)
+        assert "/rosout" not in ros.get_topics()
+        services = ros.get_services()
+        assert "/rosapi/topics" in services and not [s for s in services if s.startswith("/rbd_bridge/")]
+        with pytest.raises(roslibpy.core.ServiceException, match="allow-list"):
+            ros.get_param("/run_id")
+        with pytest.raises(roslibpy.core.ServiceException, match="allow-list"):
+            ros.set_param("/anything", 1)
+    finally:
+        ros.close()
+
+
+def auth_frame(t, secret=SECRET):
+    end = t + 60
+    return {
+        "op": "auth",
+        "mac": make_mac(secret, "127.0.0.1", "127.0.0.1", "rnd", t, "user", end),
+        "client": "127.0.0.1",
+        "dest": "127.0.0.1",
+        "rand": "rnd",
+        "t": t,
+        "level": "user",
+        "end": end,
+    }
+
+
+def test_auth_required_then_everything_works(robodog):
+    env, _, auth_port = robodog
+    url = "ws://127.0.0.1:%d" % auth_port
+    ws = connect(url, compression=None, open_timeout=15)
+    try:
+        ws.send(json.dumps({"op": "set_level", "level": "error"}))
+        ws.send(json.dumps({"op": "call_service", "id": "before", "service": "/rosapi/get_time"}))
+        status = json.loads(ws.recv(timeout=10))
+        assert status["op"] == "status" and "not authenticated" in status["msg"]
+        ws.send(json.dumps(auth_frame(int(time.time()))))
+        ws.send(json.dumps({"op": "call_service", "id": "after", "service": "/rosapi/get_time"}))
+        reply = json.loads(ws.recv(timeout=10))
+        assert reply["op"] == "service_response" and reply["result"] is True
+    finally:
+        ws.close()
+    # roslibpy's authenticate() (sent when the connection is ready) works too
+    ros = roslibpy.Ros("127.0.0.1", auth_port, transport="asyncio")
+    frame = auth_frame(int(time.time()))
+    ros.authenticate(
+        frame["mac"], frame["client"], frame["dest"], frame["rand"], frame["t"], frame["level"], frame["end"]
+    )
+    ros.run(timeout=15)
+    try:
+        assert abs(ros.get_time()["secs"] - time.time()) < 5
+    finally:
+        ros.close()
+
+
+def test_wrong_secret_closes_the_connection(robodog):
+    _, _, auth_port = robodog
+    ws = connect("ws://127.0.0.1:%d" % auth_port, compression=None, open_timeout=15)
+    ws.send(json.dumps(auth_frame(int(time.time()), secret="wrong secret 123")))
+    with pytest.raises(ConnectionClosed) as info:
+        ws.send(json.dumps({"op": "call_service", "id": "x", "service": "/rosapi/get_time"}))
+        ws.recv(timeout=10)
+    assert info.value.rcvd is not None and info.value.rcvd.code == 1008

@@ -1,0 +1,145 @@
+"""The RFC 6455 transport with a fake backend (no ROS): handshake, framing, limits, flow control."""
+
+import asyncio
+import json
+import socket
+import threading
+import time
+
+import pytest
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
+
+from rbd_bridge.protocol import Backend, TopicMessage
+from rbd_bridge.security import Policy
+from rbd_bridge.server import BridgeServer, unmask
+
+
+class EchoBackend(Backend):
+    """publish on /loop comes straight back to every subscriber of /loop."""
+
+    def __init__(self):
+        self.sessions = set()
+        self.closed = []
+
+    def advertise(self, session, topic, type_name, latch, queue_size):
+        pass
+
+    def publish(self, session, topic, msg):
+        message = TopicMessage(topic, lambda binary: dict(msg))
+        for s in list(self.sessions):
+            s.deliver(topic, message)
+        return []
+
+    def subscribe(self, session, topic, type_name):
+        self.sessions.add(session)
+        return "std_msgs/String"
+
+    def unsubscribe(self, session, topic):
+        self.sessions.discard(session)
+
+    def session_closed(self, session):
+        self.sessions.discard(session)
+        self.closed.append(session.client_id)
+
+
+@pytest.fixture
+def server(request):
+    ping = getattr(request, "param", None)
+    loop = asyncio.new_event_loop()
+    backend = EchoBackend()
+    srv = BridgeServer(loop, backend, Policy(None, None, None, None), port=0, max_message_size=100000,
+                       max_queue_frames=50, ping_interval=ping, ping_timeout=ping)
+    port = loop.run_until_complete(srv.start())
+    thread = threading.Thread(target=loop.run_forever, daemon=True)
+    thread.start()
+    yield srv, backend, port
+    asyncio.run_coroutine_threadsafe(srv.stop(), loop).result(10)
+    loop.call_soon_threadsafe(loop.stop)
+    thread.join(10)
+    loop.close()
+
+
+def test_unmask_matches_the_definition():
+    payload, mask = bytes(range(200)), b"\x01\x80\xff\x10"
+    assert unmask(payload, mask) == bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
+
+
+def test_fragmented_client_messages_and_big_server_frames(server):
+    _, _, port = server
+    ws = connect("ws://127.0.0.1:%d" % port, compression=None, max_size=None)
+    ws.send(json.dumps({"op": "subscribe", "topic": "/loop"}))
+    big = "y" * 70000
+    frame = json.dumps({"op": "publish", "topic": "/loop", "msg": {"data": big}})
+    ws.send([frame[:10], frame[10:40000], frame[40000:]])  # three WebSocket frames, one message
+    got = json.loads(ws.recv(timeout=5))
+    assert got == {"op": "publish", "topic": "/loop", "msg": {"data": big}}
+    ws.send(frame.encode())  # binary frame holding UTF-8 JSON is accepted too
+    assert json.loads(ws.recv(timeout=5))["msg"]["data"] == big
+    ws.close()
+
+
+def test_non_websocket_http_is_refused_and_unmasked_frames_close(server):
+    _, _, port = server
+    s = socket.create_connection(("127.0.0.1", port))
+    s.sendall(b"GET / HTTP/1.1\r\nHost: x\r\n\r\n")
+    assert s.recv(100).startswith(b"HTTP/1.1 426")
+    s.close()
+    s = socket.create_connection(("127.0.0.1", port))
+    s.sendall(b"GET / HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+              b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")
+    reply = s.recv(1000)
+    assert reply.startswith(b"HTTP/1.1 101") and b"s3pPLMBiTxaQ9kYGzzhZRbK+xOo=" in reply
+    s.sendall(b"\x81\x02{}")  # not masked
+    data = b""
+    s.settimeout(5)
+    while True:
+        chunk = s.recv(100)
+        if not chunk:
+            break
+        data += chunk
+    assert data[:1] == b"\x88" and data[2:4] == (1002).to_bytes(2, "big") and b"masked" in data
+    s.close()
+
+
+def test_oversized_message_closes_with_1009(server):
+    _, _, port = server
+    ws = connect("ws://127.0.0.1:%d" % port, compression=None)
+    with pytest.raises(ConnectionClosed) as info:
+        ws.send("x" * 100001)
+        ws.recv(timeout=5)
+    assert info.value.rcvd.code == 1009
+
+
+@pytest.mark.parametrize("server", [0.5], indirect=True)
+def test_silent_client_is_dropped_after_ping_timeout_and_released(server):
+    srv, backend, port = server
+    s = socket.create_connection(("127.0.0.1", port))
+    s.sendall(b"GET / HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+              b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")
+    s.recv(1000)
+    deadline = time.monotonic() + 10
+    while not backend.closed and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert backend.closed and not srv.sessions
+    s.close()
+
+
+def test_stalled_reader_keeps_bounded_queue(server):
+    srv, backend, port = server
+    s = socket.create_connection(("127.0.0.1", port))
+    s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    s.sendall(b"GET / HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+              b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")
+    s.recv(1000)
+    sub = b'{"op":"subscribe","topic":"/loop"}'
+    s.sendall(b"\x81" + bytes([0x80 | len(sub)]) + b"\x00\x00\x00\x00" + sub)
+    ws = connect("ws://127.0.0.1:%d" % port, compression=None, max_size=None)
+    payload = json.dumps({"op": "publish", "topic": "/loop", "msg": {"data": "z" * 20000}})
+    for _ in range(600):  # 12 MB towards a reader that never reads
+        ws.send(payload)
+    time.sleep(0.5)
+    stalled = [sess for sess in srv.sessions.values() if sess.out.dropped]
+    assert stalled and len(stalled[0].out) <= 50
+    s.close()
+    ws.close()
