@@ -42,3 +42,12 @@ if [ "$want" != "$have" ] || [ ! -x .venv/bin/python ]; then
 else
   echo "setup: .venv up to date"
 fi
+
+# roslibjs (npm `roslib`) for the bridge's JavaScript client tests.
+if [ ! -d src/rbd_bridge/test/js/node_modules ]; then
+  if ! command -v npm >/dev/null; then
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends nodejs npm
+  fi
+  echo "setup: npm ci (roslibjs for the bridge tests)"
+  (cd src/rbd_bridge/test/js && npm ci --no-audit --no-fund --loglevel=error)
+fi
