@@ -287,52 +287,86 @@ void CriticalZone::evaluate(const uint32_t* range_mm, ZoneResult* out) const {
   res.valid_returns = 0;
   if (!table_valid_) return;
 
-  // Pass 1: candidates from the table; branch-free count of valid returns.
-  const size_t n = table_.size();
+  // Pass 1: candidates from the table (one subtract-and-compare per pixel), valid-return count.
+  const size_t rows = beams_.rows(), cols = static_cast<size_t>(beams_.columns);
   const Interval* table = table_.data();
   thread_local std::vector<uint32_t> candidates;
+  thread_local std::vector<uint16_t> candidate_rows;
   candidates.clear();
+  candidate_rows.clear();
   uint32_t valid = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const uint32_t r = range_mm[i];
-    valid += r != 0;
-    if (static_cast<uint32_t>(r - table[i].lo) < table[i].span)
-      candidates.push_back(static_cast<uint32_t>(i));
+  for (size_t u = 0; u < rows; ++u) {
+    const size_t base = u * cols;
+    const uint32_t* rr = range_mm + base;
+    const Interval* tt = table + base;
+    for (size_t c = 0; c < cols; ++c) {
+      const uint32_t r = rr[c];
+      valid += r != 0;
+      if (static_cast<uint32_t>(r - tt[c].lo) < tt[c].span) {
+        candidates.push_back(static_cast<uint32_t>(base + c));
+        candidate_rows.push_back(static_cast<uint16_t>(u));
+      }
+    }
   }
   res.valid_returns = valid;
 
-  // Pass 2: exact test of the candidates.
+  // Pass 2: exact test of the candidates in the level frame.
   const ZoneParams& z = zone_;
-  const double blind = z.blind_zone;
+  const uint32_t blind_mm = static_cast<uint32_t>(std::max(0.0, std::ceil(z.blind_zone * 1000.0 - 1e-9)));
   const double lim[4] = {z.front, z.left, z.back, z.right};
-  const double slow[4] = {z.slowdown_front, z.slowdown_left, z.slowdown_back, z.slowdown_right};
+  const double inv_lim[4] = {1.0 / std::max(lim[0], 1e-9), 1.0 / std::max(lim[1], 1e-9),
+                             1.0 / std::max(lim[2], 1e-9), 1.0 / std::max(lim[3], 1e-9)};
+  const double outer[4] = {lim[0] + z.slowdown_front, lim[1] + z.slowdown_left, lim[2] + z.slowdown_back,
+                           lim[3] + z.slowdown_right};
+  const double inv_slow[4] = {
+      z.slowdown_front > 0 ? 1.0 / z.slowdown_front : 0.0, z.slowdown_left > 0 ? 1.0 / z.slowdown_left : 0.0,
+      z.slowdown_back > 0 ? 1.0 / z.slowdown_back : 0.0, z.slowdown_right > 0 ? 1.0 / z.slowdown_right : 0.0};
+  const Eigen::Matrix3d& R = pose_.level_from_sensor;
+  const double n = beams_.beam_origin, lz = beams_.lidar_z, height = pose_.height;
   thread_local std::vector<float> lambdas;
   lambdas.clear();
-  for (uint32_t idx : candidates) {
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    const uint32_t idx = candidates[k];
     const uint32_t r = range_mm[idx];
-    if (r * 1e-3 < blind) continue;
-    const Eigen::Vector3d p = levelPoint(idx, r);
-    if (!(p.z() > z.floor_clearance && p.z() < z.max_height)) continue;
+    if (r < blind_mm) continue;
+    const size_t u = candidate_rows[k], c = idx - u * cols;
+    // Sensor-frame point (see BeamModel), then the level frame.
+    const double cp = cos_alt_[u], sp = sin_alt_[u];
+    const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];
+    const double sa = sin_az0_[u] * cos_col_[c] + cos_az0_[u] * sin_col_[c];
+    const double rm = r * 1e-3, horiz = rm * cp + n * (1 - cp);
+    const double sx = ca * horiz, sy = sa * horiz, sz = rm * sp + lz - n * sp;
+    const double h = R(2, 0) * sx + R(2, 1) * sy + R(2, 2) * sz + height;
+    if (!(h > z.floor_clearance && h < z.max_height)) continue;
+    const double x = R(0, 0) * sx + R(0, 1) * sy + R(0, 2) * sz;
+    const double y = R(1, 0) * sx + R(1, 1) * sy + R(1, 2) * sz;
     // Signed perpendicular distance towards each side: front x, left y, back -x, right -y.
-    const double toward[4] = {p.x(), p.y(), -p.x(), -p.y()};
-    bool inside_outer = true;
-    bool inside_stop = true;
-    double lambda = 0.0;
-    for (int s = 0; s < 4; ++s) {
-      inside_stop = inside_stop && toward[s] < lim[s];
-      inside_outer = inside_outer && toward[s] < lim[s] + slow[s];
-      const double excess = toward[s] - lim[s];
-      if (excess > 0.0) lambda = std::max(lambda, slow[s] > 0.0 ? excess / slow[s] : 1.0);
+    const double toward[4] = {x, y, -x, -y};
+    if (!(toward[0] < outer[0] && toward[1] < outer[1] && toward[2] < outer[2] && toward[3] < outer[3]))
+      continue;
+    // Section = the side whose limit the ray from the LiDAR meets first: largest toward / limit
+    // (the same split as the corner azimuths phi1..phi4).
+    int side = 0;
+    double best = toward[0] * inv_lim[0];
+    for (int s = 1; s < 4; ++s) {
+      const double q = toward[s] * inv_lim[s];
+      if (q > best) {
+        best = q;
+        side = s;
+      }
     }
-    if (!inside_outer) continue;
-    const Side side = section(std::atan2(p.y(), p.x()), corners_);
     res.min_distance[side] = std::min(res.min_distance[side], static_cast<float>(toward[side]));
-    if (inside_stop) {
+    if (toward[0] < lim[0] && toward[1] < lim[1] && toward[2] < lim[2] && toward[3] < lim[3]) {
       ++res.counts[side];
       res.critical.push_back(idx);
-      res.critical_side.push_back(side);
+      res.critical_side.push_back(static_cast<uint8_t>(side));
       lambdas.push_back(0.0f);
     } else {
+      double lambda = 0.0;
+      for (int s = 0; s < 4; ++s) {
+        const double excess = toward[s] - lim[s];
+        if (excess > 0.0) lambda = std::max(lambda, inv_slow[s] > 0.0 ? excess * inv_slow[s] : 1.0);
+      }
       lambdas.push_back(static_cast<float>(std::min(1.0, lambda)));
     }
   }

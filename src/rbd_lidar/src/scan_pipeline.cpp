@@ -382,7 +382,13 @@ void ScanPipeline::buildOutputs(const sensor_msgs::PointCloud2& cloud, Outputs* 
   const uint32_t* ring_range = &range_[u * width];
   const uint8_t* row = &cloud.data[u * cloud.row_step];
   size_t count = 0;
-  const double inv_inc = width / kTwoPi;
+  // Bin of column c: the ring's azimuth is azimuth0 + direction * 2*pi*c/W, so the bin index is
+  // an offset plus +-c (no atan2 per point; the beam-origin offset keeps the point on that azimuth).
+  double b0 = (model_.azimuth0[u] + M_PI) * width / kTwoPi;
+  b0 = std::fmod(b0, static_cast<double>(width));
+  if (b0 < 0) b0 += width;
+  const long first_bin = static_cast<long>(std::floor(b0 + 1e-9));
+  const long w = static_cast<long>(width);
   for (size_t c = 0; c < width; ++c) {
     if (ring_range[c] == 0) continue;
     const uint8_t* src = row + c * cloud.point_step;
@@ -393,8 +399,8 @@ void ScanPipeline::buildOutputs(const sensor_msgs::PointCloud2& cloud, Outputs* 
     ++count;
     const float planar = std::hypot(x, y);
     if (planar < scan.range_min || planar > scan.range_max) continue;
-    long bin = static_cast<long>((std::atan2(y, x) + M_PI) * inv_inc);
-    bin = std::min<long>(std::max<long>(bin, 0), static_cast<long>(width) - 1);
+    long bin = (first_bin + model_.direction * static_cast<long>(c)) % w;
+    if (bin < 0) bin += w;
     float& slot = scan.ranges[static_cast<size_t>(bin)];
     if (planar < slot) slot = planar;
   }

@@ -1,0 +1,177 @@
+#!/usr/bin/env python3
+"""rostest of the rbd_lidar node without the simulator: synthetic ouster-ros clouds in, every output checked.
+
+This node publishes the clouds (10 Hz) and provides /rbd_controller/collision.
+"""
+
+import os
+import sys
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from rbd_msgs.msg import CollisionState
+from sensor_msgs.msg import LaserScan, PointCloud2
+from std_msgs.msg import Float32
+from std_srvs.srv import SetBool, SetBoolResponse
+from visualization_msgs.msg import Marker
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import synthetic_cloud  # noqa: E402
+
+PERIOD = 0.1
+
+
+class SyntheticLidarTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("synthetic_lidar_test")
+        cls.lock = threading.Lock()
+        cls.calls = []  # (wall time, data)
+        cls.states = []
+        cls.scans = []
+        cls.critical = []
+        cls.slices = []
+        cls.speed = []
+        cls.markers = []
+        cls.mode = "clear"
+        cls.seq_stamps = {}
+        rospy.Service("/rbd_controller/collision", SetBool, cls.on_call)
+        rospy.Subscriber("/rbd_lidar/state", CollisionState, cls.store("states"), queue_size=100)
+        rospy.Subscriber("/scan", LaserScan, cls.store("scans"), queue_size=10)
+        rospy.Subscriber("/rbd_lidar/collision_points", PointCloud2, cls.store("critical"), queue_size=10)
+        rospy.Subscriber("/rbd_lidar/slice", PointCloud2, cls.store("slices"), queue_size=10)
+        rospy.Subscriber("/rbd_lidar/speed_scale", Float32, cls.store("speed"), queue_size=100)
+        rospy.Subscriber("/rbd_lidar/zone_marker", Marker, cls.store("markers"), queue_size=10)
+        cls.pub = rospy.Publisher("/ouster/points", PointCloud2, queue_size=5)
+        cls.clear_cloud = synthetic_cloud.make_cloud(rospy.Time(0))
+        cls.person_cloud = synthetic_cloud.make_cloud(rospy.Time(0), person=(0.5, 0.0))
+        cls.published = []  # (stamp, mode)
+        cls.timer = rospy.Timer(rospy.Duration(PERIOD), cls.tick)
+
+    @classmethod
+    def on_call(cls, req):
+        with cls.lock:
+            cls.calls.append((time.monotonic(), req.data))
+        return SetBoolResponse(success=True, message="")
+
+    @classmethod
+    def store(cls, name):
+        def cb(msg):
+            with cls.lock:
+                getattr(cls, name).append(msg)
+        return cb
+
+    @classmethod
+    def tick(cls, _event):
+        with cls.lock:
+            mode = cls.mode
+        if mode == "silent":
+            return
+        stamp = rospy.Time.now()
+        if mode == "clear":
+            msg = cls.clear_cloud
+        elif mode == "person":
+            msg = cls.person_cloud
+        else:
+            msg = synthetic_cloud.malformed(stamp, mode)
+        msg.header.stamp = stamp
+        with cls.lock:
+            cls.published.append((stamp, mode))
+        cls.pub.publish(msg)
+
+    def set_mode(self, mode):
+        with self.lock:
+            self.mode = mode
+            return len(self.published), len(self.states), len(self.calls)
+
+    def wait_for(self, predicate, timeout, what):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and not rospy.is_shutdown():
+            with self.lock:
+                if predicate():
+                    return
+            time.sleep(0.02)
+        self.fail("timed out waiting for " + what)
+
+    def state_for(self, stamp, timeout=3.0):
+        found = []
+
+        def pred():
+            found[:] = [s for s in self.states if s.header.stamp == stamp]
+            return bool(found)
+
+        self.wait_for(pred, timeout, "the state of the cloud stamped %s" % stamp)
+        return found[0]
+
+    def test_node(self):
+        # 1. Clear room: the collision (initial / stale at start-up) clears; all outputs flow.
+        self.wait_for(lambda: self.states and not self.states[-1].collision and self.calls
+                      and not self.calls[-1][1], 20.0, "clear state and a data=false call")
+        with self.lock:
+            scan = self.scans[-1]
+            self.assertEqual(len(scan.ranges), 512)
+            self.assertTrue(self.slices and self.slices[-1].width > 400)
+            self.assertTrue(self.markers and len(self.markers[-1].points) == 24)
+            self.assertEqual(self.critical[-1].width, 0)
+            self.assertAlmostEqual(self.speed[-1].data, 1.0, places=3)
+            self.assertFalse(self.states[-1].stale)
+            self.assertEqual(self.states[-1].error, "")
+        # Room walls at 3 m: the scan sees them ahead.
+        ahead = scan.ranges[int((0.0 - scan.angle_min) / scan.angle_increment)]
+        self.assertAlmostEqual(ahead, 3.0, delta=0.03)
+
+        # 2. A person 0.5 m ahead: collision on the first scan containing it, one service call.
+        n_pub, _, n_calls = self.set_mode("person")
+        self.wait_for(lambda: any(m == "person" for _, m in self.published[n_pub:]), 2.0, "a person cloud")
+        with self.lock:
+            first = next(s for s, m in self.published[n_pub:] if m == "person")
+        st = self.state_for(first)
+        self.assertTrue(st.collision)
+        self.assertGreater(st.points[CollisionState.FRONT], 5)
+        self.assertLess(st.min_distance[CollisionState.FRONT], 0.35)
+        self.assertEqual(st.speed_scale, 0.0)
+        time.sleep(1.5)
+        with self.lock:
+            after = [d for _, d in self.calls[n_calls:]]
+            self.assertEqual(after, [True])
+            self.assertGreater(self.critical[-1].width, 5)
+
+        # 3. Removed: clear after exactly 3 clear scans (hysteresis), one data=false call.
+        n_pub, _, n_calls = self.set_mode("clear")
+        self.wait_for(lambda: sum(1 for _, m in self.published[n_pub:] if m == "clear") >= 4, 3.0, "clear clouds")
+        with self.lock:
+            clear_stamps = [s for s, m in self.published[n_pub:] if m == "clear"][:4]
+        flags = [self.state_for(s).collision for s in clear_stamps]
+        self.assertEqual(flags, [True, True, False, False])
+        time.sleep(1.0)
+        with self.lock:
+            self.assertEqual([d for _, d in self.calls[n_calls:]], [False])
+
+        # 4. Malformed clouds: collision with an error each time, node alive, then recovery.
+        for kind in ("no_range", "point_step", "height", "truncated", "nan", "empty"):
+            n_pub, _, _ = self.set_mode(kind)
+            self.wait_for(lambda: any(m == kind for _, m in self.published[n_pub:]), 2.0, kind)
+            with self.lock:
+                stamp = next(s for s, m in self.published[n_pub:] if m == kind)
+            st = self.state_for(stamp)
+            self.assertTrue(st.collision, kind)
+            self.assertNotEqual(st.error, "", kind)
+            self.assertFalse(st.stale, kind)
+        n_pub, n_states, _ = self.set_mode("clear")
+        self.wait_for(lambda: any(not s.collision for s in self.states[n_states:]), 5.0, "recovery after bad input")
+
+        # 5. Silence: stale after 3 periods => collision, the service is told.
+        _, n_states, n_calls = self.set_mode("silent")
+        t0 = time.monotonic()
+        self.wait_for(lambda: any(s.stale and s.collision for s in self.states[n_states:]), 3.0, "stale state")
+        self.assertLess(time.monotonic() - t0, 1.5)
+        self.wait_for(lambda: [d for _, d in self.calls[n_calls:]] == [True], 3.0, "data=true call when stale")
+        with self.lock:
+            self.assertEqual(self.speed[-1].data, 0.0)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("rbd_lidar", "synthetic_lidar", SyntheticLidarTest)
