@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace rbd_lidar {
@@ -277,6 +278,10 @@ Eigen::Vector3d CriticalZone::levelPoint(uint32_t index, uint32_t range_mm) cons
 }
 
 void CriticalZone::evaluate(const uint32_t* range_mm, ZoneResult* out) const {
+  evaluateStrided(reinterpret_cast<const uint8_t*>(range_mm), sizeof(uint32_t), out);
+}
+
+void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, ZoneResult* out) const {
   ZoneResult& res = *out;
   res.counts = {{0, 0, 0, 0}};
   const float inf = std::numeric_limits<float>::infinity();
@@ -288,24 +293,31 @@ void CriticalZone::evaluate(const uint32_t* range_mm, ZoneResult* out) const {
   if (!table_valid_) return;
 
   // Pass 1: candidates from the table (one subtract-and-compare per pixel), valid-return count.
+  // Branch-free append: the slot is always written, the count advances only for a candidate.
   const size_t rows = beams_.rows(), cols = static_cast<size_t>(beams_.columns);
   const Interval* table = table_.data();
   thread_local std::vector<uint32_t> candidates;
-  thread_local std::vector<uint16_t> candidate_rows;
-  candidates.clear();
-  candidate_rows.clear();
+  thread_local std::vector<uint32_t> candidate_range;
+  if (candidates.size() < rows * cols + 1) {
+    candidates.resize(rows * cols + 1);
+    candidate_range.resize(rows * cols + 1);
+  }
+  uint32_t* cand = candidates.data();
+  uint32_t* cand_r = candidate_range.data();
+  size_t found = 0;
   uint32_t valid = 0;
+  const uint8_t* src = range_bytes;
   for (size_t u = 0; u < rows; ++u) {
-    const size_t base = u * cols;
-    const uint32_t* rr = range_mm + base;
-    const Interval* tt = table + base;
-    for (size_t c = 0; c < cols; ++c) {
-      const uint32_t r = rr[c];
+    const Interval* row_table = table + u * cols;
+    // Candidates are stored as (row << 16 | column): no division later.
+    const uint32_t key = static_cast<uint32_t>(u) << 16;
+    for (size_t c = 0; c < cols; ++c, src += stride) {
+      uint32_t r;
+      std::memcpy(&r, src, sizeof(r));
       valid += r != 0;
-      if (static_cast<uint32_t>(r - tt[c].lo) < tt[c].span) {
-        candidates.push_back(static_cast<uint32_t>(base + c));
-        candidate_rows.push_back(static_cast<uint16_t>(u));
-      }
+      cand[found] = key | static_cast<uint32_t>(c);
+      cand_r[found] = r;
+      found += static_cast<uint32_t>(r - row_table[c].lo) < row_table[c].span;
     }
   }
   res.valid_returns = valid;
@@ -325,11 +337,11 @@ void CriticalZone::evaluate(const uint32_t* range_mm, ZoneResult* out) const {
   const double n = beams_.beam_origin, lz = beams_.lidar_z, height = pose_.height;
   thread_local std::vector<float> lambdas;
   lambdas.clear();
-  for (size_t k = 0; k < candidates.size(); ++k) {
-    const uint32_t idx = candidates[k];
-    const uint32_t r = range_mm[idx];
+  for (size_t k = 0; k < found; ++k) {
+    const uint32_t r = cand_r[k];
     if (r < blind_mm) continue;
-    const size_t u = candidate_rows[k], c = idx - u * cols;
+    const size_t u = cand[k] >> 16, c = cand[k] & 0xFFFFu;
+    const uint32_t idx = static_cast<uint32_t>(u * cols + c);
     // Sensor-frame point (see BeamModel), then the level frame.
     const double cp = cos_alt_[u], sp = sin_alt_[u];
     const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];

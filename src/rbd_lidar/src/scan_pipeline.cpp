@@ -282,23 +282,22 @@ CloudError ScanPipeline::process(const sensor_msgs::PointCloud2& cloud, Outputs*
     }
   }
   if (err == CloudError::NONE) {
-    // Range image, row-major, through the `range` field.
+    // The zone reads the `range` field in place (one strided pass, no range-image copy).
     const size_t n = static_cast<size_t>(cloud.width) * cloud.height;
-    range_.resize(n);
-    uint32_t* dst = range_.data();
+    sensor_msgs::PointCloud2ConstIterator<uint32_t> range_it(cloud, "range");
+    range_off_ = findField(cloud, "range")->offset;
     if (cloud.row_step == cloud.width * cloud.point_step) {
-      sensor_msgs::PointCloud2ConstIterator<uint32_t> it(cloud, "range");
-      for (size_t i = 0; i < n; ++i, ++it) dst[i] = *it;
-    } else {
-      const uint32_t off = findField(cloud, "range")->offset;
+      zone_.evaluateStrided(reinterpret_cast<const uint8_t*>(&*range_it), cloud.point_step, &out->zone);
+    } else {  // padded rows: compact the range image first
+      range_.resize(n);
       for (size_t u = 0; u < cloud.height; ++u) {
         for (size_t c = 0; c < cloud.width; ++c) {
-          std::memcpy(&dst[u * cloud.width + c], &cloud.data[u * cloud.row_step + c * cloud.point_step + off],
-                      4);
+          std::memcpy(&range_[u * cloud.width + c],
+                      &cloud.data[u * cloud.row_step + c * cloud.point_step + range_off_], 4);
         }
       }
+      zone_.evaluate(range_.data(), &out->zone);
     }
-    zone_.evaluate(dst, &out->zone);
     if (out->zone.valid_returns < params_.min_valid_fraction * static_cast<double>(n)) {
       err = CloudError::NO_VALID_RETURNS;
       if (message) {
@@ -320,6 +319,12 @@ CloudError ScanPipeline::process(const sensor_msgs::PointCloud2& cloud, Outputs*
   latch_.update(out->zone.total() >= std::max(1u, zone_params_.point_threshold));
   buildOutputs(cloud, out);
   return err;
+}
+
+void ScanPipeline::extractRange(const sensor_msgs::PointCloud2& cloud, std::vector<uint32_t>* range) {
+  range->resize(static_cast<size_t>(cloud.width) * cloud.height);
+  sensor_msgs::PointCloud2ConstIterator<uint32_t> it(cloud, "range");
+  for (size_t i = 0; i < range->size(); ++i, ++it) (*range)[i] = *it;
 }
 
 void ScanPipeline::fail(bool stale, const std::string& error, rbd_msgs::CollisionState* state) {
@@ -350,7 +355,9 @@ void ScanPipeline::buildOutputs(const sensor_msgs::PointCloud2& cloud, Outputs* 
     float xyz[3] = {readFloat(src + x_off_), readFloat(src + y_off_), readFloat(src + z_off_)};
     if (!std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2])) {
       // ouster-ros >= 0.13 may publish NaN xyz below its min_range: use the beam model.
-      const Eigen::Vector3d p = zone_.sensorPoint(idx, range_[idx]);
+      uint32_t r;
+      std::memcpy(&r, src + range_off_, 4);
+      const Eigen::Vector3d p = zone_.sensorPoint(idx, r);
       xyz[0] = static_cast<float>(p.x());
       xyz[1] = static_cast<float>(p.y());
       xyz[2] = static_cast<float>(p.z());
@@ -379,7 +386,6 @@ void ScanPipeline::buildOutputs(const sensor_msgs::PointCloud2& cloud, Outputs* 
   scan.ranges.assign(width, std::numeric_limits<float>::infinity());
   scan.intensities.clear();
   const size_t u = static_cast<size_t>(slice_ring_);
-  const uint32_t* ring_range = &range_[u * width];
   const uint8_t* row = &cloud.data[u * cloud.row_step];
   size_t count = 0;
   // Bin of column c: the ring's azimuth is azimuth0 + direction * 2*pi*c/W, so the bin index is
@@ -390,11 +396,13 @@ void ScanPipeline::buildOutputs(const sensor_msgs::PointCloud2& cloud, Outputs* 
   const long first_bin = static_cast<long>(std::floor(b0 + 1e-9));
   const long w = static_cast<long>(width);
   for (size_t c = 0; c < width; ++c) {
-    if (ring_range[c] == 0) continue;
     const uint8_t* src = row + c * cloud.point_step;
+    uint32_t range_mm;
+    std::memcpy(&range_mm, src + range_off_, 4);
+    if (range_mm == 0) continue;
     const float x = readFloat(src + x_off_), y = readFloat(src + y_off_), zz = readFloat(src + z_off_);
     if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(zz)) continue;
-    const float values[4] = {x, y, zz, ring_range[c] * 1e-3f};
+    const float values[4] = {x, y, zz, range_mm * 1e-3f};
     std::memcpy(&slice.data[count * 16], values, 16);
     ++count;
     const float planar = std::hypot(x, y);

@@ -116,6 +116,9 @@ class CriticalZone {
 
   // Classify one range image (rows x columns uint32 [mm], row-major, 0 = no return).
   void evaluate(const uint32_t* range_mm, ZoneResult* out) const;
+  // The same on a strided source: the range of pixel i is the uint32 at range_bytes + i * stride,
+  // e.g. the `range` field of an organised PointCloud2 with row_step = width * point_step.
+  void evaluateStrided(const uint8_t* range_bytes, size_t stride, ZoneResult* out) const;
 
   // Point of pixel `index` at `range_mm` in the level frame, z = height above the floor [m].
   Eigen::Vector3d levelPoint(uint32_t index, uint32_t range_mm) const;

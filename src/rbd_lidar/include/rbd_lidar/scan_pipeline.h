@@ -68,9 +68,12 @@ class ScanPipeline {
   CloudError process(const sensor_msgs::PointCloud2& cloud, Outputs* out, std::string* message);
   // Validation alone.
   CloudError validate(const sensor_msgs::PointCloud2& cloud, std::string* message) const;
-  // The zone core alone on the range image extracted by the last process() call (benchmark).
-  void evaluateOnly(ZoneResult* out) const { zone_.evaluate(range_.data(), out); }
-  const std::vector<uint32_t>& rangeImage() const { return range_; }
+  // Range image (row-major uint32 mm) of a validated cloud, and the zone core alone on such an
+  // image with the current configuration (benchmark, tests).
+  static void extractRange(const sensor_msgs::PointCloud2& cloud, std::vector<uint32_t>* range);
+  void evaluateOnly(const std::vector<uint32_t>& range, ZoneResult* out) const {
+    zone_.evaluate(range.data(), out);
+  }
   // Failure from outside (stale input): collision, fills a state message.
   void fail(bool stale, const std::string& error, rbd_msgs::CollisionState* state);
   bool collision() const { return latch_.collision(); }
@@ -101,7 +104,7 @@ class ScanPipeline {
   CriticalZone zone_;
   CollisionLatch latch_;
   std::vector<uint32_t> range_;
-  uint32_t x_off_ = 0, y_off_ = 4, z_off_ = 8;
+  uint32_t x_off_ = 0, y_off_ = 4, z_off_ = 8, range_off_ = 32;
 };
 
 }  // namespace rbd_lidar
