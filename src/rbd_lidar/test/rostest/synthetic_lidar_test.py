@@ -12,12 +12,13 @@ import unittest
 
 import rospy
 import rostest
-from rbd_msgs.msg import CollisionState
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import LaserScan, PointCloud2
 from std_msgs.msg import Float32
 from std_srvs.srv import SetBool, SetBoolResponse
 from visualization_msgs.msg import Marker
+
+from rbd_msgs.msg import CollisionState
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import synthetic_cloud  # noqa: E402
@@ -160,7 +161,7 @@ class SyntheticLidarTest(unittest.TestCase):
         kinds = ("no_range", "point_step", "height", "truncated", "nan", "empty")
         for kind in kinds:
             n_pub, _, _ = self.set_mode(kind)
-            self.wait_for(lambda: sum(1 for _, m in self.published[n_pub:] if m == kind) >= 4, 3.0, kind)
+            self.wait_for(lambda n=n_pub, k=kind: sum(1 for _, m in self.published[n:] if m == k) >= 4, 3.0, kind)
             with self.lock:
                 stamp = next(s for s, m in self.published[n_pub:] if m == kind)
             st = self.state_for(stamp)
@@ -173,6 +174,7 @@ class SyntheticLidarTest(unittest.TestCase):
         self.assertEqual(len({m.split(": ")[2] for m in rejected}), len(kinds), rejected)
         n_pub, n_states, _ = self.set_mode("clear")
         self.wait_for(lambda: any(not s.collision for s in self.states[n_states:]), 5.0, "recovery after bad input")
+        self.wait_for(lambda: self.calls[-1][1] is False, 3.0, "data=false call after recovery")
 
         # 5. Silence: stale after 3 periods => collision, the service is told.
         _, n_states, n_calls = self.set_mode("silent")
