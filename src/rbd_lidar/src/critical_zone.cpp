@@ -335,8 +335,14 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
       z.slowdown_back > 0 ? 1.0 / z.slowdown_back : 0.0, z.slowdown_right > 0 ? 1.0 / z.slowdown_right : 0.0};
   const Eigen::Matrix3d& R = pose_.level_from_sensor;
   const double n = beams_.beam_origin, lz = beams_.lidar_z, height = pose_.height;
-  thread_local std::vector<float> lambdas;
+  // Scratch buffers live per thread; take plain references once (a thread_local in a shared
+  // library costs a TLS lookup per access).
+  thread_local std::vector<float> lambda_buffer;
+  std::vector<float>& lambdas = lambda_buffer;
   lambdas.clear();
+  lambdas.reserve(found);
+  res.critical.reserve(found);
+  res.critical_side.reserve(found);
   for (size_t k = 0; k < found; ++k) {
     const uint32_t r = cand_r[k];
     if (r < blind_mm) continue;

@@ -39,9 +39,20 @@ def rays(columns):
     return dl * flip, ol * flip + np.array([0.0, 0.0, LIDAR_Z])
 
 
-def cast(columns, height=0.38, room=3.0, person=None, radius=0.2):
-    """Range image [mm] (uint32, 32 x W) and xyz for a level sensor `height` m above the floor."""
-    d, o = rays(columns)
+def pitch_matrix(pitch):
+    """Rotation about y by `pitch` [rad] (ROS convention: positive = nose down)."""
+    c, s = np.cos(pitch), np.sin(pitch)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def cast(columns, height=0.38, room=3.0, person=None, radius=0.2, pitch=0.0):
+    """Range image [mm] (uint32, 32 x W) and sensor-frame xyz for a sensor `height` m above the floor.
+
+    The sensor is pitched by `pitch` [rad]; the world (floor, walls, person) is level.
+    """
+    ds, os_ = rays(columns)
+    rot = pitch_matrix(pitch)
+    d, o = ds @ rot.T, os_ @ rot.T
     t = np.full(d.shape[:2], np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):
         floor = (-height - o[..., 2]) / d[..., 2]
@@ -62,14 +73,14 @@ def cast(columns, height=0.38, room=3.0, person=None, radius=0.2):
             hit = (disc >= 0) & (tc > 0) & (zc > 0) & (zc < 1.8)
             t = np.where(hit, np.minimum(t, tc), t)
     rng = np.where(np.isfinite(t), np.round(t * 1000.0), 0).astype(np.uint32)
-    xyz = (rng[..., None] * 1e-3) * d + o
+    xyz = (rng[..., None] * 1e-3) * ds + os_
     xyz[rng == 0] = np.nan
     return rng, xyz
 
 
-def make_cloud(stamp, columns=512, person=None, frame="os_sensor"):
+def make_cloud(stamp, columns=512, person=None, frame="os_sensor", pitch=0.0, height=0.38):
     """A valid ouster-ros PointCloud2 (32 x columns)."""
-    rng, xyz = cast(columns, person=person)
+    rng, xyz = cast(columns, height=height, person=person, pitch=pitch)
     arr = np.zeros((32, columns), dtype=OUSTER_DTYPE)
     arr["x"], arr["y"], arr["z"] = xyz[..., 0], xyz[..., 1], xyz[..., 2]
     arr["range"] = rng

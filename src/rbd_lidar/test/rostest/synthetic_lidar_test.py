@@ -4,14 +4,18 @@
 This node publishes the clouds (10 Hz) and provides /rbd_controller/collision.
 """
 
+import math
 import os
 import sys
 import threading
 import time
 import unittest
 
+import dynamic_reconfigure.client
 import rospy
 import rostest
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import LaserScan, PointCloud2
 from std_msgs.msg import Float32
@@ -41,7 +45,7 @@ class SyntheticLidarTest(unittest.TestCase):
         cls.logs = []
         cls.mode = "clear"
         cls.seq_stamps = {}
-        rospy.Service("/rbd_controller/collision", SetBool, cls.on_call)
+        cls.service = rospy.Service("/rbd_controller/collision", SetBool, cls.on_call)
         rospy.Subscriber("/rbd_lidar/state", CollisionState, cls.store("states"), queue_size=100)
         rospy.Subscriber("/scan", LaserScan, cls.store("scans"), queue_size=10)
         rospy.Subscriber("/rbd_lidar/collision_points", PointCloud2, cls.store("critical"), queue_size=10)
@@ -52,6 +56,16 @@ class SyntheticLidarTest(unittest.TestCase):
         cls.pub = rospy.Publisher("/ouster/points", PointCloud2, queue_size=5)
         cls.clear_cloud = synthetic_cloud.make_cloud(rospy.Time(0))
         cls.person_cloud = synthetic_cloud.make_cloud(rospy.Time(0), person=(0.5, 0.0))
+        # Person surface 0.8 m ahead: outside the 0.7 m zone, inside it when walking at 0.3 m/s.
+        cls.near_cloud = synthetic_cloud.make_cloud(rospy.Time(0), person=(1.0, 0.0))
+        # Attentive sitting: nose up 15 deg (ROS pitch -15 deg), body lowered: sensor 0.33 m above
+        # the floor (the node assumes base_height 0.28 + mount 0.10 cos 15 deg = 0.377 m).
+        cls.pitch = math.radians(-15.0)
+        cls.tilted_cloud = synthetic_cloud.make_cloud(rospy.Time(0), pitch=cls.pitch, height=0.33)
+        cls.cmd_pub = rospy.Publisher("/cmd_vel", Twist, queue_size=5)
+        cls.odom_pub = rospy.Publisher("/rbd_a1_driver/odom", Odometry, queue_size=5)
+        cls.cmd = None
+        cls.odom = None
         cls.published = []  # (stamp, mode)
         cls.timer = rospy.Timer(rospy.Duration(PERIOD), cls.tick)
 
@@ -75,16 +89,43 @@ class SyntheticLidarTest(unittest.TestCase):
         if mode == "silent":
             return
         stamp = rospy.Time.now()
+        if cls.cmd is not None:
+            cls.cmd_pub.publish(cls.cmd)
+        if cls.odom is not None:
+            cls.odom.header.stamp = stamp
+            cls.odom_pub.publish(cls.odom)
         if mode == "clear":
             msg = cls.clear_cloud
         elif mode == "person":
             msg = cls.person_cloud
+        elif mode == "near":
+            msg = cls.near_cloud
+        elif mode == "tilted":
+            msg = cls.tilted_cloud
         else:
             msg = synthetic_cloud.malformed(stamp, mode)
         msg.header.stamp = stamp
         with cls.lock:
             cls.published.append((stamp, mode))
         cls.pub.publish(msg)
+
+    def state_of_next(self, mode, count=1):
+        """States of the next `count` clouds published in `mode` (waits for them)."""
+        with self.lock:
+            n_pub = len(self.published)
+        self.wait_for(lambda: sum(1 for _, m in self.published[n_pub:] if m == mode) >= count, 5.0, mode)
+        with self.lock:
+            stamps = [s for s, m in self.published[n_pub:] if m == mode][:count]
+        return [self.state_for(s) for s in stamps]
+
+    def settle(self, mode, collision, scans=5):
+        """Publish `mode` until the collision state has been `collision` for `scans` scans."""
+        self.set_mode(mode)
+        deadline = time.monotonic() + 10.0
+        while time.monotonic() < deadline:
+            if all(s.collision == collision for s in self.state_of_next(mode, scans)):
+                return
+        self.fail("state never settled to collision=%s in mode %s" % (collision, mode))
 
     def set_mode(self, mode):
         with self.lock:
@@ -184,6 +225,53 @@ class SyntheticLidarTest(unittest.TestCase):
         self.wait_for(lambda: [d for _, d in self.calls[n_calls:]] == [True], 3.0, "data=true call when stale")
         with self.lock:
             self.assertEqual(self.speed[-1].data, 0.0)
+
+
+    def test_wiring(self):
+        """cmd_vel growth, dynamic_reconfigure, odom attitude, absent service (after test_node)."""
+        # Velocity-aware zone: 0.8 m ahead is clear at rest, critical when walking at 0.3 m/s.
+        self.settle("near", False)
+        type(self).cmd = Twist()
+        self.cmd.linear.x = 0.3
+        self.settle("near", True)
+        st = self.state_of_next("near")[0]
+        self.assertGreater(st.points[CollisionState.FRONT], 5)
+        type(self).cmd = None
+        self.cmd_pub.publish(Twist())
+        self.settle("near", False)
+
+        # dynamic_reconfigure: a 0.9 m front zone catches it at rest; back to 0.7 m clears it.
+        client = dynamic_reconfigure.client.Client("/rbd_lidar", timeout=10)
+        client.update_configuration({"zone_front": 0.9})
+        self.settle("near", True)
+        client.update_configuration({"zone_front": 0.7})
+        self.settle("near", False)
+
+        # Tilted body (attentive sitting): without attitude the rear floor looks like an obstacle;
+        # with the body pitch from odom the floor is rejected.
+        self.settle("tilted", True)
+        st = self.state_of_next("tilted")[0]
+        self.assertGreater(st.points[CollisionState.BACK], 5)
+        odom = Odometry()
+        odom.header.frame_id = "odom"
+        odom.pose.pose.orientation.y = math.sin(self.pitch / 2)
+        odom.pose.pose.orientation.w = math.cos(self.pitch / 2)
+        type(self).odom = odom
+        self.settle("tilted", False)
+        type(self).odom = None
+
+        # Absent collision service: states keep coming; the pending change is delivered once the
+        # service is back.
+        self.wait_for(lambda: self.calls and self.calls[-1][1] is False, 5.0, "data=false call before")
+        self.service.shutdown("test: service absent")
+        time.sleep(0.3)
+        with self.lock:
+            n_calls = len(self.calls)
+        self.settle("person", True)
+        with self.lock:
+            self.assertEqual(len(self.calls), n_calls)
+        type(self).service = rospy.Service("/rbd_controller/collision", SetBool, self.on_call)
+        self.wait_for(lambda: [d for _, d in self.calls[n_calls:]] == [True], 5.0, "pending call delivered")
 
 
 if __name__ == "__main__":
