@@ -396,6 +396,43 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
   }
 }
 
+bool CriticalZone::estimateHeight(const uint8_t* range_bytes, size_t stride, double max_distance,
+                                  double quantile, size_t column_step, size_t min_samples,
+                                  double* height) const {
+  if (!table_valid_) return false;
+  const size_t rows = beams_.rows(), cols = static_cast<size_t>(beams_.columns);
+  const Eigen::Matrix3d& R = pose_.level_from_sensor;
+  const double n = beams_.beam_origin, lz = beams_.lidar_z;
+  thread_local std::vector<double> sample_buffer;
+  std::vector<double>& samples = sample_buffer;
+  samples.clear();
+  const size_t step = std::max<size_t>(1, column_step);
+  for (size_t u = 0; u < rows; ++u) {
+    const double cp = cos_alt_[u], sp = sin_alt_[u];
+    for (size_t c = u % step; c < cols; c += step) {
+      uint32_t r;
+      std::memcpy(&r, range_bytes + (u * cols + c) * stride, sizeof(r));
+      if (r == 0) continue;
+      const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];
+      const double sa = sin_az0_[u] * cos_col_[c] + cos_az0_[u] * sin_col_[c];
+      // Only clearly downward rays (> 5 deg below the horizon in the level frame).
+      const double dz = R(2, 0) * ca * cp + R(2, 1) * sa * cp + R(2, 2) * sp;
+      if (dz > -0.087) continue;
+      const double rm = r * 1e-3, horiz = rm * cp + n * (1 - cp);
+      const double sx = ca * horiz, sy = sa * horiz, sz = rm * sp + lz - n * sp;
+      const double x = R(0, 0) * sx + R(0, 1) * sy + R(0, 2) * sz;
+      const double y = R(1, 0) * sx + R(1, 1) * sy + R(1, 2) * sz;
+      if (x * x + y * y > max_distance * max_distance) continue;
+      samples.push_back(-(R(2, 0) * sx + R(2, 1) * sy + R(2, 2) * sz));
+    }
+  }
+  if (samples.size() < std::max<size_t>(1, min_samples)) return false;
+  const size_t k = std::min(samples.size() - 1, static_cast<size_t>(quantile * (samples.size() - 1)));
+  std::nth_element(samples.begin(), samples.begin() + k, samples.end());
+  *height = samples[k];
+  return true;
+}
+
 bool CollisionLatch::update(bool occupied) {
   if (occupied) {
     collision_ = true;

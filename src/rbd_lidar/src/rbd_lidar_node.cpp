@@ -93,6 +93,8 @@ class LidarNode {
     pparams_.scan_range_min = param("scan_range_min", 0.30);
     pparams_.scan_range_max = param("scan_range_max", 120.0);
     pparams_.min_valid_fraction = param("min_valid_fraction", 0.01);
+    pparams_.floor_from_cloud = param("floor_from_cloud", true);
+    pparams_.floor_height_tolerance = param("floor_height_tolerance", 0.20);
 
     std::vector<double> alt, az;
     std::vector<int> shift;

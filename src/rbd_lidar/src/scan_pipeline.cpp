@@ -286,9 +286,9 @@ CloudError ScanPipeline::process(const sensor_msgs::PointCloud2& cloud, Outputs*
     const size_t n = static_cast<size_t>(cloud.width) * cloud.height;
     sensor_msgs::PointCloud2ConstIterator<uint32_t> range_it(cloud, "range");
     range_off_ = findField(cloud, "range")->offset;
-    if (cloud.row_step == cloud.width * cloud.point_step) {
-      zone_.evaluateStrided(reinterpret_cast<const uint8_t*>(&*range_it), cloud.point_step, &out->zone);
-    } else {  // padded rows: compact the range image first
+    const uint8_t* range_bytes = reinterpret_cast<const uint8_t*>(&*range_it);
+    size_t stride = cloud.point_step;
+    if (cloud.row_step != cloud.width * cloud.point_step) {  // padded rows: compact the range image
       range_.resize(n);
       for (size_t u = 0; u < cloud.height; ++u) {
         for (size_t c = 0; c < cloud.width; ++c) {
@@ -296,8 +296,21 @@ CloudError ScanPipeline::process(const sensor_msgs::PointCloud2& cloud, Outputs*
                       &cloud.data[u * cloud.row_step + c * cloud.point_step + range_off_], 4);
         }
       }
-      zone_.evaluate(range_.data(), &out->zone);
+      range_bytes = reinterpret_cast<const uint8_t*>(range_.data());
+      stride = sizeof(uint32_t);
     }
+    // Floor: the sensor height measured from downward returns within 3 m, bounded around the
+    // nominal height from the body pose.
+    height_measured_ = false;
+    if (params_.floor_from_cloud) {
+      double h;
+      if (zone_.estimateHeight(range_bytes, stride, 3.0, 0.8, 8, 50, &h) && std::isfinite(h)) {
+        const double tol = std::max(0.0, params_.floor_height_tolerance);
+        zone_.setHeight(std::min(pose_.height + tol, std::max(pose_.height - tol, h)));
+        height_measured_ = true;
+      }
+    }
+    zone_.evaluateStrided(range_bytes, stride, &out->zone);
     if (out->zone.valid_returns < params_.min_valid_fraction * static_cast<double>(n)) {
       err = CloudError::NO_VALID_RETURNS;
       if (message) {

@@ -221,6 +221,48 @@ TEST(ScanPipeline, BeamAnglesMeasuredFromCloud) {
   EXPECT_GT(nominal.modelResidual(), 0.05);
 }
 
+// Crouched attentive sitting: nose up 15 deg and the sensor 0.25 m above the floor, while the node
+// believes the standing height (0.377 m). The measured floor height removes the floor; without it
+// the rear floor is taken for an obstacle. A person is still found.
+TEST(ScanPipeline, FloorHeightMeasuredFromCloud) {
+  const BeamModel m = u0(1024);
+  SensorPose truth;
+  truth.level_from_sensor = Eigen::AngleAxisd(-15 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  truth.height = 0.25;
+  SensorPose believed = truth;
+  believed.height = 0.377;
+  const auto floor_cloud = rbd_lidar::makeOusterCloud(m, rbd_lidar::castScene(m, truth, 3.0, false));
+  ScanPipeline::Outputs out;
+  std::string msg;
+
+  ScanPipeline fixed = makePipeline();
+  rbd_lidar::PipelineParams params;
+  params.floor_from_cloud = false;
+  fixed.setParams(params);
+  fixed.setPose(believed);
+  ASSERT_EQ(fixed.process(floor_cloud, &out, &msg), CloudError::NONE) << msg;
+  EXPECT_GT(out.zone.counts[rbd_lidar::BACK], 20u);
+  EXPECT_FALSE(fixed.heightMeasured());
+
+  ScanPipeline measured = makePipeline();
+  measured.setPose(believed);
+  ASSERT_EQ(measured.process(floor_cloud, &out, &msg), CloudError::NONE) << msg;
+  EXPECT_TRUE(measured.heightMeasured());
+  EXPECT_NEAR(measured.sensorHeight(), 0.25, 0.01);
+  EXPECT_EQ(out.zone.total(), 0u);
+  ASSERT_EQ(
+      measured.process(rbd_lidar::makeOusterCloud(m, rbd_lidar::castScene(m, truth, 3.0, true, 0.5, 0.0)),
+                       &out, &msg),
+      CloudError::NONE);
+  EXPECT_GT(out.zone.counts[rbd_lidar::FRONT], 20u);
+  EXPECT_NEAR(measured.sensorHeight(), 0.25, 0.01);
+  // The measurement is bounded: a nominal height far off is moved by at most the tolerance.
+  believed.height = 0.80;
+  measured.setPose(believed);
+  ASSERT_EQ(measured.process(floor_cloud, &out, &msg), CloudError::NONE);
+  EXPECT_NEAR(measured.sensorHeight(), 0.60, 1e-9);
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

@@ -120,6 +120,16 @@ class CriticalZone {
   // e.g. the `range` field of an organised PointCloud2 with row_step = width * point_step.
   void evaluateStrided(const uint8_t* range_bytes, size_t stride, ZoneResult* out) const;
 
+  // Sensor height above the floor measured from the returns themselves: with the configured
+  // attitude, downward rays that end within `max_distance` horizontally give "sensor height if
+  // this return is on the floor"; the floor is the lowest surface, so a high quantile of these
+  // (`quantile`, e.g. 0.8) is the estimate. Rows are sampled every `column_step` columns. Returns
+  // false if fewer than `min_samples` such returns exist. Strided source as evaluateStrided.
+  bool estimateHeight(const uint8_t* range_bytes, size_t stride, double max_distance, double quantile,
+                      size_t column_step, size_t min_samples, double* height) const;
+  // Change only the sensor height (cheap; the candidate table does not depend on it).
+  void setHeight(double height) { pose_.height = height; }
+
   // Point of pixel `index` at `range_mm` in the level frame, z = height above the floor [m].
   Eigen::Vector3d levelPoint(uint32_t index, uint32_t range_mm) const;
   // Point in the sensor frame [m].

@@ -32,13 +32,15 @@ enum class CloudError {
 const char* errorName(CloudError e);
 
 struct PipelineParams {
-  int slice_ring = -1;               // row of the slice / LaserScan; -1: the beam nearest to horizontal
-  double scan_range_min = 0.30;      // LaserScan range_min [m]
-  double scan_range_max = 120.0;     // LaserScan range_max [m]
-  double scan_time = 0.1;            // LaserScan scan_time [s] (1 / scan rate)
-  double min_valid_fraction = 0.01;  // fewer non-zero ranges than this fraction => NO_VALID_RETURNS
-  bool beams_from_cloud = true;      // measure per-row altitude / azimuth from the cloud's own xyz
-  unsigned hysteresis_scans = 3;     // clear scans needed to release a collision
+  int slice_ring = -1;                   // row of the slice / LaserScan; -1: the beam nearest to horizontal
+  double scan_range_min = 0.30;          // LaserScan range_min [m]
+  double scan_range_max = 120.0;         // LaserScan range_max [m]
+  double scan_time = 0.1;                // LaserScan scan_time [s] (1 / scan rate)
+  double min_valid_fraction = 0.01;      // fewer non-zero ranges than this fraction => NO_VALID_RETURNS
+  bool beams_from_cloud = true;          // measure per-row altitude / azimuth from the cloud's own xyz
+  unsigned hysteresis_scans = 3;         // clear scans needed to release a collision
+  bool floor_from_cloud = true;          // measure the sensor height above the floor from the returns
+  double floor_height_tolerance = 0.20;  // the measurement may move the nominal height by at most this [m]
 };
 
 class ScanPipeline {
@@ -82,6 +84,9 @@ class ScanPipeline {
   int sliceRing() const { return slice_ring_; }
   // Largest disagreement between the cloud's xyz and the beam model on the last check [m].
   double modelResidual() const { return residual_; }
+  // Sensor height used for the last scan [m] and whether it was measured from the cloud.
+  double sensorHeight() const { return zone_.pose().height; }
+  bool heightMeasured() const { return height_measured_; }
 
  private:
   bool updateModel(const sensor_msgs::PointCloud2& cloud, std::string* message);
@@ -100,6 +105,7 @@ class ScanPipeline {
   bool model_checked_ = false;     // residual_ computed for the current model
   unsigned scans_since_check_ = 0;
   double residual_ = 0.0;
+  bool height_measured_ = false;
   int slice_ring_ = 0;
   CriticalZone zone_;
   CollisionLatch latch_;
