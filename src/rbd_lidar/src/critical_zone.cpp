@@ -114,6 +114,18 @@ SensorPose SensorPose::fromBody(double roll, double pitch, const Eigen::Matrix3d
   return pose;
 }
 
+bool SensorPose::levelFromGravity(const Eigen::Vector3d& accel, double heading_yaw,
+                                  Eigen::Matrix3d* rotation) {
+  if (!accel.allFinite() || accel.norm() < 1.0) return false;
+  const Eigen::Matrix3d tilt =
+      Eigen::Quaterniond::FromTwoVectors(accel.normalized(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  // FromTwoVectors adds no rotation about z beyond the tilt; keep the sensor's own x as heading.
+  const Eigen::Vector3d x = tilt * Eigen::Vector3d::UnitX();
+  const double yaw = std::atan2(x.y(), x.x());
+  *rotation = Eigen::AngleAxisd(heading_yaw - yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * tilt;
+  return true;
+}
+
 ZoneParams grownZone(const ZoneParams& base, double vx, double vy, double wz, const MotionParams& motion) {
   ZoneParams z = base;
   if (!std::isfinite(vx) || !std::isfinite(vy) || !std::isfinite(wz)) {

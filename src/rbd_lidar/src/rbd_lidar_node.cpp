@@ -6,6 +6,7 @@
 #include <nav_msgs/Odometry.h>
 #include <rbd_lidar/ZoneConfig.h>
 #include <ros/ros.h>
+#include <sensor_msgs/Imu.h>
 #include <std_msgs/Float32.h>
 #include <std_srvs/SetBool.h>
 #include <tf2_ros/transform_listener.h>
@@ -42,6 +43,7 @@ class LidarNode {
         nh_.subscribe("ouster/points", 2, &LidarNode::cloudCb, this, ros::TransportHints().tcpNoDelay());
     cmd_sub_ = nh_.subscribe("cmd_vel", 10, &LidarNode::cmdCb, this);
     if (attitude_source_ == "odom") odom_sub_ = nh_.subscribe("odom", 10, &LidarNode::odomCb, this);
+    if (attitude_source_ == "imu") imu_sub_ = nh_.subscribe("imu", 50, &LidarNode::imuCb, this);
     worker_ = std::thread(&LidarNode::serviceLoop, this);
     stale_timer_ = nh_.createTimer(ros::Duration(0.05), &LidarNode::staleCb, this);
     ROS_INFO("rbd_lidar: zone F%.2f B%.2f L%.2f R%.2f m, %zu beams, attitude from %s", zone_.front,
@@ -76,8 +78,8 @@ class LidarNode {
                    .toRotationMatrix();
     base_height_ = param("base_height", 0.28);
     attitude_source_ = param<std::string>("attitude_source", "odom");
-    if (attitude_source_ != "odom" && attitude_source_ != "fixed") {
-      ROS_ERROR("rbd_lidar: attitude_source must be 'odom' or 'fixed', not '%s'; using 'fixed'",
+    if (attitude_source_ != "odom" && attitude_source_ != "imu" && attitude_source_ != "fixed") {
+      ROS_ERROR("rbd_lidar: attitude_source must be 'odom', 'imu' or 'fixed', not '%s'; using 'fixed'",
                 attitude_source_.c_str());
       attitude_source_ = "fixed";
     }
@@ -85,6 +87,7 @@ class LidarNode {
     fixed_pitch_ = param("body_pitch", 0.0);
     use_odom_height_ = param("use_odom_height", false);
     attitude_timeout_ = param("attitude_timeout", 0.5);
+    imu_filter_time_ = param("imu_filter_time", 0.5);
     cmd_timeout_ = param("cmd_vel_timeout", 0.5);
     error_period_ = param("error_log_period", 5.0);
     retry_period_ = param("service_retry_period", 1.0);
@@ -161,6 +164,24 @@ class LidarNode {
     odom_time_ = ros::Time::now();
   }
 
+  // Low-pass filtered specific force of the sensor's IMU (gravity direction).
+  void imuCb(const sensor_msgs::Imu& m) {
+    const Eigen::Vector3d a(m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z);
+    if (!a.allFinite() || a.norm() < 1.0 || a.norm() > 50.0) {
+      ROS_WARN_THROTTLE(5.0, "rbd_lidar: implausible IMU acceleration; ignoring it");
+      return;
+    }
+    const ros::Time now = ros::Time::now();
+    if (imu_time_.isZero() || (now - imu_time_).toSec() > attitude_timeout_) {
+      gravity_ = a;
+    } else {
+      const double dt = std::max(0.0, (now - imu_time_).toSec());
+      const double k = imu_filter_time_ > 0.0 ? std::min(1.0, dt / imu_filter_time_) : 1.0;
+      gravity_ += k * (a - gravity_);
+    }
+    imu_time_ = now;
+  }
+
   SensorPose currentPose(const std::string& frame) {
     if (mount_from_tf_ && !mount_found_ && !frame.empty()) {
       try {
@@ -188,6 +209,20 @@ class LidarNode {
                           "rbd_lidar: no fresh odom for the body attitude; assuming roll %.2f pitch %.2f rad",
                           fixed_roll_, fixed_pitch_);
       }
+    }
+    if (attitude_source_ == "imu") {
+      Eigen::Matrix3d level;
+      const Eigen::Vector3d mx = mount_r_ * Eigen::Vector3d::UnitX();
+      if (!imu_time_.isZero() && (ros::Time::now() - imu_time_).toSec() < attitude_timeout_ &&
+          SensorPose::levelFromGravity(gravity_, std::atan2(mx.y(), mx.x()), &level)) {
+        SensorPose pose;
+        pose.level_from_sensor = level;
+        pose.height = height + (level * mount_r_.transpose() * mount_t_).z();
+        return pose;
+      }
+      ROS_WARN_THROTTLE(10.0,
+                        "rbd_lidar: no fresh IMU for the sensor attitude; assuming roll %.2f pitch %.2f rad",
+                        fixed_roll_, fixed_pitch_);
     }
     return SensorPose::fromBody(roll, pitch, mount_r_, mount_t_, height);
   }
@@ -340,7 +375,7 @@ class LidarNode {
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   std::unique_ptr<dynamic_reconfigure::Server<ZoneConfig>> server_;
-  ros::Subscriber cloud_sub_, cmd_sub_, odom_sub_;
+  ros::Subscriber cloud_sub_, cmd_sub_, odom_sub_, imu_sub_;
   ros::Publisher critical_pub_, slice_pub_, scan_pub_, state_pub_, marker_pub_, speed_pub_;
   ros::Timer stale_timer_;
 
@@ -359,8 +394,9 @@ class LidarNode {
   Eigen::Vector3d mount_t_ = Eigen::Vector3d(0, 0, 0.1);
   double base_height_ = 0.28, fixed_roll_ = 0, fixed_pitch_ = 0, attitude_timeout_ = 0.5, cmd_timeout_ = 0.5;
   double error_period_ = 5.0, retry_period_ = 1.0;
-  double odom_roll_ = 0, odom_pitch_ = 0, odom_z_ = 0;
-  ros::Time odom_time_, cmd_time_, last_valid_, last_stale_pub_;
+  double odom_roll_ = 0, odom_pitch_ = 0, odom_z_ = 0, imu_filter_time_ = 0.5;
+  Eigen::Vector3d gravity_ = Eigen::Vector3d(0, 0, 9.81);
+  ros::Time odom_time_, imu_time_, cmd_time_, last_valid_, last_stale_pub_;
   geometry_msgs::Twist cmd_;
   bool stale_ = false;
   std::array<ros::WallTime, static_cast<size_t>(CloudError::COUNT)> last_error_log_;

@@ -305,6 +305,28 @@ TEST(CriticalZone, FloorNeverTriggersInTiltedPoses) {
   EXPECT_TRUE(wrong_triggers);
 }
 
+TEST(SensorPose, LevelFromGravity) {
+  // A sensor pitched nose up by 15 deg (ROS pitch -15 deg) and rolled 5 deg measures gravity's
+  // reaction (+g up) rotated into its frame; the recovered rotation matches the body rotation.
+  const Eigen::Matrix3d truth = (Eigen::AngleAxisd(-15 * kDeg, Eigen::Vector3d::UnitY()) *
+                                 Eigen::AngleAxisd(5 * kDeg, Eigen::Vector3d::UnitX()))
+                                    .toRotationMatrix();
+  const Eigen::Vector3d accel = truth.transpose() * Eigen::Vector3d(0, 0, 9.81);
+  Eigen::Matrix3d r;
+  ASSERT_TRUE(SensorPose::levelFromGravity(accel, 0.0, &r));
+  // Same vertical, same heading of the sensor x axis.
+  EXPECT_LT((r.row(2) - truth.row(2)).norm(), 1e-9);
+  const Eigen::Vector3d x = r * Eigen::Vector3d::UnitX();
+  EXPECT_NEAR(std::atan2(x.y(), x.x()), 0.0, 1e-9);
+  // Level: identity; mount yawed by 90 deg: heading follows.
+  ASSERT_TRUE(SensorPose::levelFromGravity(Eigen::Vector3d(0, 0, 9.81), 0.0, &r));
+  EXPECT_LT((r - Eigen::Matrix3d::Identity()).norm(), 1e-9);
+  ASSERT_TRUE(SensorPose::levelFromGravity(Eigen::Vector3d(0, 0, 9.81), M_PI / 2, &r));
+  EXPECT_NEAR((r * Eigen::Vector3d::UnitX()).y(), 1.0, 1e-9);
+  EXPECT_FALSE(SensorPose::levelFromGravity(Eigen::Vector3d(NAN, 0, 9.8), 0.0, &r));
+  EXPECT_FALSE(SensorPose::levelFromGravity(Eigen::Vector3d(0, 0, 0.1), 0.0, &r));
+}
+
 TEST(CriticalZone, SmallAttitudeChangeKeepsTableAndStaysExact) {
   const BeamModel m = simple({0.0}, 360);
   ZoneParams z;

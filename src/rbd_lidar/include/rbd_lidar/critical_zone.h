@@ -79,6 +79,11 @@ struct SensorPose {
   // of base_link above the floor [m].
   static SensorPose fromBody(double roll, double pitch, const Eigen::Matrix3d& mount_rotation,
                              const Eigen::Vector3d& mount_translation, double base_height);
+  // Sensor tilt from the specific force measured by an IMU fixed to the sensor (axes parallel to
+  // the sensor frame, as the Ouster's internal IMU): the rotation taking `accel` to +z, followed
+  // by `heading_yaw` (yaw of the sensor x axis relative to the robot's heading, e.g. the mount yaw).
+  // Returns false (and leaves *rotation) for a non-finite or near-zero vector.
+  static bool levelFromGravity(const Eigen::Vector3d& accel, double heading_yaw, Eigen::Matrix3d* rotation);
 };
 
 // Velocity-aware growth of the stop zone.

@@ -17,7 +17,7 @@ import rostest
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Log
-from sensor_msgs.msg import LaserScan, PointCloud2
+from sensor_msgs.msg import Imu, LaserScan, PointCloud2
 from std_msgs.msg import Float32
 from std_srvs.srv import SetBool, SetBoolResponse
 from visualization_msgs.msg import Marker
@@ -64,8 +64,10 @@ class SyntheticLidarTest(unittest.TestCase):
         cls.tilted_cloud = synthetic_cloud.make_cloud(rospy.Time(0), pitch=cls.pitch, height=0.33)
         cls.cmd_pub = rospy.Publisher("/cmd_vel", Twist, queue_size=5)
         cls.odom_pub = rospy.Publisher("/rbd_a1_driver/odom", Odometry, queue_size=5)
+        cls.imu_pub = rospy.Publisher("/ouster/imu", Imu, queue_size=20)
         cls.cmd = None
         cls.odom = None
+        cls.imu = None
         cls.published = []  # (stamp, mode)
         cls.timer = rospy.Timer(rospy.Duration(PERIOD), cls.tick)
 
@@ -94,6 +96,9 @@ class SyntheticLidarTest(unittest.TestCase):
         if cls.odom is not None:
             cls.odom.header.stamp = stamp
             cls.odom_pub.publish(cls.odom)
+        if cls.imu is not None:
+            cls.imu.header.stamp = stamp
+            cls.imu_pub.publish(cls.imu)
         if mode == "clear":
             msg = cls.clear_cloud
         elif mode == "person":
@@ -152,6 +157,39 @@ class SyntheticLidarTest(unittest.TestCase):
         return found[0]
 
     def test_node(self):
+        if rospy.get_param("~attitude", "odom") != "odom":
+            self.skipTest("odom attitude run only")
+        self.run_node()
+
+    def test_wiring(self):
+        if rospy.get_param("~attitude", "odom") != "odom":
+            self.skipTest("odom attitude run only")
+        self.run_wiring()
+
+    def test_zz_imu_attitude(self):
+        """attitude_source imu: the tilted floor is rejected once the LiDAR's IMU reports the tilt."""
+        if rospy.get_param("~attitude", "odom") != "imu":
+            self.skipTest("imu attitude run only")
+        # Wait until the node is up and answers the clouds.
+        self.set_mode("tilted")
+        self.wait_for(lambda: {s.header.stamp for s in self.states} & {s for s, _ in self.published}, 20.0,
+                      "the node to process clouds")
+        self.settle("tilted", True)
+        st = self.state_of_next("tilted")[0]
+        self.assertGreater(st.points[CollisionState.BACK], 5)
+        imu = Imu()
+        imu.header.frame_id = "os_imu"
+        # Specific force +g up, seen in the sensor frame pitched by self.pitch (rotation about y).
+        imu.linear_acceleration.x = -math.sin(self.pitch) * 9.81
+        imu.linear_acceleration.z = math.cos(self.pitch) * 9.81
+        imu.orientation_covariance[0] = -1.0
+        type(self).imu = imu
+        self.settle("tilted", False)
+        # IMU lost: back to the fixed (level) assumption, the floor triggers again (fail-safe side).
+        type(self).imu = None
+        self.settle("tilted", True)
+
+    def run_node(self):
         # 1. Clear room: the collision (initial / stale at start-up) clears; all outputs flow.
         self.wait_for(lambda: self.states and not self.states[-1].collision and self.calls
                       and not self.calls[-1][1], 20.0, "clear state and a data=false call")
@@ -227,8 +265,8 @@ class SyntheticLidarTest(unittest.TestCase):
             self.assertEqual(self.speed[-1].data, 0.0)
 
 
-    def test_wiring(self):
-        """cmd_vel growth, dynamic_reconfigure, odom attitude, absent service (after test_node)."""
+    def run_wiring(self):
+        """cmd_vel growth, dynamic_reconfigure, odom attitude, absent service (after run_node)."""
         # Velocity-aware zone: 0.8 m ahead is clear at rest, critical when walking at 0.3 m/s.
         self.settle("near", False)
         type(self).cmd = Twist()
