@@ -77,7 +77,7 @@ class LidarNode {
                 Eigen::AngleAxisd(param("lidar_offset_roll", 0.0), Eigen::Vector3d::UnitX()))
                    .toRotationMatrix();
     base_height_ = param("base_height", 0.28);
-    attitude_source_ = param<std::string>("attitude_source", "odom");
+    attitude_source_ = param<std::string>("attitude_source", "imu");
     if (attitude_source_ != "odom" && attitude_source_ != "imu" && attitude_source_ != "fixed") {
       ROS_ERROR("rbd_lidar: attitude_source must be 'odom', 'imu' or 'fixed', not '%s'; using 'fixed'",
                 attitude_source_.c_str());
