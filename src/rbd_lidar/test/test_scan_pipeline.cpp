@@ -168,6 +168,57 @@ TEST(ScanPipeline, MalformedCloudsFailSafe) {
   EXPECT_EQ(messages.size(), 7u);
 }
 
+// Padded rows (row_step > width * point_step) and another point layout (range first, point_step
+// 20) give the same result as the ouster-ros layout.
+TEST(ScanPipeline, OtherLayoutsSameResult) {
+  const BeamModel m = u0(512);
+  const auto ranges = rbd_lidar::castScene(m, standing(), 3.0, true, 0.5, 0.1);
+  const auto cloud = rbd_lidar::makeOusterCloud(m, ranges);
+  ScanPipeline a = makePipeline();
+  ScanPipeline::Outputs ref, out;
+  std::string msg;
+  ASSERT_EQ(a.process(cloud, &ref, &msg), CloudError::NONE) << msg;
+  ASSERT_GT(ref.zone.total(), 10u);
+
+  auto padded = cloud;
+  padded.row_step = cloud.row_step + 64;
+  padded.data.assign(static_cast<size_t>(padded.row_step) * padded.height, 0xEE);
+  for (size_t u = 0; u < cloud.height; ++u) {
+    std::copy(cloud.data.begin() + u * cloud.row_step, cloud.data.begin() + (u + 1) * cloud.row_step,
+              padded.data.begin() + u * padded.row_step);
+  }
+  ScanPipeline b = makePipeline();
+  ASSERT_EQ(b.process(padded, &out, &msg), CloudError::NONE) << msg;
+  EXPECT_EQ(out.zone.counts, ref.zone.counts);
+  EXPECT_EQ(out.zone.critical, ref.zone.critical);
+  EXPECT_EQ(out.critical.data, ref.critical.data);
+  EXPECT_EQ(out.scan.ranges, ref.scan.ranges);
+
+  sensor_msgs::PointCloud2 compact = cloud;
+  compact.fields.clear();
+  const char* names[] = {"range", "x", "y", "z"};
+  for (int k = 0; k < 4; ++k) {
+    sensor_msgs::PointField f;
+    f.name = names[k];
+    f.offset = 4 * k;
+    f.datatype = k == 0 ? sensor_msgs::PointField::UINT32 : sensor_msgs::PointField::FLOAT32;
+    f.count = 1;
+    compact.fields.push_back(f);
+  }
+  compact.point_step = 20;
+  compact.row_step = 20 * cloud.width;
+  compact.data.assign(static_cast<size_t>(compact.row_step) * compact.height, 0);
+  for (size_t i = 0; i < static_cast<size_t>(cloud.width) * cloud.height; ++i) {
+    std::memcpy(&compact.data[i * 20], &cloud.data[i * 48 + 32], 4);
+    std::memcpy(&compact.data[i * 20 + 4], &cloud.data[i * 48], 12);
+  }
+  ScanPipeline c = makePipeline();
+  ASSERT_EQ(c.process(compact, &out, &msg), CloudError::NONE) << msg;
+  EXPECT_EQ(out.zone.counts, ref.zone.counts);
+  EXPECT_EQ(out.critical.data, ref.critical.data);
+  EXPECT_EQ(out.scan.ranges, ref.scan.ranges);
+}
+
 // ouster-ros >= 0.13: NaN xyz but a valid range (its min_range filter) must not hide an obstacle.
 TEST(ScanPipeline, NanCoordinatesDoNotHideReturns) {
   const BeamModel m = u0(512);
