@@ -345,31 +345,41 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
   const double inv_slow[4] = {
       z.slowdown_front > 0 ? 1.0 / z.slowdown_front : 0.0, z.slowdown_left > 0 ? 1.0 / z.slowdown_left : 0.0,
       z.slowdown_back > 0 ? 1.0 / z.slowdown_back : 0.0, z.slowdown_right > 0 ? 1.0 / z.slowdown_right : 0.0};
+  // Everything the loop reads lives in locals: the byte-sized stores below may alias any member.
   const Eigen::Matrix3d& R = pose_.level_from_sensor;
+  const double r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2),
+               r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
   const double n = beams_.beam_origin, lz = beams_.lidar_z, height = pose_.height;
+  const double floor_clearance = z.floor_clearance, max_height = z.max_height;
+  const double *cos_alt = cos_alt_.data(), *sin_alt = sin_alt_.data(), *cos_az0 = cos_az0_.data(),
+               *sin_az0 = sin_az0_.data(), *cos_col = cos_col_.data(), *sin_col = sin_col_.data();
   // Scratch buffers live per thread; take plain references once (a thread_local in a shared
-  // library costs a TLS lookup per access).
+  // library costs a TLS lookup per access). Outputs are sized for the worst case, then trimmed.
   thread_local std::vector<float> lambda_buffer;
   std::vector<float>& lambdas = lambda_buffer;
-  lambdas.clear();
-  lambdas.reserve(found);
-  res.critical.reserve(found);
-  res.critical_side.reserve(found);
+  lambdas.resize(found);
+  res.critical.resize(found);
+  res.critical_side.resize(found);
+  float* lam = lambdas.data();
+  uint32_t* crit = res.critical.data();
+  uint8_t* crit_side = res.critical_side.data();
+  size_t n_lam = 0, n_crit = 0;
+  uint32_t counts[4] = {0, 0, 0, 0};
+  float min_dist[4] = {res.min_distance[0], res.min_distance[1], res.min_distance[2], res.min_distance[3]};
   for (size_t k = 0; k < found; ++k) {
     const uint32_t r = cand_r[k];
     if (r < blind_mm) continue;
     const size_t u = cand[k] >> 16, c = cand[k] & 0xFFFFu;
-    const uint32_t idx = static_cast<uint32_t>(u * cols + c);
     // Sensor-frame point (see BeamModel), then the level frame.
-    const double cp = cos_alt_[u], sp = sin_alt_[u];
-    const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];
-    const double sa = sin_az0_[u] * cos_col_[c] + cos_az0_[u] * sin_col_[c];
+    const double cp = cos_alt[u], sp = sin_alt[u];
+    const double ca = cos_az0[u] * cos_col[c] - sin_az0[u] * sin_col[c];
+    const double sa = sin_az0[u] * cos_col[c] + cos_az0[u] * sin_col[c];
     const double rm = r * 1e-3, horiz = rm * cp + n * (1 - cp);
     const double sx = ca * horiz, sy = sa * horiz, sz = rm * sp + lz - n * sp;
-    const double h = R(2, 0) * sx + R(2, 1) * sy + R(2, 2) * sz + height;
-    if (!(h > z.floor_clearance && h < z.max_height)) continue;
-    const double x = R(0, 0) * sx + R(0, 1) * sy + R(0, 2) * sz;
-    const double y = R(1, 0) * sx + R(1, 1) * sy + R(1, 2) * sz;
+    const double h = r20 * sx + r21 * sy + r22 * sz + height;
+    if (!(h > floor_clearance && h < max_height)) continue;
+    const double x = r00 * sx + r01 * sy + r02 * sz;
+    const double y = r10 * sx + r11 * sy + r12 * sz;
     // Signed perpendicular distance towards each side: front x, left y, back -x, right -y.
     const double toward[4] = {x, y, -x, -y};
     if (!(toward[0] < outer[0] && toward[1] < outer[1] && toward[2] < outer[2] && toward[3] < outer[3]))
@@ -385,20 +395,28 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
         side = s;
       }
     }
-    res.min_distance[side] = std::min(res.min_distance[side], static_cast<float>(toward[side]));
+    min_dist[side] = std::min(min_dist[side], static_cast<float>(toward[side]));
     if (toward[0] < lim[0] && toward[1] < lim[1] && toward[2] < lim[2] && toward[3] < lim[3]) {
-      ++res.counts[side];
-      res.critical.push_back(idx);
-      res.critical_side.push_back(static_cast<uint8_t>(side));
-      lambdas.push_back(0.0f);
+      ++counts[side];
+      crit[n_crit] = static_cast<uint32_t>(u * cols + c);
+      crit_side[n_crit] = static_cast<uint8_t>(side);
+      ++n_crit;
+      lam[n_lam++] = 0.0f;
     } else {
       double lambda = 0.0;
       for (int s = 0; s < 4; ++s) {
         const double excess = toward[s] - lim[s];
         if (excess > 0.0) lambda = std::max(lambda, inv_slow[s] > 0.0 ? excess * inv_slow[s] : 1.0);
       }
-      lambdas.push_back(static_cast<float>(std::min(1.0, lambda)));
+      lam[n_lam++] = static_cast<float>(std::min(1.0, lambda));
     }
+  }
+  res.critical.resize(n_crit);
+  res.critical_side.resize(n_crit);
+  lambdas.resize(n_lam);
+  for (int s = 0; s < 4; ++s) {
+    res.counts[s] = counts[s];
+    res.min_distance[s] = min_dist[s];
   }
   // Speed scale: the point_threshold-th smallest lambda, so that single noisy returns do not brake.
   const size_t k = std::max<size_t>(1, z.point_threshold);
