@@ -71,3 +71,19 @@ def test_beam_table_is_an_os1_32():
     assert len(b["beam_azimuth_angles"]) == 32
     assert len(b["pixel_shift_by_row"]) == 32
     assert b["beam_altitude_angles"] == sorted(b["beam_altitude_angles"], reverse=True)
+
+
+def test_node_fallback_defaults_equal_yaml():
+    """Without the launch file (plain rosrun) the node behaves as with config/default.yaml."""
+    y = yaml_params("config/default.yaml")
+    y.update(yaml_params("config/os1_32_beams.yaml"))
+    src = read("src/rbd_lidar_node.cpp")
+    found = 0
+    for m in re.finditer(r'param(?:<[\w:]+>)?\("(\w+)", ("[^"]*"|true|false|-?[0-9.]+)\)', src):
+        name, literal = m.group(1), m.group(2)
+        value = {"true": True, "false": False}.get(literal, literal.strip('"'))
+        if isinstance(value, str) and not literal.startswith('"'):
+            value = float(value) if "." in value else int(value)
+        assert y[name] == value, (name, y[name], value)
+        found += 1
+    assert found >= 25
