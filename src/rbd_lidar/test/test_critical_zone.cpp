@@ -219,6 +219,63 @@ TEST(CriticalZone, TinyHandBuiltImage) {
   EXPECT_NEAR(res.min_distance[rbd_lidar::LEFT], 0.351, 1e-6);
 }
 
+// Synthetic analogue of thesis Fig. 23: a vertical plane at 45 deg crossing the front limit,
+// ranges with +-30 mm noise (OS1 Lambertian accuracy). In ground-truth terms (the noise-free
+// surface point of each pixel), the farthest critical and the nearest non-critical return lie
+// within 700 +- 80 mm (thesis tolerance); on the measured points the limit is exact.
+TEST(CriticalZone, NoisyAngledTargetBoundary) {
+  const BeamModel m = os1(2048);
+  const SensorPose pose = level(0.38);
+  ZoneParams z;
+  z.point_threshold = 1;
+  CriticalZone zone;
+  ASSERT_TRUE(zone.configure(m, z, pose, nullptr));
+  std::vector<uint32_t> img(32 * 2048, 0);
+  std::vector<double> true_x(img.size(), 0.0), true_y(img.size(), 0.0);
+  uint32_t seed = 12345;
+  auto noise = [&seed]() {  // uniform in [-30, 30] mm, deterministic
+    seed = seed * 1664525u + 1013904223u;
+    return static_cast<int>((seed >> 16) % 61) - 30;
+  };
+  // Plane x - y = 0.55 (45 deg to the x axis), seen for y in [-0.3, 0.3]: x from 0.25 to 0.85 m.
+  const Eigen::Vector3d normal = Eigen::Vector3d(1, -1, 0).normalized();
+  for (size_t u = 8; u < 24; ++u) {
+    for (size_t c = 0; c < 2048; ++c) {
+      Eigen::Vector3d d, o;
+      m.ray(u, c, &d, &o);
+      const double denom = normal.dot(d);
+      if (denom < 1e-3) continue;
+      const double t = (0.55 / std::sqrt(2.0) - normal.dot(o)) / denom;
+      const Eigen::Vector3d p = t * d + o;
+      if (t <= 0.3 || std::fabs(p.y()) > 0.3) continue;
+      const size_t i = u * 2048 + c;
+      img[i] = static_cast<uint32_t>(std::lround(t * 1000.0) + noise());
+      true_x[i] = p.x();
+      true_y[i] = p.y();
+    }
+  }
+  const ZoneResult res = run(zone, img);
+  ASSERT_GT(res.total(), 50u);
+  std::vector<bool> critical(img.size(), false);
+  for (uint32_t idx : res.critical) critical[idx] = true;
+  double far_critical = 0.0, near_clear = 10.0, far_measured = 0.0;
+  for (size_t i = 0; i < img.size(); ++i) {
+    if (img[i] == 0 || std::fabs(true_y[i]) > 0.30) continue;
+    if (critical[i]) {
+      far_critical = std::max(far_critical, true_x[i]);
+      far_measured = std::max(far_measured, zone.levelPoint(static_cast<uint32_t>(i), img[i]).x());
+    } else {
+      near_clear = std::min(near_clear, true_x[i]);
+    }
+  }
+  EXPECT_LT(far_measured, 0.70);
+  EXPECT_GT(far_critical, 0.62);
+  EXPECT_LT(far_critical, 0.78);
+  EXPECT_GT(near_clear, 0.62);
+  EXPECT_LT(near_clear, 0.78);
+  EXPECT_LT(near_clear, far_critical + 0.001);  // noise blurs the boundary (as in Fig. 23b)
+}
+
 TEST(CriticalZone, ZeroRangesAndEmptyImageIgnored) {
   const BeamModel m = os1(512);
   CriticalZone zone;
