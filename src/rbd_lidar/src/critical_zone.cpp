@@ -437,17 +437,20 @@ bool CriticalZone::estimateHeight(const uint8_t* range_bytes, size_t stride, dou
   std::vector<double>& samples = sample_buffer;
   samples.clear();
   const size_t step = std::max<size_t>(1, column_step);
+  const double tilt = std::hypot(R(2, 0), R(2, 1));
   for (size_t u = 0; u < rows; ++u) {
     const double cp = cos_alt_[u], sp = sin_alt_[u];
+    // Only clearly downward rays (> 5 deg below the horizon in the level frame): skip rows that
+    // have none without touching their data.
+    if (R(2, 2) * sp - tilt * cp > -0.087) continue;
     for (size_t c = u % step; c < cols; c += step) {
+      const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];
+      const double sa = sin_az0_[u] * cos_col_[c] + cos_az0_[u] * sin_col_[c];
+      const double dz = R(2, 0) * ca * cp + R(2, 1) * sa * cp + R(2, 2) * sp;
+      if (dz > -0.087) continue;
       uint32_t r;
       std::memcpy(&r, range_bytes + (u * cols + c) * stride, sizeof(r));
       if (r == 0) continue;
-      const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];
-      const double sa = sin_az0_[u] * cos_col_[c] + cos_az0_[u] * sin_col_[c];
-      // Only clearly downward rays (> 5 deg below the horizon in the level frame).
-      const double dz = R(2, 0) * ca * cp + R(2, 1) * sa * cp + R(2, 2) * sp;
-      if (dz > -0.087) continue;
       const double rm = r * 1e-3, horiz = rm * cp + n * (1 - cp);
       const double sx = ca * horiz, sy = sa * horiz, sz = rm * sp + lz - n * sp;
       const double x = R(0, 0) * sx + R(0, 1) * sy + R(0, 2) * sz;

@@ -304,7 +304,9 @@ CloudError ScanPipeline::process(const sensor_msgs::PointCloud2& cloud, Outputs*
     height_measured_ = false;
     if (params_.floor_from_cloud) {
       double h;
-      if (zone_.estimateHeight(range_bytes, stride, 3.0, 0.8, 8, 50, &h) && std::isfinite(h)) {
+      if (zone_.estimateHeight(range_bytes, stride, 3.0, 0.8, std::max<size_t>(1, cloud.width / 128), 50,
+                               &h) &&
+          std::isfinite(h)) {
         const double tol = std::max(0.0, params_.floor_height_tolerance);
         zone_.setHeight(std::min(pose_.height + tol, std::max(pose_.height - tol, h)));
         height_measured_ = true;
