@@ -14,13 +14,12 @@
 
 #include <Eigen/Geometry>
 #include <array>
-#include <atomic>
 #include <condition_variable>
 #include <mutex>
 #include <thread>
 
+#include "rbd_lidar/os1_beams.h"
 #include "rbd_lidar/scan_pipeline.h"
-#include "rbd_lidar/synthetic_cloud.h"
 
 namespace rbd_lidar {
 

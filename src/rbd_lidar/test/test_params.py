@@ -87,3 +87,12 @@ def test_node_fallback_defaults_equal_yaml():
         assert y[name] == value, (name, y[name], value)
         found += 1
     assert found >= 25
+
+
+def test_builtin_beam_table_equals_yaml():
+    b = yaml_params("config/os1_32_beams.yaml")
+    src = read("include/rbd_lidar/os1_beams.h")
+    alt = [float(v) for v in re.search(r"os1U0Altitudes\(\) \{\s*return \{([^}]*)\}", src).group(1).split(",")]
+    assert alt == b["beam_altitude_angles"]
+    az = float(re.search(r"std::vector<double>\(32, (-?[0-9.]+)\)", src).group(1))
+    assert all(abs(a - az) < 0.02 for a in b["beam_azimuth_angles"])

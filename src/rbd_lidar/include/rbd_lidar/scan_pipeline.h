@@ -109,7 +109,7 @@ class ScanPipeline {
   int slice_ring_ = 0;
   CriticalZone zone_;
   CollisionLatch latch_;
-  std::vector<uint32_t> range_;
+  std::vector<uint32_t> range_;  // compacted range image, only for clouds with padded rows
   uint32_t x_off_ = 0, y_off_ = 4, z_off_ = 8, range_off_ = 32;
 };
 

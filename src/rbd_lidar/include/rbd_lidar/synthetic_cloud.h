@@ -8,12 +8,9 @@
 #include <vector>
 
 #include "rbd_lidar/critical_zone.h"
+#include "rbd_lidar/os1_beams.h"
 
 namespace rbd_lidar {
-
-// The OS1-32 U0 beam table (ouster-sdk test metadata), degrees.
-std::vector<double> os1U0Altitudes();
-std::vector<double> os1U0Azimuths();
 
 // Ouster-ros "original" point layout (point_step 48, range UINT32 at 32), organised rows x columns,
 // xyz from the model; zero range gives NaN xyz when nan_for_zero (ouster-ros >= 0.13) else 0.
