@@ -1,0 +1,482 @@
+#include "rbd_lidar/critical_zone.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace rbd_lidar {
+
+namespace {
+
+constexpr double kTwoPi = 2.0 * M_PI;
+// Margins of the candidate table: it covers the exact zone enlarged by kPad, and stays valid while
+// the attitude moves less than kMaxTilt (kPad absorbs the resulting shift within a few metres).
+constexpr double kPad = 0.04;
+constexpr double kMaxTilt = 0.25 * M_PI / 180.0;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+double wrapAngle(double a) {
+  a = std::fmod(a + M_PI, kTwoPi);
+  if (a < 0) a += kTwoPi;
+  return a - M_PI;
+}
+
+// Shrinks [lo, hi) (ranges in m) to the ranges where a * r + b < c.
+void limit(double a, double b, double c, double* lo, double* hi) {
+  if (a > 1e-12) {
+    *hi = std::min(*hi, (c - b) / a);
+  } else if (a < -1e-12) {
+    *lo = std::max(*lo, (c - b) / a);
+  } else if (b >= c) {
+    *hi = -kInf;
+  }
+}
+
+}  // namespace
+
+BeamModel BeamModel::fromOuster(const std::vector<double>& altitude_deg,
+                                const std::vector<double>& azimuth_deg, const std::vector<int>& pixel_shift,
+                                int shift_columns, int columns, bool destaggered, double beam_origin_mm,
+                                double lidar_z_mm) {
+  BeamModel m;
+  m.columns = columns;
+  m.direction = -1;
+  m.beam_origin = beam_origin_mm * 1e-3;
+  m.lidar_z = lidar_z_mm * 1e-3;
+  const double deg = M_PI / 180.0;
+  for (size_t u = 0; u < altitude_deg.size(); ++u) {
+    m.altitude.push_back(altitude_deg[u] * deg);
+    const double az = u < azimuth_deg.size() ? azimuth_deg[u] * deg : 0.0;
+    double shift = 0.0;
+    if (destaggered && u < pixel_shift.size() && shift_columns > 0) {
+      shift = static_cast<double>(pixel_shift[u]) * columns / shift_columns;
+    }
+    // Encoder angle 2*pi*(1 - c_staggered/W), beam offset -az, os_lidar -> os_sensor turns by pi;
+    // a destaggered column c holds the staggered column c - shift.
+    m.azimuth0.push_back(wrapAngle(M_PI - az + kTwoPi * shift / columns));
+  }
+  return m;
+}
+
+bool BeamModel::valid(std::string* why) const {
+  std::string reason;
+  if (altitude.empty()) {
+    reason = "no beams";
+  } else if (azimuth0.size() != altitude.size()) {
+    reason = "beam azimuth count differs from beam altitude count";
+  } else if (columns <= 0 || columns > 65536) {
+    reason = "column count out of range";
+  } else if (direction != 1 && direction != -1) {
+    reason = "direction must be +1 or -1";
+  } else {
+    for (size_t u = 0; u < altitude.size(); ++u) {
+      if (!std::isfinite(altitude[u]) || !std::isfinite(azimuth0[u]) || std::fabs(altitude[u]) >= M_PI / 2) {
+        reason = "beam angle not finite or |altitude| >= 90 deg";
+        break;
+      }
+    }
+  }
+  if (reason.empty() && (!std::isfinite(beam_origin) || !std::isfinite(lidar_z)))
+    reason = "offsets not finite";
+  if (why) *why = reason;
+  return reason.empty();
+}
+
+void BeamModel::ray(size_t row, size_t col, Eigen::Vector3d* d, Eigen::Vector3d* o) const {
+  const double a = azimuth0[row] + direction * kTwoPi * static_cast<double>(col) / columns;
+  const double ca = std::cos(a), sa = std::sin(a);
+  const double cp = std::cos(altitude[row]), sp = std::sin(altitude[row]);
+  *d = Eigen::Vector3d(ca * cp, sa * cp, sp);
+  *o = Eigen::Vector3d(beam_origin * ca * (1 - cp), beam_origin * sa * (1 - cp), lidar_z - beam_origin * sp);
+}
+
+bool BeamModel::anglesFromPoint(const Eigen::Vector3d& p, double range, double lidar_z, double beam_origin,
+                                double* altitude, double* azimuth) {
+  if (!p.allFinite() || !std::isfinite(range) || range <= beam_origin + 0.05) return false;
+  // p_z = (r - n) sin(alt) + lidar_z, exactly; the horizontal n-term is < 1.2 mm and ignored.
+  const double s = (p.z() - lidar_z) / (range - beam_origin);
+  if (s <= -1.0 || s >= 1.0 || std::hypot(p.x(), p.y()) < 1e-6) return false;
+  *altitude = std::asin(s);
+  *azimuth = std::atan2(p.y(), p.x());
+  return true;
+}
+
+SensorPose SensorPose::fromBody(double roll, double pitch, const Eigen::Matrix3d& mount_rotation,
+                                const Eigen::Vector3d& mount_translation, double base_height) {
+  const Eigen::Matrix3d body =
+      (Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
+  SensorPose pose;
+  pose.level_from_sensor = body * mount_rotation;
+  pose.height = base_height + (body * mount_translation).z();
+  return pose;
+}
+
+bool SensorPose::levelFromGravity(const Eigen::Vector3d& accel, double heading_yaw,
+                                  Eigen::Matrix3d* rotation) {
+  if (!accel.allFinite() || accel.norm() < 1.0) return false;
+  const Eigen::Matrix3d tilt =
+      Eigen::Quaterniond::FromTwoVectors(accel.normalized(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  // FromTwoVectors adds no rotation about z beyond the tilt; keep the sensor's own x as heading.
+  const Eigen::Vector3d x = tilt * Eigen::Vector3d::UnitX();
+  const double yaw = std::atan2(x.y(), x.x());
+  *rotation = Eigen::AngleAxisd(heading_yaw - yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * tilt;
+  return true;
+}
+
+ZoneParams grownZone(const ZoneParams& base, double vx, double vy, double wz, const MotionParams& motion) {
+  ZoneParams z = base;
+  if (!std::isfinite(vx) || !std::isfinite(vy) || !std::isfinite(wz)) {
+    vx = vy = 0.0;
+    wz = 0.0;
+  }
+  const double t = std::max(0.0, motion.reaction_time);
+  const double cap = std::max(0.0, motion.max_growth);
+  const double turn = std::fabs(wz) * std::max(0.0, motion.rotation_lever) * t;
+  z.front += std::min(cap, std::max(0.0, vx) * t + turn);
+  z.back += std::min(cap, std::max(0.0, -vx) * t + turn);
+  z.left += std::min(cap, std::max(0.0, vy) * t + turn);
+  z.right += std::min(cap, std::max(0.0, -vy) * t + turn);
+  return z;
+}
+
+CriticalZone::CriticalZone()
+    : corners_(cornerAzimuths(zone_)), table_rotation_(Eigen::Matrix3d::Identity()) {}
+
+std::array<double, 4> CriticalZone::cornerAzimuths(const ZoneParams& z) {
+  return {{std::atan2(z.left, z.front), M_PI - std::atan2(z.left, z.back),
+           -M_PI + std::atan2(z.right, z.back), -std::atan2(z.right, z.front)}};
+}
+
+Side CriticalZone::section(double azimuth, const std::array<double, 4>& c) {
+  const double a = wrapAngle(azimuth);
+  if (a >= c[3] && a <= c[0]) return FRONT;
+  if (a > c[0] && a < c[1]) return LEFT;
+  if (a < c[3] && a > c[2]) return RIGHT;
+  return BACK;
+}
+
+bool CriticalZone::configure(const BeamModel& beams, const ZoneParams& zone, const SensorPose& pose,
+                             std::string* error) {
+  std::string why;
+  if (!beams.valid(&why)) {
+    if (error) *error = "beam model: " + why;
+    return false;
+  }
+  const double sides[] = {zone.front,          zone.back,          zone.left,          zone.right,
+                          zone.slowdown_front, zone.slowdown_back, zone.slowdown_left, zone.slowdown_right};
+  for (double s : sides) {
+    if (!std::isfinite(s) || s < 0.0 || s > 30.0) {
+      if (error) *error = "zone distances must be finite and in [0, 30] m";
+      return false;
+    }
+  }
+  if (!std::isfinite(zone.blind_zone) || zone.blind_zone < 0.0 || !std::isfinite(zone.floor_clearance) ||
+      !std::isfinite(zone.max_height) || !pose.level_from_sensor.allFinite() || !std::isfinite(pose.height)) {
+    if (error) *error = "blind zone, height band or sensor pose not finite";
+    return false;
+  }
+  const bool beams_changed = beams.columns != beams_.columns || beams.direction != beams_.direction ||
+                             beams.altitude != beams_.altitude || beams.azimuth0 != beams_.azimuth0 ||
+                             beams.beam_origin != beams_.beam_origin || beams.lidar_z != beams_.lidar_z;
+  if (beams_changed) {
+    beams_ = beams;
+    const size_t rows = beams_.rows(), cols = static_cast<size_t>(beams_.columns);
+    cos_alt_.resize(rows);
+    sin_alt_.resize(rows);
+    cos_az0_.resize(rows);
+    sin_az0_.resize(rows);
+    for (size_t u = 0; u < rows; ++u) {
+      cos_alt_[u] = std::cos(beams_.altitude[u]);
+      sin_alt_[u] = std::sin(beams_.altitude[u]);
+      cos_az0_[u] = std::cos(beams_.azimuth0[u]);
+      sin_az0_[u] = std::sin(beams_.azimuth0[u]);
+    }
+    cos_col_.resize(cols);
+    sin_col_.resize(cols);
+    for (size_t c = 0; c < cols; ++c) {
+      const double a = beams_.direction * kTwoPi * static_cast<double>(c) / static_cast<double>(cols);
+      cos_col_[c] = std::cos(a);
+      sin_col_[c] = std::sin(a);
+    }
+    table_valid_ = false;
+  }
+  zone_ = zone;
+  pose_ = pose;
+  corners_ = cornerAzimuths(zone_);
+
+  // Does the table still cover the exact zone with some margin, and not too loosely?
+  const std::array<double, 4> need{{zone.front + zone.slowdown_front, zone.left + zone.slowdown_left,
+                                    zone.back + zone.slowdown_back, zone.right + zone.slowdown_right}};
+  bool rebuild = !table_valid_ || zone.blind_zone != table_blind_;
+  for (size_t i = 0; i < 4 && !rebuild; ++i) {
+    const double slack = table_extent_[i] - need[i];
+    rebuild = slack < kPad / 2 || slack > 3 * kPad;
+  }
+  if (!rebuild) {
+    const Eigen::Matrix3d delta = table_rotation_.transpose() * pose.level_from_sensor;
+    rebuild = Eigen::AngleAxisd(delta).angle() > kMaxTilt;
+  }
+  if (rebuild) {
+    for (size_t i = 0; i < 4; ++i) table_extent_[i] = need[i] + kPad;
+    table_rotation_ = pose.level_from_sensor;
+    table_blind_ = zone.blind_zone;
+    buildTable();
+  }
+  return true;
+}
+
+void CriticalZone::buildTable() {
+  const size_t rows = beams_.rows(), cols = static_cast<size_t>(beams_.columns);
+  table_.resize(rows * cols);
+  const Eigen::Matrix3d& rot = table_rotation_;
+  const double n = beams_.beam_origin;
+  // The height band is not in the table: it depends on the (often changing) sensor height and
+  // only matters for the few candidates; the exact test applies it.
+  const double front = table_extent_[0], left = table_extent_[1], back = table_extent_[2],
+               right = table_extent_[3];
+  const double blind_mm = std::max(1.0, std::ceil(table_blind_ * 1000.0 - 1e-9));
+  for (size_t u = 0; u < rows; ++u) {
+    const double cp = cos_alt_[u], sp = sin_alt_[u];
+    for (size_t c = 0; c < cols; ++c) {
+      const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];
+      const double sa = sin_az0_[u] * cos_col_[c] + cos_az0_[u] * sin_col_[c];
+      const Eigen::Vector3d d = rot * Eigen::Vector3d(ca * cp, sa * cp, sp);
+      const Eigen::Vector3d o =
+          rot * Eigen::Vector3d(n * ca * (1 - cp), n * sa * (1 - cp), beams_.lidar_z - n * sp);
+      double lo = 0.0, hi = kInf;
+      limit(d.x(), o.x(), front, &lo, &hi);
+      limit(-d.x(), -o.x(), back, &lo, &hi);
+      limit(d.y(), o.y(), left, &lo, &hi);
+      limit(-d.y(), -o.y(), right, &lo, &hi);
+      // Candidates: lo_mm <= r < hi_mm (the table errs on the inclusive side).
+      const double lo_mm = std::max(blind_mm, std::floor(lo * 1000.0));
+      const double hi_mm = std::min(lo_mm + 65535.0, std::ceil(hi * 1000.0) + 1.0);
+      Interval& iv = table_[u * cols + c];
+      if (!(hi_mm > lo_mm) || lo_mm > 65535.0) {
+        iv.lo = 0;
+        iv.span = 0;
+      } else {
+        iv.lo = static_cast<uint16_t>(lo_mm);
+        iv.span = static_cast<uint16_t>(hi_mm - lo_mm);
+      }
+    }
+  }
+  table_valid_ = true;
+  ++builds_;
+  if (debug_) {
+    *debug_ << "rbd_lidar: candidate table rebuilt (" << rows << "x" << cols << ", extents F" << front << " L"
+            << left << " B" << back << " R" << right << " m)\n";
+  }
+}
+
+Eigen::Vector3d CriticalZone::sensorPoint(uint32_t index, uint32_t range_mm) const {
+  const size_t cols = static_cast<size_t>(beams_.columns);
+  const size_t u = index / cols, c = index % cols;
+  const double cp = cos_alt_[u], sp = sin_alt_[u];
+  const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];
+  const double sa = sin_az0_[u] * cos_col_[c] + cos_az0_[u] * sin_col_[c];
+  const double n = beams_.beam_origin, r = range_mm * 1e-3;
+  return Eigen::Vector3d(r * ca * cp + n * ca * (1 - cp), r * sa * cp + n * sa * (1 - cp),
+                         r * sp + beams_.lidar_z - n * sp);
+}
+
+Eigen::Vector3d CriticalZone::levelPoint(uint32_t index, uint32_t range_mm) const {
+  Eigen::Vector3d p = pose_.level_from_sensor * sensorPoint(index, range_mm);
+  p.z() += pose_.height;
+  return p;
+}
+
+void CriticalZone::evaluate(const uint32_t* range_mm, ZoneResult* out) const {
+  evaluateStrided(reinterpret_cast<const uint8_t*>(range_mm), sizeof(uint32_t), out);
+}
+
+void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, ZoneResult* out) const {
+  ZoneResult& res = *out;
+  res.counts = {{0, 0, 0, 0}};
+  const float inf = std::numeric_limits<float>::infinity();
+  res.min_distance = {{inf, inf, inf, inf}};
+  res.critical.clear();
+  res.critical_side.clear();
+  res.speed_scale = 1.0f;
+  res.valid_returns = 0;
+  if (!table_valid_) return;
+
+  // Pass 1: candidates from the table (one subtract-and-compare per pixel), valid-return count.
+  // Branch-free append: the slot is always written, the count advances only for a candidate.
+  const size_t rows = beams_.rows(), cols = static_cast<size_t>(beams_.columns);
+  const Interval* table = table_.data();
+  thread_local std::vector<uint32_t> candidates;
+  thread_local std::vector<uint32_t> candidate_range;
+  if (candidates.size() < rows * cols + 1) {
+    candidates.resize(rows * cols + 1);
+    candidate_range.resize(rows * cols + 1);
+  }
+  uint32_t* cand = candidates.data();
+  uint32_t* cand_r = candidate_range.data();
+  size_t found = 0;
+  uint32_t valid = 0;
+  const uint8_t* src = range_bytes;
+  for (size_t u = 0; u < rows; ++u) {
+    const Interval* row_table = table + u * cols;
+    // Candidates are stored as (row << 16 | column): no division later.
+    const uint32_t key = static_cast<uint32_t>(u) << 16;
+    for (size_t c = 0; c < cols; ++c, src += stride) {
+      uint32_t r;
+      std::memcpy(&r, src, sizeof(r));
+      valid += r != 0;
+      cand[found] = key | static_cast<uint32_t>(c);
+      cand_r[found] = r;
+      found += static_cast<uint32_t>(r - row_table[c].lo) < row_table[c].span;
+    }
+  }
+  res.valid_returns = valid;
+
+  // Pass 2: exact test of the candidates in the level frame.
+  const ZoneParams& z = zone_;
+  const uint32_t blind_mm = static_cast<uint32_t>(std::max(0.0, std::ceil(z.blind_zone * 1000.0 - 1e-9)));
+  const double lim[4] = {z.front, z.left, z.back, z.right};
+  const double inv_lim[4] = {1.0 / std::max(lim[0], 1e-9), 1.0 / std::max(lim[1], 1e-9),
+                             1.0 / std::max(lim[2], 1e-9), 1.0 / std::max(lim[3], 1e-9)};
+  const double outer[4] = {lim[0] + z.slowdown_front, lim[1] + z.slowdown_left, lim[2] + z.slowdown_back,
+                           lim[3] + z.slowdown_right};
+  const double inv_slow[4] = {
+      z.slowdown_front > 0 ? 1.0 / z.slowdown_front : 0.0, z.slowdown_left > 0 ? 1.0 / z.slowdown_left : 0.0,
+      z.slowdown_back > 0 ? 1.0 / z.slowdown_back : 0.0, z.slowdown_right > 0 ? 1.0 / z.slowdown_right : 0.0};
+  // Everything the loop reads lives in locals: the byte-sized stores below may alias any member.
+  const Eigen::Matrix3d& R = pose_.level_from_sensor;
+  const double r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2),
+               r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
+  const double n = beams_.beam_origin, lz = beams_.lidar_z, height = pose_.height;
+  const double floor_clearance = z.floor_clearance, max_height = z.max_height;
+  const double *cos_alt = cos_alt_.data(), *sin_alt = sin_alt_.data(), *cos_az0 = cos_az0_.data(),
+               *sin_az0 = sin_az0_.data(), *cos_col = cos_col_.data(), *sin_col = sin_col_.data();
+  // Scratch buffers live per thread; take plain references once (a thread_local in a shared
+  // library costs a TLS lookup per access). Outputs are sized for the worst case, then trimmed.
+  thread_local std::vector<float> lambda_buffer;
+  std::vector<float>& lambdas = lambda_buffer;
+  lambdas.resize(found);
+  res.critical.resize(found);
+  res.critical_side.resize(found);
+  float* lam = lambdas.data();
+  uint32_t* crit = res.critical.data();
+  uint8_t* crit_side = res.critical_side.data();
+  size_t n_lam = 0, n_crit = 0;
+  uint32_t counts[4] = {0, 0, 0, 0};
+  float min_dist[4] = {res.min_distance[0], res.min_distance[1], res.min_distance[2], res.min_distance[3]};
+  for (size_t k = 0; k < found; ++k) {
+    const uint32_t r = cand_r[k];
+    if (r < blind_mm) continue;
+    const size_t u = cand[k] >> 16, c = cand[k] & 0xFFFFu;
+    // Sensor-frame point (see BeamModel), then the level frame.
+    const double cp = cos_alt[u], sp = sin_alt[u];
+    const double ca = cos_az0[u] * cos_col[c] - sin_az0[u] * sin_col[c];
+    const double sa = sin_az0[u] * cos_col[c] + cos_az0[u] * sin_col[c];
+    const double rm = r * 1e-3, horiz = rm * cp + n * (1 - cp);
+    const double sx = ca * horiz, sy = sa * horiz, sz = rm * sp + lz - n * sp;
+    const double h = r20 * sx + r21 * sy + r22 * sz + height;
+    if (!(h > floor_clearance && h < max_height)) continue;
+    const double x = r00 * sx + r01 * sy + r02 * sz;
+    const double y = r10 * sx + r11 * sy + r12 * sz;
+    // Signed perpendicular distance towards each side: front x, left y, back -x, right -y.
+    const double toward[4] = {x, y, -x, -y};
+    if (!(toward[0] < outer[0] && toward[1] < outer[1] && toward[2] < outer[2] && toward[3] < outer[3]))
+      continue;
+    // Section = the side whose limit the ray from the LiDAR meets first: largest toward / limit
+    // (the same split as the corner azimuths phi1..phi4).
+    int side = 0;
+    double best = toward[0] * inv_lim[0];
+    for (int s = 1; s < 4; ++s) {
+      const double q = toward[s] * inv_lim[s];
+      if (q > best) {
+        best = q;
+        side = s;
+      }
+    }
+    min_dist[side] = std::min(min_dist[side], static_cast<float>(toward[side]));
+    if (toward[0] < lim[0] && toward[1] < lim[1] && toward[2] < lim[2] && toward[3] < lim[3]) {
+      ++counts[side];
+      crit[n_crit] = static_cast<uint32_t>(u * cols + c);
+      crit_side[n_crit] = static_cast<uint8_t>(side);
+      ++n_crit;
+      lam[n_lam++] = 0.0f;
+    } else {
+      double lambda = 0.0;
+      for (int s = 0; s < 4; ++s) {
+        const double excess = toward[s] - lim[s];
+        if (excess > 0.0) lambda = std::max(lambda, inv_slow[s] > 0.0 ? excess * inv_slow[s] : 1.0);
+      }
+      lam[n_lam++] = static_cast<float>(std::min(1.0, lambda));
+    }
+  }
+  res.critical.resize(n_crit);
+  res.critical_side.resize(n_crit);
+  lambdas.resize(n_lam);
+  for (int s = 0; s < 4; ++s) {
+    res.counts[s] = counts[s];
+    res.min_distance[s] = min_dist[s];
+  }
+  // Speed scale: the point_threshold-th smallest lambda, so that single noisy returns do not brake.
+  const size_t k = std::max<size_t>(1, z.point_threshold);
+  if (lambdas.size() >= k) {
+    std::nth_element(lambdas.begin(), lambdas.begin() + (k - 1), lambdas.end());
+    res.speed_scale = lambdas[k - 1];
+  }
+}
+
+bool CriticalZone::estimateHeight(const uint8_t* range_bytes, size_t stride, double max_distance,
+                                  double quantile, size_t column_step, size_t min_samples,
+                                  double* height) const {
+  if (!table_valid_) return false;
+  const size_t rows = beams_.rows(), cols = static_cast<size_t>(beams_.columns);
+  const Eigen::Matrix3d& R = pose_.level_from_sensor;
+  const double n = beams_.beam_origin, lz = beams_.lidar_z;
+  thread_local std::vector<double> sample_buffer;
+  std::vector<double>& samples = sample_buffer;
+  samples.clear();
+  const size_t step = std::max<size_t>(1, column_step);
+  const double tilt = std::hypot(R(2, 0), R(2, 1));
+  for (size_t u = 0; u < rows; ++u) {
+    const double cp = cos_alt_[u], sp = sin_alt_[u];
+    // Only clearly downward rays (> 5 deg below the horizon in the level frame): skip rows that
+    // have none without touching their data.
+    if (R(2, 2) * sp - tilt * cp > -0.087) continue;
+    for (size_t c = u % step; c < cols; c += step) {
+      const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];
+      const double sa = sin_az0_[u] * cos_col_[c] + cos_az0_[u] * sin_col_[c];
+      const double dz = R(2, 0) * ca * cp + R(2, 1) * sa * cp + R(2, 2) * sp;
+      if (dz > -0.087) continue;
+      uint32_t r;
+      std::memcpy(&r, range_bytes + (u * cols + c) * stride, sizeof(r));
+      if (r == 0) continue;
+      const double rm = r * 1e-3, horiz = rm * cp + n * (1 - cp);
+      const double sx = ca * horiz, sy = sa * horiz, sz = rm * sp + lz - n * sp;
+      const double x = R(0, 0) * sx + R(0, 1) * sy + R(0, 2) * sz;
+      const double y = R(1, 0) * sx + R(1, 1) * sy + R(1, 2) * sz;
+      if (x * x + y * y > max_distance * max_distance) continue;
+      samples.push_back(-(R(2, 0) * sx + R(2, 1) * sy + R(2, 2) * sz));
+    }
+  }
+  if (samples.size() < std::max<size_t>(1, min_samples)) return false;
+  const size_t k = std::min(samples.size() - 1, static_cast<size_t>(quantile * (samples.size() - 1)));
+  std::nth_element(samples.begin(), samples.begin() + k, samples.end());
+  *height = samples[k];
+  return true;
+}
+
+bool CollisionLatch::update(bool occupied) {
+  if (occupied) {
+    collision_ = true;
+    clear_run_ = 0;
+  } else if (collision_) {
+    if (++clear_run_ >= clear_scans_) {
+      collision_ = false;
+      clear_run_ = 0;
+    }
+  }
+  return collision_;
+}
+
+}  // namespace rbd_lidar

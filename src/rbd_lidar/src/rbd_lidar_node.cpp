@@ -1,0 +1,418 @@
+// rbd_lidar node: thin ROS adapter around ScanPipeline / CriticalZone.
+// Shaped like pointcloud_to_laserscan's nodelet (all parameters read in one place, iterator over
+// the cloud), but it always subscribes: a safety monitor never listens lazily.
+#include <dynamic_reconfigure/server.h>
+#include <geometry_msgs/Twist.h>
+#include <nav_msgs/Odometry.h>
+#include <rbd_lidar/ZoneConfig.h>
+#include <ros/ros.h>
+#include <sensor_msgs/Imu.h>
+#include <std_msgs/Float32.h>
+#include <std_srvs/SetBool.h>
+#include <tf2_ros/transform_listener.h>
+#include <visualization_msgs/Marker.h>
+
+#include <Eigen/Geometry>
+#include <array>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+#include "rbd_lidar/os1_beams.h"
+#include "rbd_lidar/scan_pipeline.h"
+
+namespace rbd_lidar {
+
+class LidarNode {
+ public:
+  LidarNode() : pnh_("~"), tf_listener_(tf_buffer_) {
+    readParameters();
+    // Publishers first: the reconfigure callback may already use them.
+    critical_pub_ = pnh_.advertise<sensor_msgs::PointCloud2>("collision_points", 2);
+    slice_pub_ = pnh_.advertise<sensor_msgs::PointCloud2>("slice", 2);
+    scan_pub_ = nh_.advertise<sensor_msgs::LaserScan>("scan", 2);
+    state_pub_ = pnh_.advertise<rbd_msgs::CollisionState>("state", 10);
+    marker_pub_ = pnh_.advertise<visualization_msgs::Marker>("zone_marker", 2, true);
+    speed_pub_ = pnh_.advertise<std_msgs::Float32>("speed_scale", 10);
+    server_.reset(new dynamic_reconfigure::Server<ZoneConfig>(pnh_));
+    server_->setCallback([this](ZoneConfig& c, uint32_t level) { reconfigure(c, level); });
+    last_valid_ = ros::Time::now();
+    // Never lazy: subscribe unconditionally.
+    cloud_sub_ =
+        nh_.subscribe("ouster/points", 2, &LidarNode::cloudCb, this, ros::TransportHints().tcpNoDelay());
+    cmd_sub_ = nh_.subscribe("cmd_vel", 10, &LidarNode::cmdCb, this);
+    if (attitude_source_ == "odom") odom_sub_ = nh_.subscribe("odom", 10, &LidarNode::odomCb, this);
+    if (attitude_source_ == "imu") imu_sub_ = nh_.subscribe("imu", 50, &LidarNode::imuCb, this);
+    worker_ = std::thread(&LidarNode::serviceLoop, this);
+    stale_timer_ = nh_.createTimer(ros::Duration(0.05), &LidarNode::staleCb, this);
+    ROS_INFO("rbd_lidar: zone F%.2f B%.2f L%.2f R%.2f m, %zu beams, attitude from %s", zone_.front,
+             zone_.back, zone_.left, zone_.right, pipeline_.beams(), attitude_source_.c_str());
+  }
+
+  ~LidarNode() {
+    {
+      std::lock_guard<std::mutex> lock(svc_mutex_);
+      stop_ = true;
+    }
+    svc_cv_.notify_all();
+    if (worker_.joinable()) worker_.join();
+  }
+
+ private:
+  template <typename T>
+  T param(const std::string& name, const T& fallback) {
+    T v;
+    pnh_.param<T>(name, v, fallback);
+    return v;
+  }
+
+  void readParameters() {
+    base_frame_ = param<std::string>("base_frame", "base_link");
+    mount_from_tf_ = param("mount_from_tf", true);
+    mount_t_ = Eigen::Vector3d(param("lidar_offset_x", 0.0), param("lidar_offset_y", 0.0),
+                               param("lidar_offset_z", 0.10));
+    mount_r_ = (Eigen::AngleAxisd(param("lidar_offset_yaw", 0.0), Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(param("lidar_offset_pitch", 0.0), Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(param("lidar_offset_roll", 0.0), Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+    base_height_ = param("base_height", 0.28);
+    attitude_source_ = param<std::string>("attitude_source", "imu");
+    if (attitude_source_ != "odom" && attitude_source_ != "imu" && attitude_source_ != "fixed") {
+      ROS_ERROR("rbd_lidar: attitude_source must be 'odom', 'imu' or 'fixed', not '%s'; using 'fixed'",
+                attitude_source_.c_str());
+      attitude_source_ = "fixed";
+    }
+    fixed_roll_ = param("body_roll", 0.0);
+    fixed_pitch_ = param("body_pitch", 0.0);
+    use_odom_height_ = param("use_odom_height", false);
+    attitude_timeout_ = param("attitude_timeout", 0.5);
+    imu_filter_time_ = param("imu_filter_time", 0.5);
+    cmd_timeout_ = param("cmd_vel_timeout", 0.5);
+    error_period_ = param("error_log_period", 5.0);
+    retry_period_ = param("service_retry_period", 1.0);
+    pparams_.beams_from_cloud = param("beams_from_cloud", true);
+    pparams_.slice_ring = param("slice_ring", -1);
+    pparams_.scan_range_min = param("scan_range_min", 0.30);
+    pparams_.scan_range_max = param("scan_range_max", 120.0);
+    pparams_.min_valid_fraction = param("min_valid_fraction", 0.01);
+    pparams_.floor_from_cloud = param("floor_from_cloud", true);
+    pparams_.floor_height_tolerance = param("floor_height_tolerance", 0.20);
+
+    std::vector<double> alt, az;
+    std::vector<int> shift;
+    pnh_.param("beam_altitude_angles", alt, os1U0Altitudes());
+    pnh_.param("beam_azimuth_angles", az, os1U0Azimuths());
+    pnh_.param("pixel_shift_by_row", shift, std::vector<int>(alt.size(), 0));
+    if (az.size() != alt.size() || shift.size() != alt.size() || alt.empty()) {
+      ROS_ERROR(
+          "rbd_lidar: beam_altitude_angles / beam_azimuth_angles / pixel_shift_by_row sizes differ "
+          "(%zu/%zu/%zu);"
+          " using the built-in OS1-32 table",
+          alt.size(), az.size(), shift.size());
+      alt = os1U0Altitudes();
+      az = os1U0Azimuths();
+      shift.assign(alt.size(), 0);
+    }
+    pipeline_.setNominalBeams(alt, az, shift, param("pixel_shift_columns", 512), param("destaggered", true),
+                              param("lidar_origin_to_beam_origin_mm", 15.806),
+                              param("lidar_to_sensor_z_mm", 36.18));
+  }
+
+  void reconfigure(ZoneConfig& c, uint32_t /*level*/) {
+    zone_.front = c.zone_front;
+    zone_.back = c.zone_back;
+    zone_.left = c.zone_left;
+    zone_.right = c.zone_right;
+    zone_.slowdown_front = c.slowdown_front;
+    zone_.slowdown_back = c.slowdown_back;
+    zone_.slowdown_left = c.slowdown_left;
+    zone_.slowdown_right = c.slowdown_right;
+    zone_.blind_zone = c.blind_zone;
+    zone_.floor_clearance = c.floor_clearance;
+    zone_.max_height = c.max_height;
+    zone_.point_threshold = static_cast<unsigned>(c.point_threshold);
+    motion_.reaction_time = c.reaction_time;
+    motion_.rotation_lever = c.rotation_lever;
+    motion_.max_growth = c.max_growth;
+    velocity_aware_ = c.velocity_aware;
+    stale_periods_ = c.stale_periods;
+    scan_rate_ = c.scan_rate;
+    pparams_.hysteresis_scans = static_cast<unsigned>(c.hysteresis_scans);
+    pparams_.scan_time = 1.0 / scan_rate_;
+    pipeline_.setParams(pparams_);
+    ROS_INFO("rbd_lidar: zone F%.2f B%.2f L%.2f R%.2f m, threshold %d, hysteresis %d", zone_.front,
+             zone_.back, zone_.left, zone_.right, c.point_threshold, c.hysteresis_scans);
+  }
+
+  void cmdCb(const geometry_msgs::Twist& t) {
+    cmd_ = t;
+    cmd_time_ = ros::Time::now();
+  }
+
+  void odomCb(const nav_msgs::Odometry& o) {
+    const auto& q = o.pose.pose.orientation;
+    const Eigen::Quaterniond quat(q.w, q.x, q.y, q.z);
+    if (!std::isfinite(quat.norm()) || quat.norm() < 0.5 || !std::isfinite(o.pose.pose.position.z)) {
+      ROS_WARN_THROTTLE(5.0, "rbd_lidar: odom orientation invalid; ignoring it");
+      return;
+    }
+    const Eigen::Matrix3d r = quat.normalized().toRotationMatrix();
+    odom_roll_ = std::atan2(r(2, 1), r(2, 2));
+    odom_pitch_ = -std::asin(std::max(-1.0, std::min(1.0, r(2, 0))));
+    odom_z_ = o.pose.pose.position.z;
+    odom_time_ = ros::Time::now();
+  }
+
+  // Low-pass filtered specific force of the sensor's IMU (gravity direction).
+  void imuCb(const sensor_msgs::Imu& m) {
+    const Eigen::Vector3d a(m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z);
+    if (!a.allFinite() || a.norm() < 1.0 || a.norm() > 50.0) {
+      ROS_WARN_THROTTLE(5.0, "rbd_lidar: implausible IMU acceleration; ignoring it");
+      return;
+    }
+    const ros::Time now = ros::Time::now();
+    if (imu_time_.isZero() || (now - imu_time_).toSec() > attitude_timeout_) {
+      gravity_ = a;
+    } else {
+      const double dt = std::max(0.0, (now - imu_time_).toSec());
+      const double k = imu_filter_time_ > 0.0 ? std::min(1.0, dt / imu_filter_time_) : 1.0;
+      gravity_ += k * (a - gravity_);
+    }
+    imu_time_ = now;
+  }
+
+  SensorPose currentPose(const std::string& frame) {
+    if (mount_from_tf_ && !mount_found_ && !frame.empty()) {
+      try {
+        const auto tf = tf_buffer_.lookupTransform(base_frame_, frame, ros::Time(0));
+        const auto& r = tf.transform.rotation;
+        mount_r_ = Eigen::Quaterniond(r.w, r.x, r.y, r.z).normalized().toRotationMatrix();
+        mount_t_ = Eigen::Vector3d(tf.transform.translation.x, tf.transform.translation.y,
+                                   tf.transform.translation.z);
+        mount_found_ = true;
+        ROS_INFO("rbd_lidar: mount %s -> %s from TF: (%.3f %.3f %.3f) m", base_frame_.c_str(), frame.c_str(),
+                 mount_t_.x(), mount_t_.y(), mount_t_.z());
+      } catch (const tf2::TransformException& e) {
+        ROS_WARN_THROTTLE(10.0, "rbd_lidar: no TF %s -> %s yet (%s); using lidar_offset_* parameters",
+                          base_frame_.c_str(), frame.c_str(), e.what());
+      }
+    }
+    double roll = fixed_roll_, pitch = fixed_pitch_, height = base_height_;
+    if (attitude_source_ == "odom") {
+      if (!odom_time_.isZero() && (ros::Time::now() - odom_time_).toSec() < attitude_timeout_) {
+        roll = odom_roll_;
+        pitch = odom_pitch_;
+        if (use_odom_height_) height = odom_z_;
+      } else {
+        ROS_WARN_THROTTLE(10.0,
+                          "rbd_lidar: no fresh odom for the body attitude; assuming roll %.2f pitch %.2f rad",
+                          fixed_roll_, fixed_pitch_);
+      }
+    }
+    if (attitude_source_ == "imu") {
+      Eigen::Matrix3d level;
+      const Eigen::Vector3d mx = mount_r_ * Eigen::Vector3d::UnitX();
+      if (!imu_time_.isZero() && (ros::Time::now() - imu_time_).toSec() < attitude_timeout_ &&
+          SensorPose::levelFromGravity(gravity_, std::atan2(mx.y(), mx.x()), &level)) {
+        SensorPose pose;
+        pose.level_from_sensor = level;
+        pose.height = height + (level * mount_r_.transpose() * mount_t_).z();
+        return pose;
+      }
+      ROS_WARN_THROTTLE(10.0,
+                        "rbd_lidar: no fresh IMU for the sensor attitude; assuming roll %.2f pitch %.2f rad",
+                        fixed_roll_, fixed_pitch_);
+    }
+    return SensorPose::fromBody(roll, pitch, mount_r_, mount_t_, height);
+  }
+
+  void cloudCb(const sensor_msgs::PointCloud2ConstPtr& cloud) {
+    const ros::Time now = ros::Time::now();
+    const SensorPose pose = currentPose(cloud->header.frame_id);
+    ZoneParams zone = zone_;
+    if (velocity_aware_ && !cmd_time_.isZero() && (now - cmd_time_).toSec() < cmd_timeout_) {
+      zone = grownZone(zone_, cmd_.linear.x, cmd_.linear.y, cmd_.angular.z, motion_);
+    }
+    pipeline_.setZone(zone);
+    pipeline_.setPose(pose);
+    ScanPipeline::Outputs& out = outputs_;
+    std::string message;
+    const CloudError err = pipeline_.process(*cloud, &out, &message);
+    if (err != CloudError::NONE) {
+      logError(static_cast<size_t>(err), message);
+    } else {
+      last_valid_ = now;
+      stale_ = false;
+      if (pipeline_.modelResidual() > 0.03) {
+        ROS_WARN_THROTTLE(30.0, "rbd_lidar: the cloud's xyz differs from the beam model by %.0f mm",
+                          pipeline_.modelResidual() * 1000.0);
+      }
+    }
+    critical_pub_.publish(out.critical);
+    if (err == CloudError::NONE) {
+      slice_pub_.publish(out.slice);
+      scan_pub_.publish(out.scan);
+    }
+    publishState(out.state);
+    publishMarker(cloud->header, zone, pose);
+  }
+
+  void staleCb(const ros::TimerEvent&) {
+    const ros::Time now = ros::Time::now();
+    if (now.isZero()) return;
+    const double timeout = stale_periods_ / scan_rate_;
+    if ((now - last_valid_).toSec() <= timeout) return;
+    // Publish the stale state once per scan period.
+    if (stale_ && (now - last_stale_pub_).toSec() < 1.0 / scan_rate_) return;
+    if (!stale_) {
+      ROS_ERROR("rbd_lidar: no valid cloud for %.2f s (%d periods): collision (stale)",
+                (now - last_valid_).toSec(), stale_periods_);
+    }
+    stale_ = true;
+    last_stale_pub_ = now;
+    rbd_msgs::CollisionState st;
+    pipeline_.fail(true, "stale: no valid cloud for " + std::to_string((now - last_valid_).toSec()) + " s",
+                   &st);
+    st.header.stamp = now;
+    st.header.frame_id = last_frame_;
+    publishState(st);
+  }
+
+  void publishState(const rbd_msgs::CollisionState& st) {
+    if (!st.header.frame_id.empty()) last_frame_ = st.header.frame_id;
+    state_pub_.publish(st);
+    std_msgs::Float32 s;
+    s.data = st.speed_scale;
+    speed_pub_.publish(s);
+    {
+      std::lock_guard<std::mutex> lock(svc_mutex_);
+      desired_ = st.collision;
+    }
+    svc_cv_.notify_all();
+  }
+
+  void logError(size_t kind, const std::string& message) {
+    const ros::WallTime now = ros::WallTime::now();
+    if (kind < last_error_log_.size() &&
+        (last_error_log_[kind].isZero() || (now - last_error_log_[kind]).toSec() >= error_period_)) {
+      last_error_log_[kind] = now;
+      ROS_ERROR("rbd_lidar: cloud rejected (collision until valid clouds return): %s", message.c_str());
+    }
+  }
+
+  void publishMarker(const std_msgs::Header& header, const ZoneParams& z, const SensorPose& pose) {
+    if (marker_pub_.getNumSubscribers() == 0 && marker_sent_) return;
+    marker_sent_ = true;
+    visualization_msgs::Marker m;
+    m.header = header;
+    m.ns = "rbd_lidar_zone";
+    m.id = 0;
+    m.type = visualization_msgs::Marker::LINE_LIST;
+    m.action = visualization_msgs::Marker::ADD;
+    m.pose.orientation.w = 1.0;
+    m.scale.x = 0.01;
+    m.color.r = 1.0;
+    m.color.a = 0.9;
+    const double xs[2] = {z.front, -z.back}, ys[2] = {z.left, -z.right};
+    const double hs[2] = {z.floor_clearance, std::min(z.max_height, pose.height + 0.3)};
+    // Box corners in the level frame, drawn in the cloud frame.
+    auto corner = [&](int i, int j, int k) {
+      const Eigen::Vector3d level(xs[i], ys[j], hs[k] - pose.height);
+      const Eigen::Vector3d s = pose.level_from_sensor.transpose() * level;
+      geometry_msgs::Point p;
+      p.x = s.x();
+      p.y = s.y();
+      p.z = s.z();
+      return p;
+    };
+    for (int k = 0; k < 2; ++k) {  // top and bottom rectangles
+      const int order[5][2] = {{0, 0}, {0, 1}, {1, 1}, {1, 0}, {0, 0}};
+      for (int e = 0; e < 4; ++e) {
+        m.points.push_back(corner(order[e][0], order[e][1], k));
+        m.points.push_back(corner(order[e + 1][0], order[e + 1][1], k));
+      }
+    }
+    for (int i = 0; i < 2; ++i) {
+      for (int j = 0; j < 2; ++j) {  // vertical edges
+        m.points.push_back(corner(i, j, 0));
+        m.points.push_back(corner(i, j, 1));
+      }
+    }
+    marker_pub_.publish(m);
+  }
+
+  // Calls the controller's collision service when the state changes; tolerates its absence
+  // (retried every service_retry_period) and never blocks the cloud callback.
+  void serviceLoop() {
+    ros::ServiceClient client = nh_.serviceClient<std_srvs::SetBool>("rbd_controller/collision");
+    std::unique_lock<std::mutex> lock(svc_mutex_);
+    while (!stop_) {
+      if (desired_ < 0 || desired_ == reported_) {
+        svc_cv_.wait(lock);
+        continue;
+      }
+      const int want = desired_;
+      lock.unlock();
+      std_srvs::SetBool srv;
+      srv.request.data = want != 0;
+      const bool ok = client.exists() && client.call(srv);
+      lock.lock();
+      if (ok) {
+        reported_ = want;
+        if (!srv.response.success) {
+          ROS_WARN("rbd_lidar: collision service refused data=%d: %s", want, srv.response.message.c_str());
+        }
+      } else {
+        ROS_WARN_THROTTLE(10.0, "rbd_lidar: collision service %s unavailable; retrying",
+                          client.getService().c_str());
+        svc_cv_.wait_for(lock, std::chrono::milliseconds(static_cast<int>(retry_period_ * 1000)));
+      }
+    }
+  }
+
+  ros::NodeHandle nh_, pnh_;
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  std::unique_ptr<dynamic_reconfigure::Server<ZoneConfig>> server_;
+  ros::Subscriber cloud_sub_, cmd_sub_, odom_sub_, imu_sub_;
+  ros::Publisher critical_pub_, slice_pub_, scan_pub_, state_pub_, marker_pub_, speed_pub_;
+  ros::Timer stale_timer_;
+
+  ScanPipeline pipeline_;
+  ScanPipeline::Outputs outputs_;
+  PipelineParams pparams_;
+  ZoneParams zone_;
+  MotionParams motion_;
+  bool velocity_aware_ = true;
+  int stale_periods_ = 3;
+  double scan_rate_ = 10.0;
+
+  std::string base_frame_, attitude_source_, last_frame_;
+  bool mount_from_tf_ = true, mount_found_ = false, use_odom_height_ = false, marker_sent_ = false;
+  Eigen::Matrix3d mount_r_ = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d mount_t_ = Eigen::Vector3d(0, 0, 0.1);
+  double base_height_ = 0.28, fixed_roll_ = 0, fixed_pitch_ = 0, attitude_timeout_ = 0.5, cmd_timeout_ = 0.5;
+  double error_period_ = 5.0, retry_period_ = 1.0;
+  double odom_roll_ = 0, odom_pitch_ = 0, odom_z_ = 0, imu_filter_time_ = 0.5;
+  Eigen::Vector3d gravity_ = Eigen::Vector3d(0, 0, 9.81);
+  ros::Time odom_time_, imu_time_, cmd_time_, last_valid_, last_stale_pub_;
+  geometry_msgs::Twist cmd_;
+  bool stale_ = false;
+  std::array<ros::WallTime, static_cast<size_t>(CloudError::COUNT)> last_error_log_;
+
+  std::thread worker_;
+  std::mutex svc_mutex_;
+  std::condition_variable svc_cv_;
+  int desired_ = -1;  // -1: nothing to report yet
+  int reported_ = 0;  // the controller starts without a collision flag
+  bool stop_ = false;
+};
+
+}  // namespace rbd_lidar
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "rbd_lidar");
+  rbd_lidar::LidarNode node;
+  ros::spin();
+  return 0;
+}

@@ -1,0 +1,502 @@
+// gtests of the ROS-free critical zone on hand-built range images.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "rbd_lidar/critical_zone.h"
+
+using rbd_lidar::BeamModel;
+using rbd_lidar::CollisionLatch;
+using rbd_lidar::CriticalZone;
+using rbd_lidar::SensorPose;
+using rbd_lidar::ZoneParams;
+using rbd_lidar::ZoneResult;
+
+namespace {
+
+const double kDeg = M_PI / 180.0;
+
+// OS1-32 U0 (ouster-sdk tests/metadata/2_0_rc2_os-992011000121-32U0_legacy.json).
+const std::vector<double> kAlt = {
+    20.5477, 19.2919,  18.0171, 16.7242, 15.4141,  14.088,   12.7466,  11.3909, 10.022,   8.641,   7.249,
+    5.8474,  4.4377,   3.0216,  1.601,   0.1779,   -1.2454,  -2.6668,  -4.0842, -5.4956,  -6.8994, -8.2939,
+    -9.6778, -11.0499, -12.409, -13.754, -15.0841, -16.3982, -17.6955, -18.975, -20.2356, -21.4764};
+
+BeamModel os1(int columns) {
+  return BeamModel::fromOuster(kAlt, std::vector<double>(32, -4.252), std::vector<int>(32, 0), 512, columns,
+                               true, 15.806, 36.18);
+}
+
+// Beams at the given elevations [deg], column 0 looking along +x, azimuth falling with the column.
+BeamModel simple(const std::vector<double>& alt_deg, int columns, double n = 0.0, double lz = 0.0) {
+  BeamModel m;
+  for (double a : alt_deg) {
+    m.altitude.push_back(a * kDeg);
+    m.azimuth0.push_back(0.0);
+  }
+  m.columns = columns;
+  m.direction = -1;
+  m.beam_origin = n;
+  m.lidar_z = lz;
+  return m;
+}
+
+SensorPose level(double height) {
+  SensorPose p;
+  p.height = height;
+  return p;
+}
+
+// Range [mm, rounded] along pixel (u, c) at which the level-frame coordinate `axis` (0 x, 1 y,
+// 2 height above floor) equals `value`; 0 if the ray never gets there.
+uint32_t rangeTo(const BeamModel& m, const SensorPose& pose, size_t u, size_t c, int axis, double value) {
+  Eigen::Vector3d d, o;
+  m.ray(u, c, &d, &o);
+  d = pose.level_from_sensor * d;
+  o = pose.level_from_sensor * o;
+  o.z() += pose.height;
+  if (std::fabs(d[axis]) < 1e-9) return 0;
+  const double r = (value - o[axis]) / d[axis];
+  return r > 0 && r < 60 ? static_cast<uint32_t>(std::lround(r * 1000.0)) : 0;
+}
+
+double pixelAzimuth(const BeamModel& m, const SensorPose& pose, size_t u, size_t c) {
+  Eigen::Vector3d d, o;
+  m.ray(u, c, &d, &o);
+  d = pose.level_from_sensor * d;
+  return std::atan2(d.y(), d.x());
+}
+
+ZoneResult run(const CriticalZone& zone, const std::vector<uint32_t>& img) {
+  ZoneResult r;
+  zone.evaluate(img.data(), &r);
+  return r;
+}
+
+}  // namespace
+
+TEST(BeamModel, MatchesOusterXyzFormula) {
+  // Independent transcription of ouster-sdk xyzlut: lidar frame, then lidar_to_sensor.
+  const int W = 1024;
+  const BeamModel m = BeamModel::fromOuster(kAlt, std::vector<double>(32, -4.252), std::vector<int>(32, 0),
+                                            512, W, false, 15.806, 36.18);
+  for (size_t u : {0u, 15u, 31u}) {
+    for (int c : {0, 100, 512, 1000}) {
+      const double te = 2 * M_PI * (1.0 - static_cast<double>(c) / W), ta = 4.252 * kDeg,
+                   phi = kAlt[u] * kDeg;
+      const double n = 15.806, r = 5000.0;
+      const Eigen::Vector3d d(std::cos(te + ta) * std::cos(phi), std::sin(te + ta) * std::cos(phi),
+                              std::sin(phi));
+      const Eigen::Vector3d off(n * std::cos(te) - n * d.x(), n * std::sin(te) - n * d.y(), -n * d.z());
+      Eigen::Vector3d lidar = r * d + off;
+      const Eigen::Vector3d expected(-lidar.x() * 1e-3, -lidar.y() * 1e-3, (lidar.z() + 36.18) * 1e-3);
+      Eigen::Vector3d dir, o;
+      m.ray(u, static_cast<size_t>(c), &dir, &o);
+      const Eigen::Vector3d got = 5.0 * dir + o;
+      EXPECT_LT((got - expected).norm(), 0.0015) << "row " << u << " col " << c;
+    }
+  }
+  // Column 0 looks to -x (connector side), column W/2 to +x.
+  Eigen::Vector3d d, o;
+  m.ray(15, 0, &d, &o);
+  EXPECT_LT(d.x(), -0.9);
+  m.ray(15, W / 2, &d, &o);
+  EXPECT_GT(d.x(), 0.9);
+}
+
+TEST(BeamModel, AnglesFromPointRecoverTheModel) {
+  const BeamModel m = os1(512);
+  for (size_t u : {0u, 9u, 31u}) {
+    Eigen::Vector3d d, o;
+    m.ray(u, 37, &d, &o);
+    double alt = 0, az = 0;
+    ASSERT_TRUE(BeamModel::anglesFromPoint(3.0 * d + o, 3.0, m.lidar_z, m.beam_origin, &alt, &az));
+    EXPECT_NEAR(alt, m.altitude[u], 1e-6);
+    EXPECT_NEAR(std::remainder(az - (m.azimuth0[u] - 2 * M_PI * 37 / 512), 2 * M_PI), 0.0, 1e-3);
+  }
+  double alt = 0, az = 0;
+  EXPECT_FALSE(BeamModel::anglesFromPoint(Eigen::Vector3d(NAN, 0, 0), 3.0, 0.036, 0.0158, &alt, &az));
+  EXPECT_FALSE(BeamModel::anglesFromPoint(Eigen::Vector3d(1, 0, 0), 0.0, 0.036, 0.0158, &alt, &az));
+}
+
+TEST(CriticalZone, CornerAzimuthsAndSections) {
+  ZoneParams z;  // 0.70 / 0.55 / 0.35 / 0.35
+  const auto c = CriticalZone::cornerAzimuths(z);
+  EXPECT_NEAR(c[0], std::atan2(0.35, 0.70), 1e-12);
+  EXPECT_NEAR(c[1], M_PI - std::atan2(0.35, 0.55), 1e-12);
+  EXPECT_NEAR(c[2], -M_PI + std::atan2(0.35, 0.55), 1e-12);
+  EXPECT_NEAR(c[3], -std::atan2(0.35, 0.70), 1e-12);
+  EXPECT_EQ(CriticalZone::section(0.0, c), rbd_lidar::FRONT);
+  EXPECT_EQ(CriticalZone::section(M_PI / 2, c), rbd_lidar::LEFT);
+  EXPECT_EQ(CriticalZone::section(M_PI, c), rbd_lidar::BACK);
+  EXPECT_EQ(CriticalZone::section(-M_PI, c), rbd_lidar::BACK);
+  EXPECT_EQ(CriticalZone::section(-M_PI / 2, c), rbd_lidar::RIGHT);
+  EXPECT_EQ(CriticalZone::section(c[0] + 0.01, c), rbd_lidar::LEFT);
+  EXPECT_EQ(CriticalZone::section(c[0] - 0.01, c), rbd_lidar::FRONT);
+}
+
+// Every side, asymmetric zone, OS1-32 geometry with beam offsets: points 5 mm inside the limit
+// are critical, 5 mm outside are not (boundary exact to well under 1 cm).
+TEST(CriticalZone, BoundaryExactPerSideAsymmetric) {
+  const BeamModel m = os1(2048);
+  ZoneParams z;
+  z.front = 0.70;
+  z.back = 0.55;
+  z.left = 0.35;
+  z.right = 0.50;
+  z.point_threshold = 1;
+  const SensorPose pose = level(0.38);
+  CriticalZone zone;
+  std::string err;
+  ASSERT_TRUE(zone.configure(m, z, pose, &err)) << err;
+  const auto corners = CriticalZone::cornerAzimuths(z);
+  const double lim[4] = {z.front, z.left, z.back, z.right};
+  const int axis[4] = {0, 1, 0, 1};
+  const double sign[4] = {1, 1, -1, -1};
+  for (int side = 0; side < 4; ++side) {
+    for (double delta : {-0.005, 0.005}) {
+      std::vector<uint32_t> img(32 * 2048, 0);
+      uint32_t expected = 0;
+      for (size_t u = 10; u < 22; ++u) {  // beams within about +-9 deg: inside the height band
+        for (size_t c = 0; c < 2048; ++c) {
+          const double az = pixelAzimuth(m, pose, u, c);
+          if (CriticalZone::section(az, corners) != side) continue;
+          // Stay 1.5 deg away from the corners so that the point is unambiguous.
+          bool near_corner = false;
+          for (double k : corners) near_corner |= std::fabs(std::remainder(az - k, 2 * M_PI)) < 1.5 * kDeg;
+          if (near_corner) continue;
+          const uint32_t r = rangeTo(m, pose, u, c, axis[side], sign[side] * (lim[side] + delta));
+          if (r == 0 || r < 300) continue;
+          img[u * 2048 + c] = r;
+          ++expected;
+        }
+      }
+      ASSERT_GT(expected, 100u);
+      const ZoneResult res = run(zone, img);
+      if (delta < 0) {
+        EXPECT_EQ(res.counts[side], expected) << "side " << side;
+        EXPECT_EQ(res.total(), expected) << "side " << side;
+        EXPECT_NEAR(res.min_distance[side], lim[side] - 0.005, 0.0012) << "side " << side;
+        EXPECT_EQ(res.critical.size(), expected);
+        for (uint8_t s : res.critical_side) EXPECT_EQ(s, side);
+      } else {
+        EXPECT_EQ(res.total(), 0u) << "side " << side;
+        EXPECT_TRUE(res.critical.empty());
+      }
+    }
+  }
+}
+
+// A hand-built 4 x 8 image with horizontal beams: one return per column, checked one by one.
+TEST(CriticalZone, TinyHandBuiltImage) {
+  const BeamModel m = simple({0.0, 0.0, 0.0, 0.0}, 8);  // column c looks at azimuth -c * 45 deg
+  ZoneParams z;
+  z.point_threshold = 1;
+  CriticalZone zone;
+  ASSERT_TRUE(zone.configure(m, z, level(0.5), nullptr));
+  // Row 0: front 690 (in), right-front diagonal 0 (none), right 349 (in), back-right 0, back 560 (out),
+  // left-back 0, left 351 (out), front-left 0. Row 1: blind zone 299 at front, 300 at the right.
+  std::vector<uint32_t> img = {690, 0, 349, 0, 560, 0, 351, 0,  //
+                               299, 0, 300, 0, 0,   0, 0,   0,  //
+                               0,   0, 0,   0, 0,   0, 0,   0,  //
+                               0,   0, 0,   0, 0,   0, 0,   700};
+  const ZoneResult res = run(zone, img);
+  EXPECT_EQ(res.counts[rbd_lidar::FRONT], 1u);
+  EXPECT_EQ(res.counts[rbd_lidar::RIGHT], 2u);
+  EXPECT_EQ(res.counts[rbd_lidar::BACK], 0u);
+  EXPECT_EQ(res.counts[rbd_lidar::LEFT], 0u);
+  // 700 mm at -315 deg = +45 deg: x = y = 0.495 > left 0.35 -> out.
+  ASSERT_EQ(res.critical.size(), 3u);
+  EXPECT_EQ(res.critical[0], 0u);
+  EXPECT_EQ(res.critical[1], 2u);
+  EXPECT_EQ(res.critical[2], 10u);
+  EXPECT_EQ(res.valid_returns, 7u);
+  EXPECT_NEAR(res.min_distance[rbd_lidar::FRONT], 0.690, 1e-6);
+  EXPECT_NEAR(res.min_distance[rbd_lidar::BACK], 0.560, 1e-6);  // in the slowdown band
+  EXPECT_NEAR(res.min_distance[rbd_lidar::LEFT], 0.351, 1e-6);
+}
+
+// Synthetic analogue of thesis Fig. 23: a vertical plane at 45 deg crossing the front limit,
+// ranges with +-30 mm noise (OS1 Lambertian accuracy). In ground-truth terms (the noise-free
+// surface point of each pixel), the farthest critical and the nearest non-critical return lie
+// within 700 +- 80 mm (thesis tolerance); on the measured points the limit is exact.
+TEST(CriticalZone, NoisyAngledTargetBoundary) {
+  const BeamModel m = os1(2048);
+  const SensorPose pose = level(0.38);
+  ZoneParams z;
+  z.point_threshold = 1;
+  CriticalZone zone;
+  ASSERT_TRUE(zone.configure(m, z, pose, nullptr));
+  std::vector<uint32_t> img(32 * 2048, 0);
+  std::vector<double> true_x(img.size(), 0.0), true_y(img.size(), 0.0);
+  uint32_t seed = 12345;
+  auto noise = [&seed]() {  // uniform in [-30, 30] mm, deterministic
+    seed = seed * 1664525u + 1013904223u;
+    return static_cast<int>((seed >> 16) % 61) - 30;
+  };
+  // Plane x - y = 0.55 (45 deg to the x axis), seen for y in [-0.3, 0.3]: x from 0.25 to 0.85 m.
+  const Eigen::Vector3d normal = Eigen::Vector3d(1, -1, 0).normalized();
+  for (size_t u = 8; u < 24; ++u) {
+    for (size_t c = 0; c < 2048; ++c) {
+      Eigen::Vector3d d, o;
+      m.ray(u, c, &d, &o);
+      const double denom = normal.dot(d);
+      if (denom < 1e-3) continue;
+      const double t = (0.55 / std::sqrt(2.0) - normal.dot(o)) / denom;
+      const Eigen::Vector3d p = t * d + o;
+      if (t <= 0.3 || std::fabs(p.y()) > 0.3) continue;
+      const size_t i = u * 2048 + c;
+      img[i] = static_cast<uint32_t>(std::lround(t * 1000.0) + noise());
+      true_x[i] = p.x();
+      true_y[i] = p.y();
+    }
+  }
+  const ZoneResult res = run(zone, img);
+  ASSERT_GT(res.total(), 50u);
+  std::vector<bool> critical(img.size(), false);
+  for (uint32_t idx : res.critical) critical[idx] = true;
+  double far_critical = 0.0, near_clear = 10.0, far_measured = 0.0;
+  for (size_t i = 0; i < img.size(); ++i) {
+    if (img[i] == 0 || std::fabs(true_y[i]) > 0.30) continue;
+    if (critical[i]) {
+      far_critical = std::max(far_critical, true_x[i]);
+      far_measured = std::max(far_measured, zone.levelPoint(static_cast<uint32_t>(i), img[i]).x());
+    } else {
+      near_clear = std::min(near_clear, true_x[i]);
+    }
+  }
+  EXPECT_LT(far_measured, 0.70);
+  EXPECT_GT(far_critical, 0.62);
+  EXPECT_LT(far_critical, 0.78);
+  EXPECT_GT(near_clear, 0.62);
+  EXPECT_LT(near_clear, 0.78);
+  EXPECT_LT(near_clear, far_critical + 0.001);  // noise blurs the boundary (as in Fig. 23b)
+}
+
+TEST(CriticalZone, ZeroRangesAndEmptyImageIgnored) {
+  const BeamModel m = os1(512);
+  CriticalZone zone;
+  ASSERT_TRUE(zone.configure(m, ZoneParams(), level(0.38), nullptr));
+  std::vector<uint32_t> img(32 * 512, 0);
+  ZoneResult res = run(zone, img);
+  EXPECT_EQ(res.total(), 0u);
+  EXPECT_EQ(res.valid_returns, 0u);
+  EXPECT_TRUE(std::isinf(res.min_distance[0]));
+  EXPECT_FLOAT_EQ(res.speed_scale, 1.0f);
+  // Everything in the blind zone: nothing counts either.
+  std::fill(img.begin(), img.end(), 250u);
+  res = run(zone, img);
+  EXPECT_EQ(res.total(), 0u);
+  EXPECT_EQ(res.valid_returns, 32u * 512u);
+  // Huge ranges (beyond uint16) never wrap into the zone.
+  std::fill(img.begin(), img.end(), 70000u + 500u);
+  res = run(zone, img);
+  EXPECT_EQ(res.total(), 0u);
+}
+
+TEST(CriticalZone, RejectsInvalidConfiguration) {
+  CriticalZone zone;
+  std::string err;
+  BeamModel m = os1(512);
+  m.altitude[3] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(zone.configure(m, ZoneParams(), level(0.38), &err));
+  EXPECT_NE(err.find("beam"), std::string::npos);
+  ZoneParams z;
+  z.front = -1.0;
+  EXPECT_FALSE(zone.configure(os1(512), z, level(0.38), &err));
+  z.front = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(zone.configure(os1(512), z, level(0.38), &err));
+  BeamModel none;
+  EXPECT_FALSE(zone.configure(none, ZoneParams(), level(0.38), &err));
+}
+
+// Floor returns in every body pose the tricks command must never trigger; with a wrong (level)
+// attitude assumed, the same floor does trigger (so the test can fail).
+TEST(CriticalZone, FloorNeverTriggersInTiltedPoses) {
+  const BeamModel m = os1(1024);
+  const Eigen::Matrix3d mount = Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d mount_t(0.0, 0.0, 0.10);
+  struct Pose {
+    double roll, pitch, base_height;
+  };
+  // Standing, attentive sitting (+-15 deg pitch), wiggle (+-0.3 rad roll), lying down.
+  const Pose poses[] = {{0, 0, 0.28},    {0, 15 * kDeg, 0.25}, {0, -15 * kDeg, 0.25}, {0.3, 0, 0.28},
+                        {-0.3, 0, 0.28}, {0, 0, 0.15},         {0.2, 15 * kDeg, 0.25}};
+  bool wrong_triggers = false;
+  for (const Pose& ps : poses) {
+    const SensorPose pose = SensorPose::fromBody(ps.roll, ps.pitch, mount, mount_t, ps.base_height);
+    std::vector<uint32_t> img(32 * 1024, 0);
+    for (size_t u = 0; u < 32; ++u) {
+      for (size_t c = 0; c < 1024; ++c) {
+        // Floor with +-15 mm range noise (deterministic pattern).
+        uint32_t r = rangeTo(m, pose, u, c, 2, 0.0);
+        if (r > 0) r += static_cast<uint32_t>(((u * 7 + c * 13) % 31)) - 15u;
+        img[u * 1024 + c] = r;
+      }
+    }
+    CriticalZone zone;
+    ASSERT_TRUE(zone.configure(m, ZoneParams(), pose, nullptr));
+    const ZoneResult res = run(zone, img);
+    EXPECT_EQ(res.total(), 0u) << "roll " << ps.roll << " pitch " << ps.pitch << " h " << ps.base_height;
+    EXPECT_FLOAT_EQ(res.speed_scale, 1.0f);
+
+    CriticalZone naive;  // attitude ignored, standing height assumed
+    ASSERT_TRUE(naive.configure(m, ZoneParams(), level(0.38), nullptr));
+    wrong_triggers |= run(naive, img).total() >= ZoneParams().point_threshold;
+
+    // A person-like vertical plane 0.5 m in front of the LiDAR is still seen in that pose.
+    for (size_t u = 0; u < 32; ++u) {
+      for (size_t c = 0; c < 1024; ++c) {
+        const double az = pixelAzimuth(m, pose, u, c);
+        if (std::fabs(az) > 20 * kDeg) continue;
+        const uint32_t r = rangeTo(m, pose, u, c, 0, 0.5);
+        if (r > 0 && (img[u * 1024 + c] == 0 || r < img[u * 1024 + c])) img[u * 1024 + c] = r;
+      }
+    }
+    const ZoneResult with_person = run(zone, img);
+    EXPECT_GE(with_person.counts[rbd_lidar::FRONT], 20u) << "pitch " << ps.pitch;
+  }
+  EXPECT_TRUE(wrong_triggers);
+}
+
+TEST(SensorPose, LevelFromGravity) {
+  // A sensor pitched nose up by 15 deg (ROS pitch -15 deg) and rolled 5 deg measures gravity's
+  // reaction (+g up) rotated into its frame; the recovered rotation matches the body rotation.
+  const Eigen::Matrix3d truth = (Eigen::AngleAxisd(-15 * kDeg, Eigen::Vector3d::UnitY()) *
+                                 Eigen::AngleAxisd(5 * kDeg, Eigen::Vector3d::UnitX()))
+                                    .toRotationMatrix();
+  const Eigen::Vector3d accel = truth.transpose() * Eigen::Vector3d(0, 0, 9.81);
+  Eigen::Matrix3d r;
+  ASSERT_TRUE(SensorPose::levelFromGravity(accel, 0.0, &r));
+  // Same vertical, same heading of the sensor x axis.
+  EXPECT_LT((r.row(2) - truth.row(2)).norm(), 1e-9);
+  const Eigen::Vector3d x = r * Eigen::Vector3d::UnitX();
+  EXPECT_NEAR(std::atan2(x.y(), x.x()), 0.0, 1e-9);
+  // Level: identity; mount yawed by 90 deg: heading follows.
+  ASSERT_TRUE(SensorPose::levelFromGravity(Eigen::Vector3d(0, 0, 9.81), 0.0, &r));
+  EXPECT_LT((r - Eigen::Matrix3d::Identity()).norm(), 1e-9);
+  ASSERT_TRUE(SensorPose::levelFromGravity(Eigen::Vector3d(0, 0, 9.81), M_PI / 2, &r));
+  EXPECT_NEAR((r * Eigen::Vector3d::UnitX()).y(), 1.0, 1e-9);
+  EXPECT_FALSE(SensorPose::levelFromGravity(Eigen::Vector3d(NAN, 0, 9.8), 0.0, &r));
+  EXPECT_FALSE(SensorPose::levelFromGravity(Eigen::Vector3d(0, 0, 0.1), 0.0, &r));
+}
+
+TEST(CriticalZone, SmallAttitudeChangeKeepsTableAndStaysExact) {
+  const BeamModel m = simple({0.0}, 360);
+  ZoneParams z;
+  z.point_threshold = 1;
+  CriticalZone zone;
+  ASSERT_TRUE(zone.configure(m, z, level(0.5), nullptr));
+  EXPECT_EQ(zone.tableBuilds(), 1u);
+  SensorPose yawed = level(0.5);
+  yawed.level_from_sensor = Eigen::AngleAxisd(0.1 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  ASSERT_TRUE(zone.configure(m, z, yawed, nullptr));
+  EXPECT_EQ(zone.tableBuilds(), 1u);
+  // Column 0 (azimuth 0, +0.1 deg yaw): x = r cos(0.1 deg).
+  std::vector<uint32_t> img(360, 0);
+  img[0] = static_cast<uint32_t>(std::floor(0.699 / std::cos(0.1 * kDeg) * 1000.0));
+  EXPECT_EQ(run(zone, img).total(), 1u);
+  img[0] = static_cast<uint32_t>(std::ceil(0.701 / std::cos(0.1 * kDeg) * 1000.0));
+  EXPECT_EQ(run(zone, img).total(), 0u);
+  yawed.level_from_sensor = Eigen::AngleAxisd(2 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  ASSERT_TRUE(zone.configure(m, z, yawed, nullptr));
+  EXPECT_EQ(zone.tableBuilds(), 2u);
+  z.front = 1.5;  // the zone outgrows the table
+  ASSERT_TRUE(zone.configure(m, z, yawed, nullptr));
+  EXPECT_EQ(zone.tableBuilds(), 3u);
+  img[0] = 1400;
+  EXPECT_EQ(run(zone, img).total(), 1u);
+}
+
+TEST(CriticalZone, VelocityAwareGrowth) {
+  ZoneParams base;
+  rbd_lidar::MotionParams motion;  // 0.7 s
+  ZoneParams g = rbd_lidar::grownZone(base, 0.3, 0.0, 0.0, motion);
+  EXPECT_NEAR(g.front, 0.70 + 0.21, 1e-9);
+  EXPECT_NEAR(g.back, 0.55, 1e-9);
+  g = rbd_lidar::grownZone(base, -0.2, 0.12, 0.0, motion);
+  EXPECT_NEAR(g.front, 0.70, 1e-9);
+  EXPECT_NEAR(g.back, 0.55 + 0.14, 1e-9);
+  EXPECT_NEAR(g.left, 0.35 + 0.084, 1e-9);
+  EXPECT_NEAR(g.right, 0.35, 1e-9);
+  g = rbd_lidar::grownZone(base, 0.0, 0.0, 0.628, motion);  // 36 deg/s
+  EXPECT_NEAR(g.right, 0.35 + 0.628 * 0.3 * 0.7, 1e-9);
+  g = rbd_lidar::grownZone(base, 5.0, 0.0, 0.0, motion);
+  EXPECT_NEAR(g.front, 0.70 + 0.5, 1e-9);  // capped
+  g = rbd_lidar::grownZone(base, NAN, 0.0, 0.0, motion);
+  EXPECT_NEAR(g.front, 0.70, 1e-9);
+
+  // A return 0.85 m ahead is clear at rest and critical when walking forward at 0.3 m/s.
+  const BeamModel m = simple({0.0}, 360);
+  ZoneParams z;
+  z.point_threshold = 1;
+  std::vector<uint32_t> img(360, 0);
+  img[0] = 850;
+  CriticalZone zone;
+  ASSERT_TRUE(zone.configure(m, z, level(0.5), nullptr));
+  EXPECT_EQ(run(zone, img).total(), 0u);
+  ASSERT_TRUE(zone.configure(m, rbd_lidar::grownZone(z, 0.3, 0, 0, motion), level(0.5), nullptr));
+  EXPECT_EQ(run(zone, img).total(), 1u);
+  // Walking backwards does not grow the front.
+  ASSERT_TRUE(zone.configure(m, rbd_lidar::grownZone(z, -0.3, 0, 0, motion), level(0.5), nullptr));
+  EXPECT_EQ(run(zone, img).total(), 0u);
+}
+
+TEST(CriticalZone, SlowdownScale) {
+  const BeamModel m = simple({0.0}, 360);
+  ZoneParams z;  // front 0.70 + slowdown 0.50
+  z.point_threshold = 3;
+  CriticalZone zone;
+  ASSERT_TRUE(zone.configure(m, z, level(0.5), nullptr));
+  std::vector<uint32_t> img(360, 0);
+  // Columns 0, 1, 359 look ahead (within 1 deg): x ~= r.
+  img[0] = img[1] = img[359] = 950;  // lambda = (0.95 - 0.70) / 0.50 = 0.5
+  ZoneResult res = run(zone, img);
+  EXPECT_EQ(res.total(), 0u);
+  EXPECT_NEAR(res.speed_scale, 0.5, 0.002);
+  EXPECT_NEAR(res.min_distance[rbd_lidar::FRONT], 0.95, 0.001);
+  img[1] = 800;  // the 3rd smallest is still 0.5
+  EXPECT_NEAR(run(zone, img).speed_scale, 0.5, 0.002);
+  img[0] = img[359] = 820;
+  EXPECT_NEAR(run(zone, img).speed_scale, 0.24, 0.002);
+  // Fewer than point_threshold returns in the band: no slowdown (single noisy returns).
+  img[0] = img[359] = 0;
+  EXPECT_FLOAT_EQ(run(zone, img).speed_scale, 1.0f);
+  // Beyond the band: 1; inside the stop zone: 0.
+  img[0] = img[1] = img[359] = 1300;
+  EXPECT_FLOAT_EQ(run(zone, img).speed_scale, 1.0f);
+  img[0] = img[1] = img[359] = 600;
+  res = run(zone, img);
+  EXPECT_FLOAT_EQ(res.speed_scale, 0.0f);
+  EXPECT_EQ(res.total(), 3u);
+}
+
+TEST(CollisionLatch, Hysteresis) {
+  CollisionLatch latch(3);
+  EXPECT_TRUE(latch.collision());  // nothing seen yet
+  EXPECT_TRUE(latch.update(false));
+  EXPECT_TRUE(latch.update(false));
+  EXPECT_FALSE(latch.update(false));
+  EXPECT_TRUE(latch.update(true));  // immediately
+  EXPECT_TRUE(latch.update(false));
+  EXPECT_TRUE(latch.update(false));
+  EXPECT_TRUE(latch.update(true));  // the clear run starts again
+  EXPECT_TRUE(latch.update(false));
+  EXPECT_TRUE(latch.update(false));
+  EXPECT_FALSE(latch.update(false));
+  latch.fail();
+  EXPECT_TRUE(latch.collision());
+  EXPECT_TRUE(latch.update(false));
+  EXPECT_TRUE(latch.update(false));
+  EXPECT_FALSE(latch.update(false));
+  CollisionLatch immediate(1);
+  EXPECT_FALSE(immediate.update(false));
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
