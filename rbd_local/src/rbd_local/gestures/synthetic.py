@@ -54,12 +54,14 @@ def _smooth_noise(rng: np.random.Generator, n: int, width: float) -> np.ndarray:
     return sm / span if span > 1e-9 else sm
 
 
-def _trajectory(kind: str, rng: np.random.Generator, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _trajectory(
+    kind: str, rng: np.random.Generator, t: np.ndarray, curl0: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Hand-centre path (hand units), scale factor per frame and curl per frame."""
     n = len(t)
     path = np.zeros((n, 2))
     scale = np.ones(n)
-    curl = np.tile(_random_curl(rng), (n, 1))
+    curl = np.tile(curl0, (n, 1))
     tau = _activity(rng, t)
     if kind == "swipe_right" or kind in ("swipe_left", "swipe_up", "diagonal", "push_down"):
         amp = rng.uniform(2.0, 5.0) if kind != "push_down" else rng.uniform(1.5, 4.0)
@@ -123,13 +125,30 @@ def _random_curl(rng: np.random.Generator) -> np.ndarray:
     return rng.uniform(0.0, 1.0, 5)  # relaxed, anything
 
 
-def generate(kind: str, rng: np.random.Generator, samples: int = DEFAULT_SAMPLES) -> np.ndarray:
+def random_hand(rng: np.random.Generator) -> dict:
+    """Draw a hand: size [px], orientation [rad], handedness, finger curl, depth profile, jitter."""
+    return {
+        "size": rng.uniform(0.06, 0.2) * IMAGE_SIZE[1],  # wrist to middle-finger base [px]
+        "angle": rng.uniform(-1.9, 1.9),
+        "mirror": -1.0 if rng.random() < 0.5 else 1.0,
+        "curl": _random_curl(rng),
+        "depth": rng.normal(0.0, 0.1, NUM_LANDMARKS),
+        "jitter": rng.uniform(0.01, 0.05),
+    }
+
+
+def generate(
+    kind: str, rng: np.random.Generator, samples: int = DEFAULT_SAMPLES, hand: dict = None, start: np.ndarray = None
+) -> np.ndarray:
     """Generate one window of key points.
 
     Args:
         kind: a gesture name from :data:`GESTURES` or a none-class kind from :data:`NONE_KINDS`.
         rng: random generator (seed it for reproducible data).
         samples: frames per window.
+        hand: the hand to move (:func:`random_hand`); default a new random one.
+        start: (2,) starting position of the hand [px]; default a random one that keeps the
+            whole motion inside the image.
 
     Returns:
         (samples, 21, 3) float array in pixels of a 640 x 480 image.
@@ -139,30 +158,48 @@ def generate(kind: str, rng: np.random.Generator, samples: int = DEFAULT_SAMPLES
     """
     if samples < 4:
         raise ValueError("a window needs at least 4 samples, got %d" % samples)
+    hand = random_hand(rng) if hand is None else hand
     t = np.linspace(0.0, 1.0, samples)
-    path, scale, curl = _trajectory(kind, rng, t)
+    path, scale, curl = _trajectory(kind, rng, t, hand["curl"])
     width, height = IMAGE_SIZE
-    size = rng.uniform(0.06, 0.2) * height  # wrist to middle-finger base [px]
-    angle = rng.uniform(-1.9, 1.9)
+    size, angle, mirror, depth, jitter = hand["size"], hand["angle"], hand["mirror"], hand["depth"], hand["jitter"]
     wobble = rng.uniform(0.0, 0.25) * _smooth_noise(rng, samples, 6)[:, 0]
-    mirror = -1.0 if rng.random() < 0.5 else 1.0
-    # Keep the whole motion inside the image.
-    span = (path.max(axis=0) - path.min(axis=0)) * size
-    lo = np.array([2.5 * size, 2.5 * size]) - path.min(axis=0) * size
-    hi = np.array([width, height]) - 2.5 * size - path.max(axis=0) * size
-    start = np.where(hi > lo, rng.uniform(np.minimum(lo, hi), np.maximum(lo, hi)), (np.array([width, height]) - span) / 2)
-    depth = rng.normal(0.0, 0.1, NUM_LANDMARKS)
-    jitter = rng.uniform(0.01, 0.05)
+    if start is None:
+        # Keep the whole motion inside the image.
+        span = (path.max(axis=0) - path.min(axis=0)) * size
+        lo = np.array([2.5 * size, 2.5 * size]) - path.min(axis=0) * size
+        hi = np.array([width, height]) - 2.5 * size - path.max(axis=0) * size
+        start = np.where(hi > lo, rng.uniform(np.minimum(lo, hi), np.maximum(lo, hi)),
+                         (np.array([width, height]) - span) / 2)
     shapes = hand_shape(curl) * np.array([mirror, 1.0])  # (samples, 21, 2)
     c, s = np.cos(angle + wobble), np.sin(angle + wobble)
     rot = np.stack([np.stack([c, -s], axis=1), np.stack([s, c], axis=1)], axis=1)  # (samples, 2, 2)
     pts = np.einsum("nij,nkj->nki", rot, shapes) * (size * scale)[:, None, None]
-    pts += start + path[:, None, :] * size
+    pts += np.asarray(start) + path[:, None, :] * size
     pts += rng.normal(0.0, jitter * size, pts.shape)
     out = np.empty((samples, NUM_LANDMARKS, 3))
     out[:, :, :2] = pts
     out[:, :, 2] = depth * size * scale[:, None] + rng.normal(0.0, jitter * size, (samples, NUM_LANDMARKS))
     return out
+
+
+def stream(kinds: list, seed: int, fps: float = 30.0, window_s: float = 1.2) -> list:
+    """One continuous hand performing ``kinds`` one after another (each ``window_s`` long).
+
+    Returns:
+        List of (time [s], (21, 3) key points) at ``fps``.
+    """
+    rng = np.random.default_rng(seed)
+    hand = random_hand(rng)
+    hand["size"] = IMAGE_SIZE[1] * 0.1
+    n = int(round(window_s * fps))
+    pos = np.array(IMAGE_SIZE, dtype=np.float64) / 2 - np.array([0.15 * IMAGE_SIZE[0], 0.0])
+    frames = []
+    for kind in kinds:
+        w = generate(kind, rng, n, hand=hand, start=pos)
+        pos = w[-1, :, :2].mean(axis=0) - (w[0, :, :2].mean(axis=0) - pos)
+        frames.extend(w)
+    return [(i / fps, f) for i, f in enumerate(frames)]
 
 
 def label_of(kind: str) -> str:
