@@ -27,7 +27,7 @@ class FakeBridge:
         self._loop = None
         self._server = None
         self._thread = None
-        self._lock = threading.Lock()
+        self._lock = threading.RLock()
 
     # -- control from the test thread
     def start(self):
