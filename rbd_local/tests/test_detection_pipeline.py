@@ -104,7 +104,7 @@ def test_rbd_gesture_cli_on_a_video_file_and_an_image_sequence(tmp_path, photos)
     for source in (["--video", clip], ["--images", str(img_dir)]):
         proc = subprocess.run(
             [sys.executable, "-m", "rbd_local.gesture_app", "--headless", "--no-link"] + source,
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True, timeout=120, env=env,
+            capture_output=True, universal_newlines=True, timeout=120, env=env,
         )
         assert proc.returncode == 0, proc.stderr[-2000:]
         lines = [json.loads(x) for x in proc.stdout.splitlines() if x.startswith("{")]
@@ -116,6 +116,6 @@ def test_rbd_gesture_cli_reports_a_missing_video_clearly(tmp_path):
     env = dict(os.environ, PYTHONPATH=os.path.join(PKG_ROOT, "src"))
     proc = subprocess.run(
         [sys.executable, "-m", "rbd_local.gesture_app", "--headless", "--no-link", "--video", str(tmp_path / "x.avi")],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True, timeout=60, env=env,
+        capture_output=True, universal_newlines=True, timeout=60, env=env,
     )
     assert proc.returncode == 2 and "does not exist" in proc.stderr

@@ -97,7 +97,7 @@ def test_state_colour_follows_published_status(app, status, colour):
     assert pump(app["root"], lambda: app["gui"].state_colour() == colour)
     assert app["gui"].state_label.cget("text") == status.upper()
     rendered = screen_pixel(app["gui"].state_label)
-    assert all(abs(a - b) <= 12 for a, b in zip(rendered, hex_rgb(colour))), (rendered, colour)
+    assert all(abs(a - b) <= 12 for a, b in zip(rendered, hex_rgb(colour), strict=False)), (rendered, colour)
 
 
 def test_unknown_status_is_grey_not_a_crash(app):

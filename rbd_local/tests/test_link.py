@@ -48,7 +48,8 @@ def test_gesture_heartbeat_and_subscriptions(fake_bridge):
         assert 1.2 < time.monotonic() - t0 + 0.5 < 6.0
         seqs = [b["seq"] for b in beats]
         assert seqs == sorted(seqs) and beats[0]["frame_id"] == "rbd_local"
-        assert fake_bridge.wait_for(lambda: {STATUS_TOPIC, STATE_TOPIC, PATH_QUEUE_TOPIC} <= set(fake_bridge.subscribed))
+        wanted = {STATUS_TOPIC, STATE_TOPIC, PATH_QUEUE_TOPIC}
+        assert fake_bridge.wait_for(lambda: wanted <= set(fake_bridge.subscribed))
         assert fake_bridge.subscribed[PATH_QUEUE_TOPIC] == "rbd_msgs/PathQueue"
         fake_bridge.push(STATUS_TOPIC, {"data": "running"})
         fake_bridge.push(STATE_TOPIC, {"data": "EXECUTING"})
