@@ -87,7 +87,7 @@ def test_record_then_train_on_recordings(tmp_path, hand_photos):
         recs.append(out)
     model_path = str(tmp_path / "m.npz")
     proc = subprocess.run([sys.executable, "-m", "rbd_local.train", "--synthetic", "--per-class", "60",
-                           "--per-none-kind", "30", "--data"] + recs + ["--out", model_path],
+                           "--per-none-kind", "30", "--eval-per-class", "30", "--data"] + recs + ["--out", model_path],
                           env=ENV, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "false triggers on random motion" in proc.stdout and "true \\ decided" in proc.stdout

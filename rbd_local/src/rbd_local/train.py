@@ -86,6 +86,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--threshold", type=float, default=DEFAULT_THRESHOLD,
                    help="confidence threshold stored in the model")
     p.add_argument("--C", type=float, default=1.0, dest="c_reg", help="inverse regularisation strength")
+    p.add_argument("--eval-per-class", type=int, default=300,
+                   help="held-out synthetic windows per gesture (random motion: 4 x this over 3 kinds)")
     p.add_argument("--out", required=True, help="output model .npz")
     return p
 
@@ -147,7 +149,9 @@ def main(argv: list[str] = None) -> int:
     print("trained on %d windows (%s) in %.1f s" % (len(y), ", ".join(parts), time.monotonic() - t0))
     model.save(args.out)
     print("saved %s" % args.out)
-    report = evaluate(model, seed=args.seed + 1000)
+    n_eval = max(1, args.eval_per_class)
+    report = evaluate(model, seed=args.seed + 1000, per_gesture=n_eval, per_random=max(1, 4 * n_eval // 3),
+                      per_unknown=max(1, n_eval // 3))
     print("\nheld-out SYNTHETIC windows (seed %d), threshold %.2f:" % (args.seed + 1000, model.threshold))
     print(format_confusion(report["confusion"], report["labels"]))
     print("accuracy on the four gestures: %.1f %% (argmax without threshold: %.1f %%)"
