@@ -187,3 +187,23 @@ def test_disconnected_is_obvious_and_estop_says_it_could_not(app):
     gui.estop_button.invoke()
     assert pump(root, lambda: gui.message_label.cget("text") == "E-STOP ENGAGED", 10)
     assert app["bridge"].service_calls == [(EM_STOP_SERVICE, {"data": True})]
+
+
+def test_rbd_gui_entry_point_connects_and_saves_a_screenshot(display, tmp_path):
+    import sys
+
+    from fake_bridge import FakeBridge
+
+    bridge = FakeBridge().start()
+    try:
+        shot = tmp_path / "shot.png"
+        env = dict(os.environ, DISPLAY=display,
+                   PYTHONPATH=os.path.join(os.path.dirname(DOCS), "src"))
+        proc = subprocess.run([sys.executable, "-m", "rbd_local.gui_app", "--port", str(bridge.port),
+                               "--screenshot", str(shot)], env=env, capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        assert shot.stat().st_size > 1000
+        assert bridge.wait_for(lambda: STATUS_TOPIC in bridge.subscribed)
+        assert bridge.published_on("/rbd_local/heartbeat"), "the GUI app sends the operator heartbeat"
+    finally:
+        bridge.stop()

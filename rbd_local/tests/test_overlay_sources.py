@@ -1,0 +1,40 @@
+import numpy as np
+import pytest
+
+from rbd_local.gestures import synthetic
+from rbd_local.gestures.overlay import POINT_BGR, draw_overlay
+from rbd_local.gestures.sources import FrameSource
+
+
+def test_overlay_draws_key_points_and_leaves_the_input_alone():
+    frame = np.zeros((480, 640, 3), np.uint8)
+    kp = synthetic.generate("static", np.random.default_rng(0))[0]
+    out = draw_overlay(frame, kp, "wave", 0.9, sent="wiggle")
+    assert not frame.any()
+    for x, y in np.round(kp[:, :2]).astype(int):
+        if 0 <= x < 640 and 0 <= y < 480:
+            assert tuple(out[y, x]) == POINT_BGR
+    assert out[:34].any()  # the caption bar with class and confidence
+    assert draw_overlay(frame, None, "", 0.0).shape == frame.shape
+
+
+def test_frame_source_arguments_and_missing_inputs(tmp_path):
+    with pytest.raises(ValueError):
+        FrameSource()
+    with pytest.raises(ValueError):
+        FrameSource(video="a.avi", images="b")
+    with pytest.raises(OSError):
+        FrameSource(images=str(tmp_path))
+    with pytest.raises(OSError):
+        FrameSource(video=str(tmp_path / "missing.avi"))
+
+
+def test_image_sequence_is_timed_by_fps(tmp_path):
+    import cv2
+
+    for i in range(3):
+        cv2.imwrite(str(tmp_path / ("%02d.png" % i)), np.full((48, 64, 3), i, np.uint8))
+    (tmp_path / "notes.txt").write_text("not an image")
+    src = FrameSource(images=str(tmp_path), fps=10.0)
+    got = [(t, int(f[0, 0, 0])) for t, f in src]
+    assert got == [(0.0, 0), (0.1, 1), (0.2, 2)]
