@@ -38,3 +38,18 @@ def test_image_sequence_is_timed_by_fps(tmp_path):
     src = FrameSource(images=str(tmp_path), fps=10.0)
     got = [(t, int(f[0, 0, 0])) for t, f in src]
     assert got == [(0.0, 0), (0.1, 1), (0.2, 2)]
+
+
+def test_pipeline_survives_broken_frames(shipped_model):
+    from rbd_local.gestures.config import load_config
+    from rbd_local.gestures.pipeline import GesturePipeline
+
+    sent = []
+    pipe = GesturePipeline(shipped_model, load_config()["gestures"], send=sent.append)
+    try:
+        for i, bad in enumerate([np.zeros((4, 4), np.uint8), np.zeros((480, 640, 3), np.float64), np.zeros((0, 0, 3))]):
+            r = pipe.process(i / 30.0, bad)
+            assert r.keypoints is None and not r.decision.fired
+        assert sent == []
+    finally:
+        pipe.close()

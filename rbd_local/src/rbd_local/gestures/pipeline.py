@@ -1,5 +1,6 @@
 """Frame -> key points -> window -> gesture -> command, with the overlay, for one video stream."""
 
+import logging
 import time
 from typing import Callable
 
@@ -10,6 +11,8 @@ from rbd_local.gestures.detector import HandDetector
 from rbd_local.gestures.model import GestureModel
 from rbd_local.gestures.overlay import draw_overlay
 from rbd_local.gestures.recognizer import Decision, GestureRecognizer
+
+LOG = logging.getLogger("rbd_local.gestures")
 
 
 class FrameResult:
@@ -80,7 +83,11 @@ class GesturePipeline:
             What was seen and decided.
         """
         t0 = time.perf_counter()
-        found = self.detector.detect(frame)
+        try:
+            found = self.detector.detect(frame)
+        except ValueError as exc:  # a broken frame counts as "no hand", never a crash
+            LOG.warning("frame skipped: %s", exc)
+            found = None
         t1 = time.perf_counter()
         keypoints = found[0] if found is not None else None
         decision = self.recognizer.update(t, keypoints)
