@@ -25,10 +25,13 @@ def _bridge_available():
     if not shutil.which("roscore") or not shutil.which("rospack"):
         return False
     proc = subprocess.run(["rospack", "find", "rbd_bridge"], capture_output=True, text=True, timeout=30)
-    return proc.returncode == 0
+    pkg = proc.stdout.strip()
+    return proc.returncode == 0 and os.path.isfile(os.path.join(pkg, "launch", "rbd_bridge.launch"))
 
 
-pytestmark = pytest.mark.skipif(not _bridge_available(), reason="rbd_bridge not built in this workspace (make build)")
+pytestmark = pytest.mark.skipif(
+    not _bridge_available(), reason="rbd_bridge (with launch/rbd_bridge.launch) not in this sourced workspace"
+)
 
 
 def _free_port():
