@@ -165,3 +165,13 @@ def test_each_gesture_in_a_continuous_stream_fires_itself(shipped_model, gesture
         fired = [d.label for t, kp in _stream(["static", gesture, "static", "static"], seed)
                  for d in [rec.update(t, kp)] if d.fired]
         assert fired[:1] == [gesture], (seed, fired)
+
+
+def test_cooldown_suppresses_repeats_of_a_continuing_gesture(shipped_model):
+    def fired(cooldown):
+        rec = GestureRecognizer(shipped_model, cooldown_s=cooldown)
+        return [d.label for t, kp in _stream(["static", "wave", "wave", "wave"], 1)
+                for d in [rec.update(t, kp)] if d.fired]
+
+    assert fired(0.0) == ["wave"] * 3  # one per window of waving without a cooldown
+    assert fired(10.0) == ["wave"]
