@@ -144,3 +144,20 @@ def test_bad_arguments():
     link = RobotLink("127.0.0.1", 9090)
     with pytest.raises(ValueError):
         link.send_gesture("")
+
+
+def test_retrying_does_not_pile_up_twisted_log_observers():
+    from fake_bridge import FakeBridge
+    from twisted.python import log
+
+    b = FakeBridge().start()
+    port = b.port
+    b.stop()
+    link = RobotLink("127.0.0.1", port, retry_s=0.05, connect_timeout_s=0.1).start()
+    try:
+        time.sleep(0.5)
+        before = len(log.theLogPublisher.observers)
+        time.sleep(1.5)  # ~10 more failed attempts
+        assert len(log.theLogPublisher.observers) <= before
+    finally:
+        link.stop()

@@ -233,9 +233,18 @@ class RobotLink:
             except Exception:  # a UI callback must never kill the link thread
                 LOG.exception("on_connection callback failed")
 
+    # One roslibpy event-loop manager for every connection of the process: each new manager
+    # would start another Twisted log observer, and a link that retries every second for
+    # hours would pile them up.
+    _shared_manager = None
+
     def _connect(self) -> bool:
         ros = roslibpy.Ros(self.host, self.port)
         ros.factory.stopTrying()  # reconnection is ours: a fresh client per attempt
+        if RobotLink._shared_manager is not None and hasattr(ros.factory, "_manager"):
+            ros.factory._manager = RobotLink._shared_manager
+        else:
+            RobotLink._shared_manager = ros.factory.manager
         try:
             ros.run(timeout=self.connect_timeout_s)
         except Exception as exc:
