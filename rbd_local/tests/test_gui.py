@@ -155,6 +155,7 @@ def test_screenshot_for_the_readme(app):
         "walk: to (0.6, 0)", "walk: turn to face back", "walk: to (-0.6, 0)", "walk: face forward", "walk: to start"]})
     gui.post_gesture("swipe_right", "walk", 0.93)
     assert pump(root, lambda: gui.state_colour() == "#2e7d32" and gui.shown_moves()[4].startswith("5."))
+    assert gui.gesture_label.cget("text") == "last gesture: swipe_right → walk (93 %)"
     pump(root, lambda: False, 0.3)
     # Always saved under .cache/; docs/gui.png (committed, shown in the README) is refreshed
     # when it is missing or RBD_UPDATE_DOCS=1, so a test run leaves the checkout clean.
@@ -189,21 +190,29 @@ def test_disconnected_is_obvious_and_estop_says_it_could_not(app):
     assert app["bridge"].service_calls == [(EM_STOP_SERVICE, {"data": True})]
 
 
-def test_rbd_gui_entry_point_connects_and_saves_a_screenshot(display, tmp_path):
+def test_rbd_gui_entry_point_with_in_process_gesture_recognition(display, tmp_path, hand_photos):
     import sys
 
+    import cv2
     from fake_bridge import FakeBridge
 
+    from rbd_local.gestures.photo_clip import moving_photo_frames, write_clip
+
+    clip = str(tmp_path / "right.avi")
+    frames = moving_photo_frames(cv2.imread(hand_photos["handSrc.jpg"]), "right", distance=0.4, hold_s=1.0)
+    write_clip(frames, clip)
     bridge = FakeBridge().start()
     try:
         shot = tmp_path / "shot.png"
         env = dict(os.environ, DISPLAY=display,
                    PYTHONPATH=os.path.join(os.path.dirname(DOCS), "src"))
-        proc = subprocess.run([sys.executable, "-m", "rbd_local.gui_app", "--port", str(bridge.port),
-                               "--screenshot", str(shot)], env=env, capture_output=True, text=True, timeout=120)
+        proc = subprocess.run([sys.executable, "-m", "rbd_local.gui_app", "--port", str(bridge.port), "--video", clip,
+                               "--screenshot", str(shot), "--screenshot-delay", "8"],
+                              env=env, capture_output=True, text=True, timeout=120)
         assert proc.returncode == 0, proc.stderr[-2000:]
         assert shot.stat().st_size > 1000
         assert bridge.wait_for(lambda: STATUS_TOPIC in bridge.subscribed)
         assert bridge.published_on("/rbd_local/heartbeat"), "the GUI app sends the operator heartbeat"
+        assert bridge.published_on("/rbd_gestrec/gesture") == [{"data": "walk"}]
     finally:
         bridge.stop()

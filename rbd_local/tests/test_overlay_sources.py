@@ -53,3 +53,15 @@ def test_pipeline_survives_broken_frames(shipped_model):
         assert sent == []
     finally:
         pipe.close()
+
+
+def test_realtime_playback_paces_files(tmp_path):
+    import time
+
+    import cv2
+
+    for i in range(4):
+        cv2.imwrite(str(tmp_path / ("%02d.png" % i)), np.zeros((8, 8, 3), np.uint8))
+    t0 = time.monotonic()
+    assert len(list(FrameSource(images=str(tmp_path), fps=10.0, realtime=True))) == 4
+    assert time.monotonic() - t0 >= 0.29  # frames at 0, 0.1, 0.2, 0.3 s

@@ -18,6 +18,7 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--video", help="video file instead of a camera")
     src.add_argument("--images", help="directory or glob of images instead of a camera")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate of an image sequence")
+    p.add_argument("--realtime", action="store_true", help="play a video or image sequence at its frame rate")
     p.add_argument("--config", help="YAML configuration (default: the packaged one)")
     p.add_argument("--model", help="gesture model .npz (overrides the configuration)")
     p.add_argument("--threshold", type=float, help="confidence threshold (overrides model and configuration)")
@@ -48,7 +49,7 @@ def main(argv: list[str] = None) -> int:
 
     try:
         if args.video or args.images:
-            source = FrameSource(video=args.video, images=args.images, fps=args.fps)
+            source = FrameSource(video=args.video, images=args.images, fps=args.fps, realtime=args.realtime)
         else:
             source = FrameSource(camera=args.camera if args.camera is not None else 0)
     except (OSError, ValueError) as exc:

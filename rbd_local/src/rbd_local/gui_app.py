@@ -22,7 +22,8 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--camera", type=int, help="also recognise gestures from this camera")
     src.add_argument("--video", help="also recognise gestures from this video file")
     src.add_argument("--images", help="also recognise gestures from these images")
-    p.add_argument("--screenshot", help="save a screenshot of the window to this PNG after 3 s and quit")
+    p.add_argument("--screenshot", help="save a screenshot of the window to this PNG, then quit")
+    p.add_argument("--screenshot-delay", type=float, default=3.0, help="seconds before the screenshot")
     return p
 
 
@@ -31,7 +32,9 @@ def _run_gestures(args: argparse.Namespace, cfg: dict, link: object, gui: object
     from rbd_local.gestures.pipeline import GesturePipeline
     from rbd_local.gestures.sources import FrameSource
 
-    source = FrameSource(camera=args.camera, video=args.video, images=args.images)
+    source = FrameSource(camera=args.camera, video=args.video, images=args.images, realtime=True)
+    if not source.live:
+        link.wait_connected(5.0)  # a recorded clip is replayed for the robot, not before it listens
     pipeline = GesturePipeline(GestureModel.load(cfg["model"]), cfg["gestures"], send=link.send_gesture,
                                threshold=cfg["threshold"], min_consecutive=cfg["min_consecutive"],
                                cooldown_s=cfg["cooldown_s"], model_complexity=cfg["model_complexity"])
@@ -87,7 +90,7 @@ def main(argv: list[str] = None) -> int:
             save_window(root, args.screenshot)
             root.destroy()
 
-        root.after(3000, shot)
+        root.after(int(1000 * args.screenshot_delay), shot)
     try:
         root.mainloop()
     finally:

@@ -14,7 +14,9 @@ class FrameSource:
     wall clock, so the classifier window always covers the same real duration.
     """
 
-    def __init__(self, camera: int = None, video: str = None, images: str = None, fps: float = 30.0) -> None:
+    def __init__(
+        self, camera: int = None, video: str = None, images: str = None, fps: float = 30.0, realtime: bool = False
+    ) -> None:
         """Open exactly one source.
 
         Args:
@@ -22,6 +24,7 @@ class FrameSource:
             video: path of a video file.
             images: a directory of images (sorted by name) or a glob pattern.
             fps: frame rate assumed for image sequences (and videos that do not tell).
+            realtime: play files at their frame rate instead of as fast as possible.
 
         Raises:
             ValueError: if not exactly one source is given, or fps <= 0.
@@ -37,6 +40,7 @@ class FrameSource:
         self._cap = None
         self._files = None
         self.live = camera is not None
+        self.realtime = bool(realtime)
         if images is not None:
             pattern = os.path.join(images, "*") if os.path.isdir(images) else images
             exts = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
@@ -62,6 +66,14 @@ class FrameSource:
 
     def __next__(self) -> tuple[float, np.ndarray]:
         """Next (time, frame); StopIteration at the end of a file or sequence."""
+        t, frame = self._next()
+        if self.realtime and not self.live:
+            delay = t - (time.monotonic() - self._t0)
+            if delay > 0:
+                time.sleep(delay)
+        return t, frame
+
+    def _next(self) -> tuple[float, np.ndarray]:
         import cv2
 
         if self._files is not None:
