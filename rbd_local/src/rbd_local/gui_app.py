@@ -27,12 +27,10 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _run_gestures(args: argparse.Namespace, cfg: dict, link: object, gui: object, stop: threading.Event) -> None:
+def _run_gestures(source: object, cfg: dict, link: object, gui: object, stop: threading.Event) -> None:
     from rbd_local.gestures.model import GestureModel
     from rbd_local.gestures.pipeline import GesturePipeline
-    from rbd_local.gestures.sources import FrameSource
 
-    source = FrameSource(camera=args.camera, video=args.video, images=args.images, realtime=True)
     if not source.live:
         link.wait_connected(5.0)  # a recorded clip is replayed for the robot, not before it listens
     pipeline = GesturePipeline(GestureModel.load(cfg["model"]), cfg["gestures"], send=link.send_gesture,
@@ -63,6 +61,15 @@ def main(argv: list[str] = None) -> int:
     except (OSError, ValueError) as exc:
         print("rbd-gui: %s" % exc, file=sys.stderr)
         return 2
+    source = None
+    if args.camera is not None or args.video or args.images:
+        from rbd_local.gestures.sources import FrameSource
+
+        try:
+            source = FrameSource(camera=args.camera, video=args.video, images=args.images, realtime=True)
+        except (OSError, ValueError) as exc:
+            print("rbd-gui: %s" % exc, file=sys.stderr)
+            return 2
     import customtkinter as ctk
 
     from rbd_local.gui.app import OperatorGui
@@ -81,8 +88,8 @@ def main(argv: list[str] = None) -> int:
     gui = holder["gui"] = OperatorGui(root, link)
     link.start()
     stop = threading.Event()
-    if args.camera is not None or args.video or args.images:
-        threading.Thread(target=_run_gestures, args=(args, cfg, link, gui, stop), daemon=True).start()
+    if source is not None:
+        threading.Thread(target=_run_gestures, args=(source, cfg, link, gui, stop), daemon=True).start()
     if args.screenshot:
         def shot() -> None:
             from rbd_local.gui.screenshot import save_window
