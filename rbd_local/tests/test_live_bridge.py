@@ -21,16 +21,18 @@ from rbd_local.link import RobotLink
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def _bridge_available():
+def _has_launch(pkg, launch):
     if not shutil.which("roscore") or not shutil.which("rospack"):
         return False
-    proc = subprocess.run(["rospack", "find", "rbd_bridge"], capture_output=True, text=True, timeout=30)
-    pkg = proc.stdout.strip()
-    return proc.returncode == 0 and os.path.isfile(os.path.join(pkg, "launch", "rbd_bridge.launch"))
+    proc = subprocess.run(["rospack", "find", pkg], capture_output=True, text=True, timeout=30)
+    return proc.returncode == 0 and os.path.isfile(os.path.join(proc.stdout.strip(), "launch", launch))
 
 
+HAVE_BRIDGE = _has_launch("rbd_bridge", "rbd_bridge.launch")
+HAVE_CONTROL = _has_launch("rbd_controller", "rbd_controller.launch") and _has_launch("rbd_gestrec",
+                                                                                     "rbd_gestrec.launch")
 pytestmark = pytest.mark.skipif(
-    not _bridge_available(), reason="rbd_bridge (with launch/rbd_bridge.launch) not in this sourced workspace"
+    not HAVE_BRIDGE, reason="rbd_bridge (with launch/rbd_bridge.launch) not in this sourced workspace"
 )
 
 
@@ -71,39 +73,66 @@ class Lines:
         return False
 
 
-@pytest.fixture
-def ros_bridge():
-    home = tempfile.mkdtemp(prefix="rbd-local-ros-")
-    master_port, ws_port = _free_port(), _free_port()
-    env = dict(os.environ, ROS_HOME=home, ROS_LOG_DIR=os.path.join(home, "log"), ROS_IP="127.0.0.1",
-               ROS_MASTER_URI="http://127.0.0.1:%d" % master_port, PYTHONUNBUFFERED="1")
-    env.pop("ROS_HOSTNAME", None)
-    procs = []
-    try:
-        procs.append(subprocess.Popen(["roscore", "-p", str(master_port)], env=env, stdout=subprocess.DEVNULL,
-                                      stderr=subprocess.DEVNULL, start_new_session=True))
-        assert _wait_port(master_port, 30), "roscore did not start"
-        procs.append(subprocess.Popen(
-            ["roslaunch", "rbd_bridge", "rbd_bridge.launch", "port:=%d" % ws_port, "address:=127.0.0.1"],
-            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True))
-        peer = subprocess.Popen([sys.executable, os.path.join(HERE, "ros_peer.py")], env=env, stdout=subprocess.PIPE,
-                                stderr=subprocess.DEVNULL, text=True, start_new_session=True)
-        procs.append(peer)
-        lines = Lines(peer)
-        assert lines.wait(lambda x: x == "READY", 30), "ROS peer did not start"
-        assert _wait_port(ws_port, 30), "rbd_bridge did not open its port"
-        yield ws_port, lines
-    finally:
-        for p in reversed(procs):
+class RosSystem:
+    """A private roscore on a free port, rbd_bridge with the RoboDog allow-list, and more nodes."""
+
+    def __init__(self):
+        self.home = tempfile.mkdtemp(prefix="rbd-local-ros-")
+        self.master_port, self.ws_port = _free_port(), _free_port()
+        self.env = dict(os.environ, ROS_HOME=self.home, ROS_LOG_DIR=os.path.join(self.home, "log"),
+                        ROS_IP="127.0.0.1", ROS_MASTER_URI="http://127.0.0.1:%d" % self.master_port,
+                        PYTHONUNBUFFERED="1", PYTHONDONTWRITEBYTECODE="1")
+        self.env.pop("ROS_HOSTNAME", None)
+        self.procs = []
+
+    def spawn(self, cmd, stdout=subprocess.DEVNULL):
+        p = subprocess.Popen(cmd, env=self.env, stdout=stdout, stderr=subprocess.DEVNULL, text=True,
+                             start_new_session=True)
+        self.procs.append(p)
+        return p
+
+    def start(self):
+        self.spawn(["roscore", "-p", str(self.master_port)])
+        assert _wait_port(self.master_port, 30), "roscore did not start"
+        self.spawn(["roslaunch", "rbd_bridge", "rbd_bridge.launch", "port:=%d" % self.ws_port,
+                    "address:=127.0.0.1"])
+        return self
+
+    def wait_bridge(self):
+        assert _wait_port(self.ws_port, 30), "rbd_bridge did not open its port"
+
+    def run(self, cmd, timeout=30):
+        return subprocess.run(cmd, env=self.env, capture_output=True, text=True, timeout=timeout)
+
+    def stop(self):
+        for p in reversed(self.procs):
             if p.poll() is None:
                 os.killpg(p.pid, 2)  # SIGINT: roslaunch/roscore shut down their children
-        for p in reversed(procs):
+        for p in reversed(self.procs):
             try:
                 p.wait(15)
             except subprocess.TimeoutExpired:
                 os.killpg(p.pid, 9)
                 p.wait()
-        shutil.rmtree(home, ignore_errors=True)
+        shutil.rmtree(self.home, ignore_errors=True)
+
+
+@pytest.fixture
+def ros_system():
+    system = RosSystem().start()
+    try:
+        yield system
+    finally:
+        system.stop()
+
+
+@pytest.fixture
+def ros_bridge(ros_system):
+    peer = ros_system.spawn([sys.executable, os.path.join(HERE, "ros_peer.py")], stdout=subprocess.PIPE)
+    lines = Lines(peer)
+    assert lines.wait(lambda x: x == "READY", 30), "ROS peer did not start"
+    ros_system.wait_bridge()
+    return ros_system.ws_port, lines
 
 
 def test_link_through_the_real_bridge(ros_bridge):
@@ -133,5 +162,43 @@ def test_link_through_the_real_bridge(ros_bridge):
         while time.monotonic() < deadline and got["status"][-1:] != ["emergency"]:
             time.sleep(0.05)
         assert got["status"][-1] == "emergency"
+    finally:
+        link.stop()
+
+
+def _wait_value(values, wanted, timeout=15):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and values[-1:] != [wanted]:
+        time.sleep(0.05)
+    return values[-1:] == [wanted]
+
+
+@pytest.mark.skipif(not HAVE_CONTROL, reason="rbd_controller / rbd_gestrec not in this sourced workspace")
+def test_gesture_reaches_rbd_gestrec_and_estop_reaches_rbd_controller(ros_system):
+    ros_system.spawn(["roslaunch", "rbd_gestrec", "rbd_gestrec.launch"])
+    ros_system.spawn(["roslaunch", "rbd_controller", "rbd_controller.launch"])
+    ros_system.wait_bridge()
+    states = []
+    link = RobotLink("127.0.0.1", ros_system.ws_port, retry_s=0.3, on_state=states.append).start()
+    try:
+        assert link.wait_connected(20)
+        assert _wait_value(states, "EMERGENCY_STOP", 30), states  # power-up state, latched
+        # While the e-stop holds, the controller does not take gestures: rbd_gestrec keeps ours.
+        deadline = time.monotonic() + 20
+        got = ""
+        while time.monotonic() < deadline and "walk" not in got:
+            link.send_gesture("walk")
+            time.sleep(0.5)
+            got = ros_system.run(["rosservice", "call", "/rbd_gestrec/get_last_gesture"]).stdout
+        assert 'command: "walk"' in got, got
+        # release (GUI's second click) and engage again, through the bridge to the real controller
+        ok, msg = link.em_stop(False, timeout=10)
+        assert ok, msg
+        assert _wait_value(states, "WAITING_FOR_GESTURE"), states
+        ok, msg = link.em_stop(True, timeout=10)
+        assert ok, msg
+        assert _wait_value(states, "EMERGENCY_STOP"), states
+        echo = ros_system.run(["rostopic", "echo", "-n", "1", "/rbd_controller/estop"])
+        assert "data: True" in echo.stdout, echo.stdout
     finally:
         link.stop()
