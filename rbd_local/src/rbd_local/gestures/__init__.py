@@ -1,0 +1,1 @@
+"""Gesture recognition: MediaPipe key points, window features, logistic-regression classifier."""

@@ -1,0 +1,340 @@
+"""The robot link: the only module of rbd_local that imports roslibpy.
+
+Everything the laptop app exchanges with the robot goes through :class:`RobotLink`, which
+talks to ``rbd_bridge`` (rosbridge v2 protocol) from its own background thread:
+
+- publishes ``/rbd_gestrec/gesture`` (std_msgs/String, the trick command) and the operator
+  heartbeat ``/rbd_local/heartbeat`` (std_msgs/Header, ~2 Hz);
+- calls ``/rbd_controller/em_stop`` (std_srvs/SetBool);
+- subscribes ``/rbd_pos_controller/status``, ``/rbd_controller/state`` (std_msgs/String) and
+  ``/rbd_controller/path_queue`` (rbd_msgs/PathQueue) and hands them to callbacks.
+
+Callers never block on the network: :meth:`RobotLink.send_gesture` only queues. A lost link
+is re-established by the background thread (a fresh connection every ``retry_s``); gestures
+are never queued across a link loss (a stale "walk" must not move the robot later), they are
+dropped and counted instead.
+"""
+
+import logging
+import queue
+import threading
+import time
+from typing import Callable
+
+import roslibpy
+
+LOG = logging.getLogger("rbd_local.link")
+
+GESTURE_TOPIC = "/rbd_gestrec/gesture"
+HEARTBEAT_TOPIC = "/rbd_local/heartbeat"
+EM_STOP_SERVICE = "/rbd_controller/em_stop"
+STATUS_TOPIC = "/rbd_pos_controller/status"
+STATE_TOPIC = "/rbd_controller/state"
+PATH_QUEUE_TOPIC = "/rbd_controller/path_queue"
+
+
+class RobotLink:
+    """Background connection to the robot's rosbridge server."""
+
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = 9090,
+        heartbeat_hz: float = 2.0,
+        retry_s: float = 1.0,
+        connect_timeout_s: float = 2.0,
+        gesture_max_age_s: float = 0.5,
+        on_status: Callable[[str], None] = None,
+        on_state: Callable[[str], None] = None,
+        on_path_queue: Callable[[list], None] = None,
+        on_connection: Callable[[bool], None] = None,
+    ) -> None:
+        """Configure the link (call :meth:`start` to connect).
+
+        Args:
+            host: bridge host name or address.
+            port: bridge port.
+            heartbeat_hz: heartbeat rate (0 disables it).
+            retry_s: pause between connection attempts [s].
+            connect_timeout_s: time allowed for one connection attempt [s].
+            gesture_max_age_s: queued gestures older than this are dropped, not sent [s].
+            on_status: called with each ``/rbd_pos_controller/status`` string.
+            on_state: called with each ``/rbd_controller/state`` string.
+            on_path_queue: called with the ``names`` list of each path-queue message.
+            on_connection: called with True/False when the link comes up / goes down.
+
+        Raises:
+            ValueError: on bad arguments.
+        """
+        if not isinstance(host, str) or not host:
+            raise ValueError("host must be a non-empty string")
+        if not isinstance(port, int) or not 0 < port < 65536:
+            raise ValueError("port must be an integer in 1..65535, got %r" % (port,))
+        if heartbeat_hz < 0 or retry_s <= 0 or connect_timeout_s <= 0 or gesture_max_age_s <= 0:
+            raise ValueError("heartbeat_hz >= 0, retry_s > 0, connect_timeout_s > 0, gesture_max_age_s > 0 required")
+        self.host = host
+        self.port = port
+        self.heartbeat_hz = float(heartbeat_hz)
+        self.retry_s = float(retry_s)
+        self.connect_timeout_s = float(connect_timeout_s)
+        self.gesture_max_age_s = float(gesture_max_age_s)
+        self._callbacks = {
+            STATUS_TOPIC: on_status,
+            STATE_TOPIC: on_state,
+            PATH_QUEUE_TOPIC: on_path_queue,
+        }
+        self._on_connection = on_connection
+        self._outbox: queue.Queue = queue.Queue(maxsize=32)
+        self._stop = threading.Event()
+        self._wake = threading.Event()
+        self._connected_evt = threading.Event()
+        self._thread = None
+        self._lock = threading.Lock()
+        self._ros = None
+        self._pubs = {}
+        self._subs = []
+        self._seq = 0
+        self.sent_gestures = 0
+        self.dropped_gestures = 0
+        self.connect_count = 0
+
+    # ----------------------------------------------------------------- public API
+    @property
+    def address(self) -> str:
+        """``ws://host:port`` of the bridge."""
+        return "ws://%s:%d" % (self.host, self.port)
+
+    @property
+    def connected(self) -> bool:
+        """True while the WebSocket to the bridge is open."""
+        ros = self._ros
+        return bool(ros is not None and ros.is_connected and self._connected_evt.is_set())
+
+    def start(self) -> "RobotLink":
+        """Start the background thread (connects as soon as the bridge is reachable)."""
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._run, name="rbd-link", daemon=True)
+            self._thread.start()
+        return self
+
+    def stop(self, timeout: float = 5.0) -> None:
+        """Close the connection and stop the background thread."""
+        self._stop.set()
+        self._wake.set()
+        if self._thread is not None:
+            self._thread.join(timeout)
+            self._thread = None
+
+    def send_gesture(self, command: str) -> bool:
+        """Queue a trick command for ``/rbd_gestrec/gesture``; never blocks.
+
+        Args:
+            command: the trick name (e.g. ``walk``).
+
+        Returns:
+            False if it was dropped at once (link down or queue full), True if queued.
+        """
+        if not isinstance(command, str) or not command:
+            raise ValueError("command must be a non-empty string")
+        if not self.connected:
+            self.dropped_gestures += 1
+            LOG.warning("link down: gesture %r not sent", command)
+            return False
+        try:
+            self._outbox.put_nowait((time.monotonic(), command))
+        except queue.Full:
+            self.dropped_gestures += 1
+            return False
+        self._wake.set()
+        return True
+
+    def request_reconnect(self) -> None:
+        """Make the background thread try to connect now instead of after the retry pause."""
+        self._force = True
+        self._wake.set()
+
+    def wait_connected(self, timeout: float) -> bool:
+        """Block up to ``timeout`` seconds until the link is up; return whether it is."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self.connected:
+                return True
+            self._connected_evt.wait(min(0.05, max(0.0, deadline - time.monotonic())))
+        return self.connected
+
+    def em_stop(self, engage: bool, timeout: float = 3.0) -> tuple[bool, str]:
+        """Call ``/rbd_controller/em_stop`` (SetBool); blocks the caller up to ``timeout``.
+
+        When the link is down it first asks for an immediate reconnection and waits for it
+        (still within ``timeout``). The request is never queued for later delivery.
+
+        Args:
+            engage: True engages the emergency stop, False releases it.
+            timeout: total time allowed [s].
+
+        Returns:
+            (success, message) — success is True only if the controller answered success.
+        """
+        deadline = time.monotonic() + timeout
+        if not self.connected:
+            self.request_reconnect()
+            if not self.wait_connected(max(0.0, deadline - time.monotonic())):
+                return False, "no connection to %s: e-stop NOT delivered" % self.address
+        ros = self._ros
+        try:
+            service = roslibpy.Service(ros, EM_STOP_SERVICE, "std_srvs/SetBool")
+            response = service.call(
+                roslibpy.ServiceRequest({"data": bool(engage)}), timeout=max(0.1, deadline - time.monotonic())
+            )
+        except Exception as exc:  # roslibpy raises plain Exception for failed calls
+            return False, "em_stop call failed: %s" % (exc,)
+        success = bool(response.get("success", False))
+        return success, str(response.get("message", ""))
+
+    # ------------------------------------------------------------- worker thread
+    _force = False
+
+    def _run(self) -> None:
+        next_try = 0.0
+        next_beat = 0.0
+        was_connected = False
+        while not self._stop.is_set():
+            now = time.monotonic()
+            if not self.connected:
+                if was_connected:
+                    was_connected = False
+                    self._connected_evt.clear()
+                    self._teardown()
+                    self._notify(False)
+                    LOG.warning("link to %s lost; reconnecting", self.address)
+                if now >= next_try or self._force:
+                    self._force = False
+                    if self._connect():
+                        was_connected = True
+                        next_beat = 0.0
+                        self._notify(True)
+                        continue
+                    next_try = time.monotonic() + self.retry_s
+                self._drain(send=False)
+            else:
+                self._drain(send=True)
+                if self.heartbeat_hz > 0 and now >= next_beat:
+                    next_beat = now + 1.0 / self.heartbeat_hz
+                    self._heartbeat()
+            self._wake.wait(0.05)
+            self._wake.clear()
+        self._connected_evt.clear()
+        self._teardown()
+
+    def _notify(self, up: bool) -> None:
+        if self._on_connection is not None:
+            try:
+                self._on_connection(up)
+            except Exception:  # a UI callback must never kill the link thread
+                LOG.exception("on_connection callback failed")
+
+    # One roslibpy event-loop manager for every connection of the process: each new manager
+    # would start another Twisted log observer, and a link that retries every second for
+    # hours would pile them up.
+    _shared_manager = None
+
+    def _connect(self) -> bool:
+        ros = roslibpy.Ros(self.host, self.port)
+        ros.factory.stopTrying()  # reconnection is ours: a fresh client per attempt
+        if RobotLink._shared_manager is not None and hasattr(ros.factory, "_manager"):
+            ros.factory._manager = RobotLink._shared_manager
+        else:
+            RobotLink._shared_manager = ros.factory.manager
+        try:
+            ros.run(timeout=self.connect_timeout_s)
+        except Exception as exc:
+            LOG.debug("cannot connect to %s: %s", self.address, exc)
+            self._close_quietly(ros)
+            return False
+        with self._lock:
+            self._ros = ros
+            self._pubs = {
+                GESTURE_TOPIC: roslibpy.Topic(ros, GESTURE_TOPIC, "std_msgs/String", reconnect_on_close=False),
+                HEARTBEAT_TOPIC: roslibpy.Topic(ros, HEARTBEAT_TOPIC, "std_msgs/Header", reconnect_on_close=False),
+            }
+            for pub in self._pubs.values():
+                pub.advertise()
+            self._subs = []
+            for name, msg_type in (
+                (STATUS_TOPIC, "std_msgs/String"),
+                (STATE_TOPIC, "std_msgs/String"),
+                (PATH_QUEUE_TOPIC, "rbd_msgs/PathQueue"),
+            ):
+                if self._callbacks[name] is None:
+                    continue
+                topic = roslibpy.Topic(ros, name, msg_type, reconnect_on_close=False)
+                topic.subscribe(self._make_handler(name))
+                self._subs.append(topic)
+        self.connect_count += 1
+        self._connected_evt.set()
+        LOG.info("connected to %s", self.address)
+        return True
+
+    def _make_handler(self, name: str) -> Callable[[dict], None]:
+        callback = self._callbacks[name]
+
+        def handle(msg: dict) -> None:
+            try:
+                if name == PATH_QUEUE_TOPIC:
+                    names = msg.get("names") if isinstance(msg, dict) else None
+                    if not isinstance(names, list):
+                        LOG.warning("malformed path queue ignored: %r", msg)
+                        return
+                    callback([str(n) for n in names])
+                else:
+                    data = msg.get("data") if isinstance(msg, dict) else None
+                    if not isinstance(data, str):
+                        LOG.warning("malformed %s message ignored: %r", name, msg)
+                        return
+                    callback(data)
+            except Exception:
+                LOG.exception("callback for %s failed", name)
+
+        return handle
+
+    def _drain(self, send: bool) -> None:
+        while True:
+            try:
+                stamp, command = self._outbox.get_nowait()
+            except queue.Empty:
+                return
+            if not send or time.monotonic() - stamp > self.gesture_max_age_s:
+                self.dropped_gestures += 1
+                LOG.warning("gesture %r dropped (link down or too old)", command)
+                continue
+            try:
+                self._pubs[GESTURE_TOPIC].publish(roslibpy.Message({"data": command}))
+                self.sent_gestures += 1
+            except Exception:
+                self.dropped_gestures += 1
+                LOG.exception("publishing gesture failed")
+
+    def _heartbeat(self) -> None:
+        self._seq += 1
+        now = time.time()
+        msg = {"seq": self._seq, "stamp": {"secs": int(now), "nsecs": int((now % 1) * 1e9)}, "frame_id": "rbd_local"}
+        try:
+            self._pubs[HEARTBEAT_TOPIC].publish(roslibpy.Message(msg))
+        except Exception:
+            LOG.exception("heartbeat failed")
+
+    def _teardown(self) -> None:
+        with self._lock:
+            ros, self._ros = self._ros, None
+            self._pubs, self._subs = {}, []
+        if ros is not None:
+            self._close_quietly(ros)
+
+    @staticmethod
+    def _close_quietly(ros: "roslibpy.Ros") -> None:
+        try:
+            ros.factory.stopTrying()
+            if ros.is_connected:
+                ros.close(timeout=1.0)
+        except Exception:
+            LOG.debug("closing the old connection failed", exc_info=True)

@@ -1,0 +1,135 @@
+"""In-process fake rosbridge v2 server (websockets) for the link and GUI tests.
+
+It records advertise/publish/subscribe/call_service ops, answers service calls with a
+configurable handler and pushes messages to subscribed clients. ``kick_all`` drops every
+connection (link loss); ``stop``/``start`` on the same port simulate a bridge restart.
+"""
+
+import asyncio
+import json
+import threading
+import time
+
+import websockets
+
+
+class FakeBridge:
+    def __init__(self, port=0):
+        self.port = port
+        self.published = []  # (topic, msg)
+        self.advertised = []
+        self.subscribed = {}  # topic -> type
+        self.service_calls = []  # (service, args)
+        self.service_handler = lambda service, args: (True, {"success": True, "message": "ok"})
+        self.connections = 0
+        self._clients = set()
+        self._subs = {}  # websocket -> {topic: id}
+        self._loop = None
+        self._server = None
+        self._thread = None
+        self._lock = threading.RLock()
+
+    # -- control from the test thread
+    def start(self):
+        ready = threading.Event()
+
+        def run():
+            self._loop = asyncio.new_event_loop()
+            asyncio.set_event_loop(self._loop)
+
+            async def main():
+                self._server = await websockets.serve(self._handle, "127.0.0.1", self.port)
+                self.port = self._server.sockets[0].getsockname()[1]
+                ready.set()
+                await self._server.wait_closed()
+
+            try:
+                self._loop.run_until_complete(main())
+            finally:
+                self._loop.close()
+
+        self._thread = threading.Thread(target=run, daemon=True)
+        self._thread.start()
+        assert ready.wait(5), "fake bridge did not start"
+        return self
+
+    def stop(self):
+        if self._loop is None:
+            return
+
+        async def shutdown():
+            self._server.close()
+            for ws in list(self._clients):
+                await ws.close()
+
+        asyncio.run_coroutine_threadsafe(shutdown(), self._loop).result(5)
+        self._thread.join(5)
+        self._loop = None
+
+    def kick_all(self):
+        async def kick():
+            for ws in list(self._clients):
+                await ws.close()
+
+        asyncio.run_coroutine_threadsafe(kick(), self._loop).result(5)
+
+    def push(self, topic, msg):
+        """Send msg to every client subscribed to topic."""
+
+        async def send():
+            for ws, subs in list(self._subs.items()):
+                if topic in subs:
+                    await ws.send(json.dumps({"op": "publish", "topic": topic, "msg": msg}))
+
+        asyncio.run_coroutine_threadsafe(send(), self._loop).result(5)
+
+    def wait_for(self, predicate, timeout=10.0):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            with self._lock:
+                if predicate():
+                    return True
+            time.sleep(0.02)
+        with self._lock:
+            return predicate()
+
+    def published_on(self, topic):
+        with self._lock:
+            return [m for t, m in self.published if t == topic]
+
+    # -- server side
+    async def _handle(self, ws):
+        self._clients.add(ws)
+        self._subs[ws] = {}
+        with self._lock:
+            self.connections += 1
+        try:
+            async for raw in ws:
+                try:
+                    msg = json.loads(raw)
+                except ValueError:
+                    continue
+                op = msg.get("op")
+                with self._lock:
+                    if op == "advertise":
+                        self.advertised.append((msg["topic"], msg.get("type")))
+                    elif op == "publish":
+                        self.published.append((msg["topic"], msg.get("msg")))
+                    elif op == "subscribe":
+                        self._subs[ws][msg["topic"]] = msg.get("id")
+                        self.subscribed[msg["topic"]] = msg.get("type")
+                    elif op == "unsubscribe":
+                        self._subs[ws].pop(msg["topic"], None)
+                    elif op == "call_service":
+                        self.service_calls.append((msg["service"], msg.get("args")))
+                if op == "call_service":
+                    result, values = self.service_handler(msg["service"], msg.get("args"))
+                    reply = {"op": "service_response", "service": msg["service"], "result": result, "values": values}
+                    if "id" in msg:
+                        reply["id"] = msg["id"]
+                    await ws.send(json.dumps(reply))
+        except websockets.ConnectionClosed:
+            pass
+        finally:
+            self._clients.discard(ws)
+            self._subs.pop(ws, None)

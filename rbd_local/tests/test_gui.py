@@ -1,0 +1,218 @@
+"""The operator GUI under a private Xvfb, wired to the real RobotLink and a fake bridge."""
+
+import io
+import os
+import shutil
+import subprocess
+import time
+
+import pytest
+
+from rbd_local.link import EM_STOP_SERVICE, PATH_QUEUE_TOPIC, STATE_TOPIC, STATUS_TOPIC, RobotLink
+
+pytestmark = pytest.mark.skipif(shutil.which("Xvfb") is None, reason="Xvfb not installed")
+
+DOCS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "docs")
+
+
+@pytest.fixture(scope="module")
+def display():
+    from xvfb import Xvfb
+
+    x = Xvfb("1024x768x24").start()
+    old = os.environ.get("DISPLAY")
+    os.environ["DISPLAY"] = x.display
+    yield x.display
+    if old is None:
+        os.environ.pop("DISPLAY", None)
+    else:
+        os.environ["DISPLAY"] = old
+    x.stop()
+
+
+@pytest.fixture(scope="module")
+def app(display):
+    import customtkinter as ctk
+    from fake_bridge import FakeBridge
+
+    from rbd_local.gui.app import OperatorGui
+
+    bridge = FakeBridge().start()
+    root = ctk.CTk()
+    holder = {}
+    link = RobotLink(
+        "127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=0.5,
+        on_status=lambda s: holder["gui"].post_status(s), on_state=lambda s: holder["gui"].post_state(s),
+        on_path_queue=lambda n: holder["gui"].post_path_queue(n),
+        on_connection=lambda up: holder["gui"].post_connection(up),
+    )
+    gui = holder["gui"] = OperatorGui(root, link, em_stop_timeout=1.5)
+    link.start()
+    state = {"root": root, "gui": gui, "link": link, "bridge": bridge}
+    pump(root, lambda: link.connected, 10)
+    assert bridge.wait_for(lambda: {STATUS_TOPIC, PATH_QUEUE_TOPIC, STATE_TOPIC} <= set(bridge.subscribed))
+    yield state
+    link.stop()
+    state["bridge"].stop()
+    root.destroy()
+
+
+def pump(root, until, timeout=5.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        root.update()
+        if until():
+            return True
+        time.sleep(0.02)
+    root.update()
+    return until()
+
+
+def screen_pixel(widget):
+    """Colour actually rendered at the centre of ``widget`` (X server screenshot)."""
+    from PIL import Image
+
+    widget.update()
+    x = widget.winfo_rootx() + widget.winfo_width() // 2
+    y = widget.winfo_rooty() + 8
+    png = subprocess.run(["import", "-window", "root", "png:-"], stdout=subprocess.PIPE, check=True, timeout=30).stdout
+    return Image.open(io.BytesIO(png)).convert("RGB").getpixel((x, y))
+
+
+def hex_rgb(colour):
+    return tuple(int(colour[i : i + 2], 16) for i in (1, 3, 5))
+
+
+def test_connection_indicator_shows_connected(app):
+    assert pump(app["root"], lambda: "CONNECTED" in app["gui"].connection_label.cget("text"))
+    assert app["gui"].connection_label.cget("fg_color") == "#2e7d32"
+
+
+@pytest.mark.parametrize(
+    "status, colour",
+    [("idle", "#1565c0"), ("running", "#2e7d32"), ("collision", "#ef6c00"), ("emergency", "#c62828")],
+)
+def test_state_colour_follows_published_status(app, status, colour):
+    app["bridge"].push(STATUS_TOPIC, {"data": status})
+    assert pump(app["root"], lambda: app["gui"].state_colour() == colour)
+    assert app["gui"].state_label.cget("text") == status.upper()
+    rendered = screen_pixel(app["gui"].state_label)
+    assert all(abs(a - b) <= 12 for a, b in zip(rendered, hex_rgb(colour), strict=False)), (rendered, colour)
+
+
+def test_unknown_status_is_grey_not_a_crash(app):
+    app["bridge"].push(STATUS_TOPIC, {"data": "bogus"})
+    assert pump(app["root"], lambda: app["gui"].state_colour() == "#616161")
+
+
+def test_estop_click_calls_the_service(app):
+    bridge, gui, root = app["bridge"], app["gui"], app["root"]
+    n = len(bridge.service_calls)
+    b = gui.estop_button
+    root.update()
+    x = b.winfo_rootx() + b.winfo_width() // 2
+    y = b.winfo_rooty() + b.winfo_height() // 2
+    subprocess.run(["xdotool", "mousemove", str(x), str(y), "click", "1"], check=True, timeout=10)
+    assert pump(root, lambda: len(bridge.service_calls) > n)
+    assert bridge.service_calls[n] == (EM_STOP_SERVICE, {"data": True})
+    assert pump(root, lambda: gui.message_label.cget("text") == "E-STOP ENGAGED")
+
+
+def test_release_needs_a_second_deliberate_click(app):
+    bridge, gui, root = app["bridge"], app["gui"], app["root"]
+    n = len(bridge.service_calls)
+    gui.release_button.invoke()
+    pump(root, lambda: False, 0.6)
+    assert len(bridge.service_calls) == n, "one click must not release the e-stop"
+    assert "Confirm" in gui.release_button.cget("text")
+    gui.release_button.invoke()
+    assert pump(root, lambda: len(bridge.service_calls) > n)
+    assert bridge.service_calls[n] == (EM_STOP_SERVICE, {"data": False})
+    assert pump(root, lambda: gui.message_label.cget("text") == "e-stop released")
+
+
+def test_next_five_moves_update_and_dequeue(app):
+    bridge, gui, root = app["bridge"], app["gui"], app["root"]
+    names = ["walk: to (0.6, 0)", "walk: turn to face back", "walk: to (-0.6, 0)", "walk: face forward",
+             "walk: to start", "spin: yaw pi", "spin: yaw 0"]
+    bridge.push(PATH_QUEUE_TOPIC, {"command": "walk", "names": names})
+    assert pump(root, lambda: gui.shown_moves()[0] == "1. " + names[0])
+    assert gui.shown_moves() == ["%d. %s" % (i + 1, n) for i, n in enumerate(names[:5])]
+    bridge.push(PATH_QUEUE_TOPIC, {"command": "walk", "names": names[1:]})  # first move reached
+    assert pump(root, lambda: gui.shown_moves()[0] == "1. " + names[1])
+    assert gui.shown_moves()[4] == "5. " + names[5]
+    bridge.push(PATH_QUEUE_TOPIC, {"command": "walk", "names": names[5:]})
+    assert pump(root, lambda: gui.shown_moves()[:3] == ["1. " + names[5], "2. " + names[6], ""])
+
+
+def test_screenshot_for_the_readme(app):
+    from rbd_local.gui.screenshot import save_window
+
+    bridge, gui, root = app["bridge"], app["gui"], app["root"]
+    bridge.push(STATUS_TOPIC, {"data": "running"})
+    bridge.push(STATE_TOPIC, {"data": "EXECUTING"})
+    bridge.push(PATH_QUEUE_TOPIC, {"command": "walk", "names": [
+        "walk: to (0.6, 0)", "walk: turn to face back", "walk: to (-0.6, 0)", "walk: face forward", "walk: to start"]})
+    gui.post_gesture("swipe_right", "walk", 0.93)
+    assert pump(root, lambda: gui.state_colour() == "#2e7d32" and gui.shown_moves()[4].startswith("5."))
+    assert gui.gesture_label.cget("text") == "last gesture: swipe_right → walk (93 %)"
+    pump(root, lambda: False, 0.3)
+    # Always saved under .cache/; docs/gui.png (committed, shown in the README) is refreshed
+    # when it is missing or RBD_UPDATE_DOCS=1, so a test run leaves the checkout clean.
+    cache = os.path.join(os.path.dirname(DOCS), ".cache")
+    os.makedirs(cache, exist_ok=True)
+    path = os.path.join(cache, "gui.png")
+    save_window(root, path)
+    from PIL import Image
+
+    assert Image.open(path).size[0] >= 600
+    docs_png = os.path.join(DOCS, "gui.png")
+    if os.environ.get("RBD_UPDATE_DOCS") == "1" or not os.path.exists(docs_png):
+        os.makedirs(DOCS, exist_ok=True)
+        shutil.copyfile(path, docs_png)
+
+
+def test_disconnected_is_obvious_and_estop_says_it_could_not(app):
+    bridge, gui, root = app["bridge"], app["gui"], app["root"]
+    bridge.stop()
+    assert pump(root, lambda: "DISCONNECTED" in gui.connection_label.cget("text"), 10)
+    assert gui.connection_label.cget("fg_color") == "#c62828"
+    gui.estop_button.invoke()
+    assert pump(root, lambda: gui.message_label.cget("text").startswith("E-STOP FAILED"), 10)
+    assert "NOT delivered" in gui.message_label.cget("text")
+    # the bridge comes back: the indicator recovers and the e-stop works again
+    from fake_bridge import FakeBridge
+
+    app["bridge"] = FakeBridge(port=bridge.port).start()
+    assert pump(root, lambda: "CONNECTED ws" in gui.connection_label.cget("text"), 10)
+    gui.estop_button.invoke()
+    assert pump(root, lambda: gui.message_label.cget("text") == "E-STOP ENGAGED", 10)
+    assert app["bridge"].service_calls == [(EM_STOP_SERVICE, {"data": True})]
+
+
+def test_rbd_gui_entry_point_with_in_process_gesture_recognition(display, tmp_path, hand_photos):
+    import sys
+
+    import cv2
+    from fake_bridge import FakeBridge
+
+    from rbd_local.gestures.photo_clip import moving_photo_frames, write_clip
+
+    clip = str(tmp_path / "right.avi")
+    frames = moving_photo_frames(cv2.imread(hand_photos["handSrc.jpg"]), "right", distance=0.4, hold_s=1.0)
+    write_clip(frames, clip)
+    bridge = FakeBridge().start()
+    try:
+        shot = tmp_path / "shot.png"
+        env = dict(os.environ, DISPLAY=display,
+                   PYTHONPATH=os.path.join(os.path.dirname(DOCS), "src"))
+        proc = subprocess.run([sys.executable, "-m", "rbd_local.gui_app", "--port", str(bridge.port), "--video", clip,
+                               "--screenshot", str(shot), "--screenshot-delay", "8"],
+                              env=env, capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        assert shot.stat().st_size > 1000
+        assert bridge.wait_for(lambda: STATUS_TOPIC in bridge.subscribed)
+        assert bridge.published_on("/rbd_local/heartbeat"), "the GUI app sends the operator heartbeat"
+        assert bridge.published_on("/rbd_gestrec/gesture") == [{"data": "walk"}]
+    finally:
+        bridge.stop()

@@ -1,0 +1,163 @@
+"""RobotLink against an in-process fake rosbridge server."""
+
+import time
+
+import pytest
+
+from rbd_local.link import (
+    EM_STOP_SERVICE,
+    GESTURE_TOPIC,
+    HEARTBEAT_TOPIC,
+    PATH_QUEUE_TOPIC,
+    STATE_TOPIC,
+    STATUS_TOPIC,
+    RobotLink,
+)
+
+
+def _link(bridge, **kw):
+    got = {"status": [], "state": [], "moves": [], "conn": []}
+    link = RobotLink(
+        "127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=1.0,
+        on_status=got["status"].append, on_state=got["state"].append,
+        on_path_queue=got["moves"].append, on_connection=got["conn"].append, **kw,
+    )
+    return link.start(), got
+
+
+def _wait(pred, timeout=10.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if pred():
+            return True
+        time.sleep(0.02)
+    return pred()
+
+
+def test_gesture_heartbeat_and_subscriptions(fake_bridge):
+    link, got = _link(fake_bridge)
+    try:
+        assert link.wait_connected(10)
+        assert fake_bridge.wait_for(lambda: (GESTURE_TOPIC, "std_msgs/String") in fake_bridge.advertised)
+        assert link.send_gesture("walk")
+        assert fake_bridge.wait_for(lambda: fake_bridge.published_on(GESTURE_TOPIC) == [{"data": "walk"}])
+        # heartbeat at ~2 Hz with increasing seq
+        t0 = time.monotonic()
+        assert fake_bridge.wait_for(lambda: len(fake_bridge.published_on(HEARTBEAT_TOPIC)) >= 5, timeout=10)
+        beats = fake_bridge.published_on(HEARTBEAT_TOPIC)
+        assert 1.2 < time.monotonic() - t0 + 0.5 < 6.0
+        seqs = [b["seq"] for b in beats]
+        assert seqs == sorted(seqs) and beats[0]["frame_id"] == "rbd_local"
+        wanted = {STATUS_TOPIC, STATE_TOPIC, PATH_QUEUE_TOPIC}
+        assert fake_bridge.wait_for(lambda: wanted <= set(fake_bridge.subscribed))
+        assert fake_bridge.subscribed[PATH_QUEUE_TOPIC] == "rbd_msgs/PathQueue"
+        fake_bridge.push(STATUS_TOPIC, {"data": "running"})
+        fake_bridge.push(STATE_TOPIC, {"data": "EXECUTING"})
+        fake_bridge.push(PATH_QUEUE_TOPIC, {"command": "walk", "names": ["a", "b", "c"], "poses": []})
+        fake_bridge.push(STATUS_TOPIC, {"nodata": 1})  # malformed: ignored, no crash
+        fake_bridge.push(PATH_QUEUE_TOPIC, {"names": "x"})  # malformed: ignored
+        fake_bridge.push(STATUS_TOPIC, {"data": "idle"})
+        assert _wait(lambda: got["status"] == ["running", "idle"])
+        assert got["state"] == ["EXECUTING"] and got["moves"] == [["a", "b", "c"]]
+        assert link.connected
+    finally:
+        link.stop()
+
+
+def test_em_stop_calls_the_service_and_reports_the_answer(fake_bridge):
+    link, _ = _link(fake_bridge)
+    try:
+        assert link.wait_connected(10)
+        assert link.em_stop(True) == (True, "ok")
+        fake_bridge.service_handler = lambda s, a: (True, {"success": False, "message": "refused"})
+        assert link.em_stop(False) == (False, "refused")
+        fake_bridge.service_handler = lambda s, a: (False, "service not available")
+        ok, msg = link.em_stop(True)
+        assert not ok and msg
+        assert [c for c in fake_bridge.service_calls] == [
+            (EM_STOP_SERVICE, {"data": True}), (EM_STOP_SERVICE, {"data": False}), (EM_STOP_SERVICE, {"data": True}),
+        ]
+    finally:
+        link.stop()
+
+
+def test_reconnects_after_link_loss_and_bridge_restart(fake_bridge):
+    link, got = _link(fake_bridge)
+    try:
+        assert link.wait_connected(10)
+        fake_bridge.kick_all()
+        assert _wait(lambda: got["conn"][-1:] == [True] and False in got["conn"])
+        assert link.wait_connected(10)
+        assert fake_bridge.wait_for(lambda: fake_bridge.connections >= 2)
+        port = fake_bridge.port
+        fake_bridge.stop()
+        assert _wait(lambda: not link.connected)
+        # while the bridge is gone: gestures are dropped at once (never delivered late), no blocking
+        t0 = time.monotonic()
+        assert link.send_gesture("spin") is False
+        assert time.monotonic() - t0 < 0.05
+        ok, msg = link.em_stop(True, timeout=1.0)
+        assert not ok and "NOT delivered" in msg
+        from fake_bridge import FakeBridge
+
+        restarted = FakeBridge(port=port).start()
+        try:
+            assert link.wait_connected(10), "no reconnection after the bridge came back"
+            assert restarted.wait_for(lambda: STATUS_TOPIC in restarted.subscribed)
+            restarted.push(STATUS_TOPIC, {"data": "collision"})
+            assert _wait(lambda: got["status"][-1:] == ["collision"])
+            link.send_gesture("wiggle")
+            assert restarted.wait_for(lambda: restarted.published_on(GESTURE_TOPIC) == [{"data": "wiggle"}])
+            time.sleep(0.3)
+            assert {"data": "spin"} not in restarted.published_on(GESTURE_TOPIC)
+            assert link.dropped_gestures >= 1
+        finally:
+            restarted.stop()
+    finally:
+        link.stop()
+
+
+def test_never_blocks_without_a_bridge():
+    from fake_bridge import FakeBridge
+
+    b = FakeBridge().start()
+    port = b.port
+    b.stop()  # nothing listens on this port now
+    link = RobotLink("127.0.0.1", port, retry_s=0.2, connect_timeout_s=0.5).start()
+    try:
+        t0 = time.monotonic()
+        for _ in range(100):
+            link.send_gesture("walk")
+        assert time.monotonic() - t0 < 0.1
+        assert not link.connected
+    finally:
+        link.stop()
+
+
+def test_bad_arguments():
+    with pytest.raises(ValueError):
+        RobotLink("", 9090)
+    with pytest.raises(ValueError):
+        RobotLink("127.0.0.1", 70000)
+    with pytest.raises(ValueError):
+        RobotLink("127.0.0.1", 9090, retry_s=0)
+    link = RobotLink("127.0.0.1", 9090)
+    with pytest.raises(ValueError):
+        link.send_gesture("")
+
+
+def test_retrying_does_not_pile_up_twisted_log_observers():
+    from fake_bridge import FakeBridge
+    from twisted.python import log
+
+    b = FakeBridge().start()
+    port = b.port
+    b.stop()
+    link = RobotLink("127.0.0.1", port, retry_s=0.05, connect_timeout_s=0.1).start()
+    try:
+        time.sleep(0.5)
+        before = len(log.theLogPublisher.observers)
+        time.sleep(1.5)  # ~10 more failed attempts
+        assert len(log.theLogPublisher.observers) <= before
+    finally:
+        link.stop()

@@ -1,0 +1,204 @@
+"""RobotLink against the real rbd_bridge with a real ROS master (skipped when rbd_bridge is not built).
+
+Run from a sourced catkin workspace (``source ./env.sh`` after ``make build``) that contains
+rbd_bridge; the test starts its own roscore on a free port, ``roslaunch rbd_bridge
+rbd_bridge.launch`` (the RoboDog allow-list) and a stand-in controller (ros_peer.py).
+"""
+
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+import pytest
+
+from rbd_local.link import RobotLink
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def _has_launch(pkg, launch):
+    if not shutil.which("roscore") or not shutil.which("rospack"):
+        return False
+    proc = subprocess.run(["rospack", "find", pkg], capture_output=True, text=True, timeout=30)
+    return proc.returncode == 0 and os.path.isfile(os.path.join(proc.stdout.strip(), "launch", launch))
+
+
+HAVE_BRIDGE = _has_launch("rbd_bridge", "rbd_bridge.launch")
+HAVE_CONTROL = _has_launch("rbd_controller", "rbd_controller.launch") and _has_launch("rbd_gestrec",
+                                                                                     "rbd_gestrec.launch")
+pytestmark = pytest.mark.skipif(
+    not HAVE_BRIDGE, reason="rbd_bridge (with launch/rbd_bridge.launch) not in this sourced workspace"
+)
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _wait_port(port, timeout):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return True
+        time.sleep(0.1)
+    return False
+
+
+class Lines:
+    """Collect a process's stdout lines in a thread."""
+
+    def __init__(self, proc):
+        self.lines = []
+        self._t = threading.Thread(target=self._read, args=(proc,), daemon=True)
+        self._t.start()
+
+    def _read(self, proc):
+        for line in proc.stdout:
+            self.lines.append(line.strip())
+
+    def wait(self, pred, timeout=15):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if any(pred(x) for x in list(self.lines)):
+                return True
+            time.sleep(0.05)
+        return False
+
+
+class RosSystem:
+    """A private roscore on a free port, rbd_bridge with the RoboDog allow-list, and more nodes."""
+
+    def __init__(self):
+        self.home = tempfile.mkdtemp(prefix="rbd-local-ros-")
+        self.master_port, self.ws_port = _free_port(), _free_port()
+        self.env = dict(os.environ, ROS_HOME=self.home, ROS_LOG_DIR=os.path.join(self.home, "log"),
+                        ROS_IP="127.0.0.1", ROS_MASTER_URI="http://127.0.0.1:%d" % self.master_port,
+                        PYTHONUNBUFFERED="1", PYTHONDONTWRITEBYTECODE="1")
+        self.env.pop("ROS_HOSTNAME", None)
+        self.procs = []
+
+    def spawn(self, cmd, stdout=subprocess.DEVNULL):
+        p = subprocess.Popen(cmd, env=self.env, stdout=stdout, stderr=subprocess.DEVNULL, text=True,
+                             start_new_session=True)
+        self.procs.append(p)
+        return p
+
+    def start(self):
+        self.spawn(["roscore", "-p", str(self.master_port)])
+        assert _wait_port(self.master_port, 30), "roscore did not start"
+        self.spawn(["roslaunch", "rbd_bridge", "rbd_bridge.launch", "port:=%d" % self.ws_port,
+                    "address:=127.0.0.1"])
+        return self
+
+    def wait_bridge(self):
+        assert _wait_port(self.ws_port, 30), "rbd_bridge did not open its port"
+
+    def run(self, cmd, timeout=30):
+        return subprocess.run(cmd, env=self.env, capture_output=True, text=True, timeout=timeout)
+
+    def stop(self):
+        for p in reversed(self.procs):
+            if p.poll() is None:
+                os.killpg(p.pid, 2)  # SIGINT: roslaunch/roscore shut down their children
+        for p in reversed(self.procs):
+            try:
+                p.wait(15)
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, 9)
+                p.wait()
+        shutil.rmtree(self.home, ignore_errors=True)
+
+
+@pytest.fixture
+def ros_system():
+    system = RosSystem().start()
+    try:
+        yield system
+    finally:
+        system.stop()
+
+
+@pytest.fixture
+def ros_bridge(ros_system):
+    peer = ros_system.spawn([sys.executable, os.path.join(HERE, "ros_peer.py")], stdout=subprocess.PIPE)
+    lines = Lines(peer)
+    assert lines.wait(lambda x: x == "READY", 30), "ROS peer did not start"
+    ros_system.wait_bridge()
+    return ros_system.ws_port, lines
+
+
+def test_link_through_the_real_bridge(ros_bridge):
+    port, peer = ros_bridge
+    got = {"status": [], "state": [], "moves": []}
+    link = RobotLink("127.0.0.1", port, retry_s=0.3, on_status=got["status"].append, on_state=got["state"].append,
+                     on_path_queue=got["moves"].append).start()
+    try:
+        assert link.wait_connected(20)
+        # latched state arrives through the allow-listed subscriptions
+        deadline = time.monotonic() + 15
+        while time.monotonic() < deadline and not (got["status"] and got["state"] and got["moves"]):
+            time.sleep(0.05)
+        assert got["status"][:1] == ["idle"] and got["state"][:1] == ["WAITING_FOR_GESTURE"]
+        assert got["moves"][:1] == [["walk: to (0.6, 0)", "walk: back"]]
+        # a gesture published by the laptop arrives in ROS (retry: the bridge's advertise may lag)
+        deadline = time.monotonic() + 15
+        while time.monotonic() < deadline and "GESTURE walk" not in peer.lines:
+            link.send_gesture("walk")
+            peer.wait(lambda x: x == "GESTURE walk", 1.0)
+        assert "GESTURE walk" in peer.lines
+        assert peer.wait(lambda x: x.startswith("HEARTBEAT"), 10)
+        # the e-stop reaches the controller and its answer comes back
+        assert link.em_stop(True, timeout=10) == (True, "engaged")
+        assert peer.wait(lambda x: x == "EMSTOP True", 5)
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline and got["status"][-1:] != ["emergency"]:
+            time.sleep(0.05)
+        assert got["status"][-1] == "emergency"
+    finally:
+        link.stop()
+
+
+def _wait_value(values, wanted, timeout=15):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and values[-1:] != [wanted]:
+        time.sleep(0.05)
+    return values[-1:] == [wanted]
+
+
+@pytest.mark.skipif(not HAVE_CONTROL, reason="rbd_controller / rbd_gestrec not in this sourced workspace")
+def test_gesture_reaches_rbd_gestrec_and_estop_reaches_rbd_controller(ros_system):
+    ros_system.spawn(["roslaunch", "rbd_gestrec", "rbd_gestrec.launch"])
+    ros_system.spawn(["roslaunch", "rbd_controller", "rbd_controller.launch"])
+    ros_system.wait_bridge()
+    states = []
+    link = RobotLink("127.0.0.1", ros_system.ws_port, retry_s=0.3, on_state=states.append).start()
+    try:
+        assert link.wait_connected(20)
+        assert _wait_value(states, "EMERGENCY_STOP", 30), states  # power-up state, latched
+        # While the e-stop holds, the controller does not take gestures: rbd_gestrec keeps ours.
+        deadline = time.monotonic() + 20
+        got = ""
+        while time.monotonic() < deadline and "walk" not in got:
+            link.send_gesture("walk")
+            time.sleep(0.5)
+            got = ros_system.run(["rosservice", "call", "/rbd_gestrec/get_last_gesture"]).stdout
+        assert 'command: "walk"' in got, got
+        # release (GUI's second click) and engage again, through the bridge to the real controller
+        ok, msg = link.em_stop(False, timeout=10)
+        assert ok, msg
+        assert _wait_value(states, "WAITING_FOR_GESTURE"), states
+        ok, msg = link.em_stop(True, timeout=10)
+        assert ok, msg
+        assert _wait_value(states, "EMERGENCY_STOP"), states
+        echo = ros_system.run(["rostopic", "echo", "-n", "1", "/rbd_controller/estop"])
+        assert "data: True" in echo.stdout, echo.stdout
+    finally:
+        link.stop()
