@@ -2,7 +2,8 @@
 catkin_make, catkin build (catkin_tools) and colcon, and every rbd package is found.
 
 The workspace is built the way the robot does it (system python, no venv, nothing of this
-checkout's devel space on the paths). Tests are not compiled there (CATKIN_ENABLE_TESTING=OFF):
+checkout's devel space on the paths). Tests are not compiled there (CATKIN_ENABLE_TESTING=OFF)
+and C++ is built unoptimised:
 `make test` compiles and runs them once in the main build.
 """
 
@@ -16,7 +17,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PACKAGES = sorted(
     d for d in os.listdir(os.path.join(ROOT, "src")) if os.path.isfile(os.path.join(ROOT, "src", d, "package.xml"))
 )
-CMAKE_ARGS = ["-DPYTHON_EXECUTABLE=/usr/bin/python3", "-DCATKIN_ENABLE_TESTING=OFF", "-DCMAKE_BUILD_TYPE=Release"]
+# -O0: this test proves the packages build and are found; optimised code is built once by `make build`.
+CMAKE_ARGS = ["-DPYTHON_EXECUTABLE=/usr/bin/python3", "-DCATKIN_ENABLE_TESTING=OFF", "-DCMAKE_BUILD_TYPE=",
+              "-DCMAKE_CXX_FLAGS=-O0"]
 
 
 def clean_env():

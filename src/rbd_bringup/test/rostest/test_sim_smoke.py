@@ -16,7 +16,7 @@ from std_srvs.srv import SetBool
 
 EXPECTED_NODES = [
     "/mock_a1", "/rbd_a1_driver", "/os1_sim", "/zed2_sim", "/world", "/robot_state_publisher",
-    "/rbd_controller", "/rbd_pos_controller", "/rbd_navigation", "/rbd_gestrec", "/rbd_bridge",
+    "/rbd_controller", "/rbd_pos_controller", "/rbd_navigation", "/rbd_gestrec", "/rbd_bridge", "/rbd_lidar",
 ]
 
 
