@@ -1,0 +1,164 @@
+"""The demo's report: what happened in a run, from ground truth and the A1's command stream.
+
+ROS-free so the demo, its system test and the soak share one model of the figures.
+"""
+
+import json
+import math
+from typing import Dict, List, Optional, Sequence, Tuple
+
+
+def reaction_times(collision_onsets: Sequence[float], commands: Sequence[Tuple[float, float]]) -> List[float]:
+    """Software reaction time per collision onset: scan time → first zero-velocity command at the A1.
+
+    Args:
+        collision_onsets: stamps of the scans that first contained an intruder [s].
+        commands: (time [s], commanded speed magnitude) of every HighCmd seen on LCM, in order.
+
+    Returns:
+        One reaction time [s] per onset at which the robot was commanded to move (onsets while
+        already standing still have nothing to stop and are skipped).
+    """
+    out = []
+    for onset in collision_onsets:
+        before = [speed for t, speed in commands if t <= onset]
+        if not before or before[-1] < 1e-6:
+            continue
+        after = [t for t, speed in commands if t > onset and speed < 1e-6]
+        if after:
+            out.append(after[0] - onset)
+    return out
+
+
+def percentile(values: Sequence[float], q: float) -> Optional[float]:
+    """The q-th percentile (0..100, nearest rank) or None for no values."""
+    if not values:
+        return None
+    ordered = sorted(values)
+    rank = max(0, min(len(ordered) - 1, int(math.ceil(q / 100.0 * len(ordered))) - 1))
+    return ordered[rank]
+
+
+def build_report(
+    tricks_requested: Sequence[str],
+    tricks_completed: Sequence[str],
+    contacts: Sequence[Tuple[float, str]],
+    min_clearance: float,
+    state_log: Sequence[Tuple[float, str]],
+    start_pose: Tuple[float, float, float],
+    final_pose: Tuple[float, float, float],
+    reactions: Sequence[float],
+    scan_period: float,
+    duration: float,
+) -> Dict:
+    """Collect the run's figures into one JSON-able dictionary.
+
+    Args:
+        tricks_requested: trick commands the scripted audience showed.
+        tricks_completed: tricks that ran to the end (back to WAITING_FOR_GESTURE).
+        contacts: (time, person) of every footprint contact from ground truth.
+        min_clearance: smallest footprint-to-person clearance seen [m].
+        state_log: (time, state) of every main-controller state change.
+        start_pose: ground-truth (x, y, yaw) when the e-stop was released.
+        final_pose: ground-truth (x, y, yaw) at the end.
+        reactions: software reaction times [s] (see :func:`reaction_times`).
+        scan_period: LiDAR scan period [s].
+        duration: wall time of the scripted part [s].
+
+    Returns:
+        The report.
+    """
+    states = [s for _, s in state_log]
+    stops = sum(1 for s in states if s in ("COLLISION_DETECTED", "EMERGENCY_STOP"))
+    resumes = sum(
+        1 for a, b in zip(states, states[1:]) if a in ("COLLISION_DETECTED", "EMERGENCY_STOP") and b == "EXECUTING"
+    )
+    dyaw = math.atan2(math.sin(final_pose[2] - start_pose[2]), math.cos(final_pose[2] - start_pose[2]))
+    p99 = percentile(reactions, 99)
+    return {
+        "tricks_requested": list(tricks_requested),
+        "tricks_completed": list(tricks_completed),
+        "collisions_with_people": len(contacts),
+        "contacts": [{"t": round(t, 3), "person": p} for t, p in contacts],
+        "min_distance_to_person_m": None if math.isinf(min_clearance) else round(min_clearance, 3),
+        "stops": stops,
+        "resumes": resumes,
+        "collision_stops": states.count("COLLISION_DETECTED"),
+        "final_position_error_m": round(math.hypot(final_pose[0] - start_pose[0], final_pose[1] - start_pose[1]), 3),
+        "final_yaw_error_deg": round(math.degrees(abs(dyaw)), 2),
+        "reaction_times_s": [round(r, 4) for r in reactions],
+        "reaction_p50_s": None if not reactions else round(percentile(reactions, 50), 4),
+        "reaction_p99_s": None if p99 is None else round(p99, 4),
+        "reaction_goal_s": round(scan_period + 0.020, 4),
+        "duration_s": round(duration, 1),
+        "states": [{"t": round(t, 3), "state": s} for t, s in state_log],
+    }
+
+
+def render_text(report: Dict) -> str:
+    """Human-readable report (the demo's last screen and report.txt)."""
+    lines = [
+        "RoboDog demo report",
+        "===================",
+        "tricks completed:        %d of %d (%s)" % (
+            len(report["tricks_completed"]), len(report["tricks_requested"]), ", ".join(report["tricks_completed"])),
+        "collisions with people:  %d (ground truth, robot footprint vs person cylinders)" % report[
+            "collisions_with_people"],
+        "min distance to person:  %s m" % report["min_distance_to_person_m"],
+        "stops / resumes:         %d / %d (collision stops: %d)" % (
+            report["stops"], report["resumes"], report["collision_stops"]),
+        "final pose error:        %.3f m, %.1f deg (ground truth vs start)" % (
+            report["final_position_error_m"], report["final_yaw_error_deg"]),
+        "software reaction time:  p50 %s s, p99 %s s over %d stops (goal <= %s s: one scan + 20 ms)" % (
+            report["reaction_p50_s"], report["reaction_p99_s"], len(report["reaction_times_s"]),
+            report["reaction_goal_s"]),
+        "duration:                %.1f s" % report["duration_s"],
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def write_report(report: Dict, out_dir: str) -> None:
+    """Write report.json and report.txt into out_dir."""
+    with open("%s/report.json" % out_dir, "w") as fh:
+        json.dump(report, fh, indent=2)
+    with open("%s/report.txt" % out_dir, "w") as fh:
+        fh.write(render_text(report))
+
+
+def plot_run(path_xy: Sequence[Tuple[float, float]], people: Dict[str, List[Tuple[float, float, float]]],
+             stop_points: Sequence[Tuple[float, float]], png: str) -> None:
+    """PNG of the run: the robot's ground-truth path, where people stood, where it stopped.
+
+    Args:
+        path_xy: ground-truth positions [m].
+        people: person name -> list of (x, y, radius) samples.
+        stop_points: robot positions at collision stops [m].
+        png: output file.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 6))
+    if path_xy:
+        xs, ys = zip(*path_xy)
+        ax.plot(xs, ys, "-", color="tab:blue", lw=1.5, label="robot (ground truth)")
+        ax.plot(xs[0], ys[0], "o", color="tab:green", label="start")
+    for i, (_name, samples) in enumerate(sorted(people.items())):
+        px = [s[0] for s in samples]
+        py = [s[1] for s in samples]
+        ax.plot(px, py, ".", ms=2, color="tab:orange", alpha=0.4, label="people" if i == 0 else None)
+        ax.add_patch(plt.Circle((px[-1], py[-1]), samples[-1][2], color="tab:orange", fill=False))
+    if stop_points:
+        sx, sy = zip(*stop_points)
+        ax.plot(sx, sy, "x", color="red", ms=10, mew=2, label="collision stop")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title("RoboDog demo run")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    plt.close(fig)

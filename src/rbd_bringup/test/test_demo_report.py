@@ -1,0 +1,35 @@
+import math
+
+import pytest
+
+from rbd_bringup.demo_report import build_report, percentile, reaction_times, render_text
+
+
+def test_reaction_time_from_moving_command_to_first_zero():
+    cmds = [(0.0, 0.3), (0.1, 0.3), (0.2, 0.3), (0.25, 0.0), (0.3, 0.0)]
+    assert reaction_times([0.12], cmds) == [pytest.approx(0.13)]
+
+
+def test_onset_while_standing_is_not_a_reaction():
+    cmds = [(0.0, 0.0), (0.1, 0.0), (0.2, 0.3)]
+    assert reaction_times([0.05], cmds) == []
+
+
+def test_percentile_nearest_rank():
+    assert percentile([], 50) is None
+    assert percentile([3.0, 1.0, 2.0], 50) == 2.0
+    assert percentile([1.0, 2.0, 3.0, 4.0], 99) == 4.0
+
+
+def test_report_counts_stops_resumes_and_pose_error():
+    log = [(0, "EMERGENCY_STOP"), (1, "WAITING_FOR_GESTURE"), (2, "GENERATING_PATH"), (3, "EXECUTING"),
+           (4, "COLLISION_DETECTED"), (6, "EXECUTING"), (9, "WAITING_FOR_GESTURE")]
+    rep = build_report(["walk"], ["walk"], [], 0.42, log, (0, 0, 0), (0.03, 0.04, math.radians(2)), [0.1, 0.12],
+                       0.1, 12.0)
+    assert rep["stops"] == 2 and rep["resumes"] == 1 and rep["collision_stops"] == 1
+    assert rep["final_position_error_m"] == pytest.approx(0.05)
+    assert rep["final_yaw_error_deg"] == pytest.approx(2.0, abs=0.01)
+    assert rep["reaction_p99_s"] == pytest.approx(0.12)
+    assert rep["reaction_goal_s"] == pytest.approx(0.12)
+    text = render_text(rep)
+    assert "collisions with people:  0" in text and "1 of 1" in text

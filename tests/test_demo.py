@@ -1,0 +1,30 @@
+"""System test: `make demo`'s scenario (tools/demo_scenario.py) on the whole simulated stack.
+
+Asserts the report measured on ground truth: every trick completed, no contact with people,
+the robot stopped for the visitor and resumed after the visitor left.
+"""
+
+import json
+import os
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def test_demo_scenario(tmp_path):
+    out = tmp_path / "demo"
+    proc = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "demo_scenario.py"), "--out", str(out),
+                           "--columns", "512"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                          timeout=600)
+    assert (out / "report.json").exists(), proc.stdout[-5000:]
+    report = json.loads((out / "report.json").read_text())
+    assert report["collisions_with_people"] == 0, report
+    assert report["tricks_completed"] == ["walk", "spin", "wiggle", "lie_down"], proc.stdout[-5000:]
+    assert report["collision_stops"] >= 1, "the robot never stopped for the visitor"
+    assert report["resumes"] >= 1, "the interrupted trick never resumed"
+    assert report["min_distance_to_person_m"] > 0.0
+    assert report["final_position_error_m"] < 0.1
+    assert (out / "run.png").stat().st_size > 10000
+    assert (out / "demo.bag").exists()
+    assert proc.returncode == 0, proc.stdout[-5000:]

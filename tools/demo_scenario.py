@@ -1,0 +1,369 @@
+#!/usr/bin/env python3
+"""`make demo`: the whole RoboDog system in simulation with a scripted audience.
+
+Starts a private ROS master and `rbd_bringup sim.launch`, plays the laptop app (rbd_local) for
+the audience: gestures go through the app's own recognition pipeline (MediaPipe on a clip made
+from a real hand photo for `walk` and `lie_down`; recorded key-point sequences for `spin` and
+`wiggle`) and through the rosbridge-compatible server to the robot. During the walk a person
+steps into the robot's way and leaves again. Everything safety-related is measured on the
+simulator's ground truth and on the command stream the A1 receives over LCM.
+
+Writes OUT/report.txt, OUT/report.json, OUT/run.png and OUT/demo.bag.
+"""
+
+import argparse
+import math
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+TRICKS = ["walk", "spin", "wiggle", "lie_down"]
+GESTURE_OF = {"walk": "swipe_right", "spin": "circle", "wiggle": "wave", "lie_down": "push_down"}
+PHOTO_MOTION = {"walk": "right", "lie_down": "down"}  # gestures a moving real photo can show
+BAG_TOPICS = ["/rbd_sim/ground_truth", "/rbd_sim/obstacles", "/rbd_controller/state", "/rbd_controller/path_queue",
+              "/rbd_pos_controller/status", "/rbd_lidar/state", "/cmd_vel", "/rbd_gestrec/gesture", "/scan"]
+
+
+def free_port():
+    """A TCP port on 127.0.0.1 that is free right now."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def say(msg):
+    """Print one progress line with the time since the demo started."""
+    print("[demo %6.1f s] %s" % (time.monotonic() - T0, msg), flush=True)
+
+
+T0 = time.monotonic()
+
+
+class Monitor:
+    """Ground truth, people, controller states, LiDAR onsets and the A1's LCM command stream."""
+
+    def __init__(self, lcm_url):
+        import rospy
+        from nav_msgs.msg import Odometry
+        from std_msgs.msg import String
+        from visualization_msgs.msg import MarkerArray
+
+        from rbd_bringup.metrics import ContactMonitor
+        from rbd_msgs.msg import CollisionState
+
+        self.lock = threading.Lock()
+        self.contacts = ContactMonitor()
+        self.pose = None
+        self.path = []
+        self.people = {}
+        self.people_log = {}
+        self.state = ""
+        self.state_log = []
+        self.onsets = []
+        self.stop_points = []
+        self.commands = []
+        self._collision = False
+        rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_truth, queue_size=50)
+        rospy.Subscriber("/rbd_sim/obstacles", MarkerArray, self.on_people, queue_size=5)
+        rospy.Subscriber("/rbd_controller/state", String, self.on_state, queue_size=20)
+        rospy.Subscriber("/rbd_lidar/state", CollisionState, self.on_zone, queue_size=50)
+        self._lcm_stop = threading.Event()
+        self._lcm = threading.Thread(target=self.lcm_loop, args=(lcm_url,), daemon=True)
+        self._lcm.start()
+
+    def lcm_loop(self, url):
+        """Record every HighCmd the A1 receives (time, commanded speed)."""
+        import lcm
+
+        from rbd_a1_driver import unitree_layout as ul
+
+        lc = lcm.LCM(url)
+
+        def on_cmd(_channel, data):
+            try:
+                cmd = ul.decode_high_cmd(data)
+            except ValueError:
+                return
+            speed = max(math.hypot(cmd.velocity[0], cmd.velocity[1]), abs(cmd.yaw_speed))
+            if cmd.mode != ul.MODE_VELOCITY_WALK:
+                speed = 0.0
+            with self.lock:
+                self.commands.append((time.time(), speed))
+
+        lc.subscribe(ul.CHANNEL_HIGH_CMD, on_cmd)
+        while not self._lcm_stop.is_set():
+            lc.handle_timeout(100)
+
+    def on_truth(self, msg):
+        """Ground-truth pose: path, contacts with people."""
+        p = msg.pose.pose.position
+        q = msg.pose.pose.orientation
+        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        with self.lock:
+            self.pose = (p.x, p.y, yaw)
+            if not self.path or math.hypot(p.x - self.path[-1][0], p.y - self.path[-1][1]) > 0.01:
+                self.path.append((p.x, p.y))
+            people = [(n, x, y, r) for n, (x, y, r) in self.people.items()]
+            self.contacts.update(msg.header.stamp.to_sec(), (p.x, p.y), yaw, people)
+
+    def on_people(self, msg):
+        """Current people and obstacles of the simulated world."""
+        with self.lock:
+            for m in msg.markers:
+                if m.action != 0 or m.type != 3:  # ADD, CYLINDER
+                    if m.action in (2, 3):  # DELETE, DELETEALL
+                        self.people.pop(m.text or "%s/%d" % (m.ns, m.id), None)
+                    continue
+                name = m.text or "%s/%d" % (m.ns, m.id)
+                entry = (m.pose.position.x, m.pose.position.y, m.scale.x / 2.0)
+                self.people[name] = entry
+                self.people_log.setdefault(name, []).append(entry)
+
+    def on_state(self, msg):
+        """Main-controller state changes (printed, logged, stop points)."""
+        with self.lock:
+            self.state = msg.data
+            self.state_log.append((time.time(), msg.data))
+            if msg.data == "COLLISION_DETECTED" and self.pose:
+                self.stop_points.append(self.pose[:2])
+        say("state -> %s" % msg.data)
+
+    def on_zone(self, msg):
+        """Scan stamps at which an intruder first entered the zone."""
+        if msg.collision and not self._collision and not msg.stale and not msg.error:
+            with self.lock:
+                self.onsets.append(msg.header.stamp.to_sec())
+        self._collision = msg.collision
+
+    def wait_state(self, states, timeout):
+        """Block until the controller is in one of states; False on timeout."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self.state in states:
+                return True
+            time.sleep(0.05)
+        return False
+
+    def close(self):
+        """Stop the LCM listener."""
+        self._lcm_stop.set()
+        self._lcm.join(2.0)
+
+
+class Audience:
+    """The laptop app's gesture pipeline feeding the robot link."""
+
+    def __init__(self, link, cache_dir):
+        from rbd_local.gestures.config import load_config
+        from rbd_local.gestures.model import GestureModel
+
+        cfg = load_config()
+        self.model = GestureModel.load(cfg["model"])
+        self.mapping = cfg["gestures"]
+        self.cfg = cfg
+        self.link = link
+        self.cache_dir = cache_dir
+        self.photo = None
+
+    def _photo(self):
+        if self.photo is None:
+            import cv2
+
+            from rbd_local.testdata import fetch_hand_photos
+
+            self.photo = cv2.imread(fetch_hand_photos(self.cache_dir)["handSrc.jpg"])
+        return self.photo
+
+    def show(self, trick, seed):
+        """Perform the gesture for ``trick``; returns the commands the app sent."""
+        from rbd_local.gestures.recognizer import GestureRecognizer
+
+        sent = []
+
+        def send(command):
+            sent.append(command)
+            self.link.send_gesture(command)
+
+        if trick in PHOTO_MOTION:
+            from rbd_local.gestures.photo_clip import moving_photo_frames
+            from rbd_local.gestures.pipeline import GesturePipeline
+
+            pipe = GesturePipeline(self.model, self.mapping, send=send, model_complexity=self.cfg["model_complexity"])
+            try:
+                frames = moving_photo_frames(self._photo(), PHOTO_MOTION[trick])
+                for i, frame in enumerate(frames):
+                    pipe.process(i / 30.0, frame)
+                    time.sleep(1.0 / 60.0)
+            finally:
+                pipe.close()
+            source = "MediaPipe on a moving real hand photo"
+        else:
+            from rbd_local.gestures import synthetic
+
+            rec = GestureRecognizer(self.model, None, self.cfg["min_consecutive"], self.cfg["cooldown_s"])
+            for t, kp in synthetic.stream(["static", GESTURE_OF[trick], "static"], seed):
+                d = rec.update(t, kp)
+                if d.fired and self.mapping.get(d.label):
+                    send(self.mapping[d.label])
+            source = "recorded key-point sequence"
+        say("audience shows %s (%s) -> app sent %s" % (GESTURE_OF[trick], source, sent or "nothing"))
+        return sent
+
+
+def main():
+    """Run the demo; exit 0 when every trick completed with no contact."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", default=os.path.join(ROOT, "demo-output"))
+    ap.add_argument("--tricks", default=",".join(TRICKS))
+    ap.add_argument("--intrude", default="walk", help="trick during which a person steps in ('' = none)")
+    ap.add_argument("--columns", type=int, default=1024)
+    ap.add_argument("--visual", action="store_true", help="open RViz (audience view) and the GUI")
+    ap.add_argument("--trick-timeout", type=float, default=90.0)
+    args = ap.parse_args()
+    tricks = [t for t in args.tricks.split(",") if t]
+    os.makedirs(args.out, exist_ok=True)
+
+    home = tempfile.mkdtemp(prefix="rbd-demo-home.")
+    port, bridge_port = free_port(), free_port()
+    os.environ.update(ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOME=home,
+                      ROS_LOG_DIR=os.path.join(home, "log"), ROS_IP="127.0.0.1")
+    launch_log = open(os.path.join(args.out, "roslaunch.log"), "w")
+    cmd = ["roslaunch", "-p", str(port), "rbd_bringup", "sim.launch", "lidar_columns:=%d" % args.columns,
+           "bridge_port:=%d" % bridge_port, "rviz:=%s" % str(args.visual).lower()]
+    say("starting the simulated system: %s" % " ".join(cmd))
+    launch = subprocess.Popen(cmd, stdout=launch_log, stderr=subprocess.STDOUT, start_new_session=True)
+    procs = [launch]
+    monitor = link = None
+    try:
+        import rospy
+
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                socket.create_connection(("127.0.0.1", port), 0.5).close()
+                break
+            except OSError as exc:
+                if time.monotonic() > deadline:
+                    raise RuntimeError("ROS master did not start") from exc
+                time.sleep(0.2)
+        rospy.init_node("demo_audience", disable_signals=True)
+        deadline = time.monotonic() + 60
+        while not rospy.has_param("/rbd_sim/lcm_url") and time.monotonic() < deadline:
+            time.sleep(0.2)
+        monitor = Monitor(rospy.get_param("/rbd_sim/lcm_url"))
+        bag = subprocess.Popen(["rosbag", "record", "-q", "-O", os.path.join(args.out, "demo.bag")] + BAG_TOPICS,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+        procs.append(bag)
+        if args.visual:
+            procs.append(subprocess.Popen(["rbd-gui", "--port", str(bridge_port)], start_new_session=True))
+
+        from rbd_local.link import RobotLink
+
+        link = RobotLink(port=bridge_port).start()
+        if not link.wait_connected(60.0):
+            raise RuntimeError("laptop app could not reach the bridge on port %d" % bridge_port)
+        say("laptop app connected to the bridge on port %d" % bridge_port)
+        if not monitor.wait_state(("EMERGENCY_STOP",), 60.0):
+            raise RuntimeError("controller did not come up in EMERGENCY_STOP")
+        deadline = time.monotonic() + 30
+        while monitor.pose is None and time.monotonic() < deadline:
+            time.sleep(0.1)
+        audience = Audience(link, os.path.join(ROOT, "rbd_local", ".cache"))
+
+        say("operator releases the e-stop (GUI path: bridge -> /rbd_controller/em_stop)")
+        ok, message = link.em_stop(False)
+        if not ok:
+            raise RuntimeError("e-stop release failed: %s" % message)
+        monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0)
+        start_pose = monitor.pose
+        t_start = time.monotonic()
+        completed = []
+        for i, trick in enumerate(tricks):
+            taken = False
+            for attempt in range(5):
+                monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0)
+                audience.show(trick, seed=100 + 10 * i + attempt)
+                if monitor.wait_state(("GENERATING_PATH", "EXECUTING"), 8.0):
+                    taken = True
+                    break
+            if not taken:
+                say("trick %s: the robot never took the gesture" % trick)
+                continue
+            if trick == args.intrude:
+                intrude(monitor)
+            if monitor.wait_state(("EXECUTING",), 10.0) and wait_done(monitor, args.trick_timeout):
+                completed.append(trick)
+                say("trick %s completed (%d/%d)" % (trick, len(completed), len(tricks)))
+            else:
+                say("trick %s did not complete" % trick)
+        duration = time.monotonic() - t_start
+        time.sleep(1.0)
+    finally:
+        if link is not None:
+            link.stop()
+        if monitor is not None:
+            monitor.close()
+        for p in reversed(procs):
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGINT)
+        for p in reversed(procs):
+            try:
+                p.wait(20)
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
+        shutil.rmtree(home, ignore_errors=True)
+
+    from rbd_bringup.demo_report import build_report, plot_run, reaction_times, render_text, write_report
+
+    with monitor.lock:
+        report = build_report(tricks, completed, monitor.contacts.contacts, monitor.contacts.min_clearance,
+                              monitor.state_log, start_pose, monitor.pose,
+                              reaction_times(monitor.onsets, monitor.commands), 0.1, duration)
+        plot_run(monitor.path, monitor.people_log, monitor.stop_points, os.path.join(args.out, "run.png"))
+    write_report(report, args.out)
+    print(render_text(report), flush=True)
+    print("written: %s/{report.txt, report.json, run.png, demo.bag}" % args.out, flush=True)
+    ok = report["collisions_with_people"] == 0 and len(completed) == len(tricks)
+    return 0 if ok else 1
+
+
+def wait_done(monitor, timeout):
+    """Wait until the trick's queue is done (back to WAITING_FOR_GESTURE)."""
+    return monitor.wait_state(("WAITING_FOR_GESTURE",), timeout)
+
+
+def intrude(monitor):
+    """A visitor steps into the robot's way while it walks, waits, and leaves."""
+    import rospy
+
+    from rbd_msgs.srv import PlaceObstacle
+
+    place = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
+    # Wait until the robot really walks, then put the person 1.0 m ahead of it.
+    deadline = time.monotonic() + 15.0
+    while time.monotonic() < deadline:
+        with monitor.lock:
+            moving = monitor.commands and monitor.commands[-1][1] > 0.1
+        if moving and monitor.state == "EXECUTING":
+            break
+        time.sleep(0.05)
+    x, y, yaw = monitor.pose
+    px, py = x + 1.0 * math.cos(yaw), y + 1.0 * math.sin(yaw)
+    say("a visitor steps in 1.0 m ahead of the walking robot at (%.2f, %.2f)" % (px, py))
+    place("visitor", px, py, 0.2, 1.7, False)
+    stopped = monitor.wait_state(("COLLISION_DETECTED",), 10.0)
+    say("robot %s" % ("stopped for the visitor" if stopped else "did NOT stop"))
+    time.sleep(3.0)
+    place("visitor", px, py, 0.2, 1.7, True)
+    say("the visitor leaves")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
