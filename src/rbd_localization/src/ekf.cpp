@@ -1,0 +1,319 @@
+#include "rbd_localization/ekf.h"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+namespace rbd_localization {
+
+namespace {
+
+using Mat3 = Eigen::Matrix3d;
+using Vec3 = Eigen::Vector3d;
+using Rows3 = Eigen::Matrix<double, 3, STATE_SIZE>;
+
+constexpr double kMinVariance = 1e-9;
+constexpr double kMinCosPitch = 1e-6;
+
+// The members planar mode holds at zero.
+constexpr std::array<int, 7> kTwoDMembers = {{StateMemberZ, StateMemberRoll, StateMemberPitch, StateMemberVz,
+                                              StateMemberVroll, StateMemberVpitch, StateMemberAz}};
+
+bool isTwoDMember(int index) {
+  for (int m : kTwoDMembers) {
+    if (m == index) return true;
+  }
+  return false;
+}
+
+// Blocks of the motion model's Jacobian F at one state for one step dt. Row blocks that
+// differ from identity are position (0-2), orientation (3-5) and linear velocity (6-8):
+//   p' = p + R(e) (v dt + a dt^2 / 2)   e' = e + T(e) w dt   v' = v + a dt
+struct ModelBlocks {
+  Mat3 rot;        // R(e) body -> world, R = Rz(yaw) Ry(pitch) Rx(roll)
+  Mat3 d_pos_d_e;  // d p' / d e
+  Mat3 euler_rate; // T(e): body rates -> Euler angle rates
+  Mat3 d_e_d_e;    // d e' / d e (identity + dT/de w dt)
+  Vec3 pos_step;   // R (v dt + a dt^2/2)
+  Vec3 euler_step; // T w dt
+};
+
+ModelBlocks modelBlocks(const StateVector& x, double dt) {
+  const double cr = std::cos(x(StateMemberRoll)), sr = std::sin(x(StateMemberRoll));
+  const double cp = std::cos(x(StateMemberPitch)), sp = std::sin(x(StateMemberPitch));
+  const double cy = std::cos(x(StateMemberYaw)), sy = std::sin(x(StateMemberYaw));
+  Mat3 rx, ry, rz, drx, dry, drz;
+  rx << 1, 0, 0, 0, cr, -sr, 0, sr, cr;
+  ry << cp, 0, sp, 0, 1, 0, -sp, 0, cp;
+  rz << cy, -sy, 0, sy, cy, 0, 0, 0, 1;
+  drx << 0, 0, 0, 0, -sr, -cr, 0, cr, -sr;
+  dry << -sp, 0, cp, 0, 0, 0, -cp, 0, -sp;
+  drz << -sy, -cy, 0, cy, -sy, 0, 0, 0, 0;
+
+  ModelBlocks b;
+  const Mat3 rzy = rz * ry;
+  b.rot = rzy * rx;
+  const Vec3 v = x.segment<3>(POSITION_V_OFFSET);
+  const Vec3 a = x.segment<3>(POSITION_A_OFFSET);
+  const Vec3 u = v * dt + a * (0.5 * dt * dt);
+  b.pos_step = b.rot * u;
+  b.d_pos_d_e.col(0) = rzy * (drx * u);
+  b.d_pos_d_e.col(1) = rz * (dry * (rx * u));
+  b.d_pos_d_e.col(2) = drz * (ry * (rx * u));
+
+  // Keep T finite near +-90 deg pitch (gimbal lock): clamp cos(pitch) away from zero.
+  const double cpc = std::fabs(cp) < kMinCosPitch ? std::copysign(kMinCosPitch, cp) : cp;
+  const double tp = sp / cpc;
+  const double sec = 1.0 / cpc;
+  b.euler_rate << 1, sr * tp, cr * tp, 0, cr, -sr, 0, sr * sec, cr * sec;
+  const Vec3 w = x.segment<3>(ORIENTATION_V_OFFSET);
+  b.euler_step = b.euler_rate * w * dt;
+  Mat3 dt_droll, dt_dpitch;
+  dt_droll << 0, cr * tp, -sr * tp, 0, -sr, -cr, 0, cr * sec, -sr * sec;
+  dt_dpitch << 0, sr * sec * sec, cr * sec * sec, 0, 0, 0, 0, sr * tp * sec, cr * tp * sec;
+  b.d_e_d_e.setIdentity();
+  b.d_e_d_e.col(0) += dt_droll * w * dt;
+  b.d_e_d_e.col(1) += dt_dpitch * w * dt;
+  return b;
+}
+
+// Rows of F * M for the three non-identity row blocks, M given with STATE_SIZE rows.
+void applyTransfer(const ModelBlocks& b, double dt, const StateMatrix& m, StateMatrix* out) {
+  *out = m;
+  const Rows3 pos = m.middleRows<3>(POSITION_OFFSET) + b.d_pos_d_e * m.middleRows<3>(ORIENTATION_OFFSET) +
+                    (b.rot * dt) * m.middleRows<3>(POSITION_V_OFFSET) +
+                    (b.rot * (0.5 * dt * dt)) * m.middleRows<3>(POSITION_A_OFFSET);
+  const Rows3 ori =
+      b.d_e_d_e * m.middleRows<3>(ORIENTATION_OFFSET) + (b.euler_rate * dt) * m.middleRows<3>(ORIENTATION_V_OFFSET);
+  out->middleRows<3>(POSITION_V_OFFSET) += dt * m.middleRows<3>(POSITION_A_OFFSET);
+  out->middleRows<3>(POSITION_OFFSET) = pos;
+  out->middleRows<3>(ORIENTATION_OFFSET) = ori;
+}
+
+}  // namespace
+
+double wrapAngle(double angle) {
+  if (angle >= -M_PI && angle < M_PI) return angle;
+  angle = std::fmod(angle + M_PI, 2.0 * M_PI);
+  if (angle < 0.0) angle += 2.0 * M_PI;
+  return angle - M_PI;
+}
+
+Measurement::Measurement()
+    : time(0.0),
+      values(StateVector::Zero()),
+      covariance(StateMatrix::Identity()),
+      mahalanobis_threshold(std::numeric_limits<double>::max()) {
+  update_vector.fill(false);
+}
+
+Ekf::Ekf()
+    : state_(StateVector::Zero()),
+      covariance_(StateMatrix::Identity() * 1e-9),
+      initial_covariance_(StateMatrix::Identity() * 1e-9),
+      process_noise_(StateMatrix::Identity() * 0.01),
+      initialized_(false),
+      two_d_mode_(false),
+      debug_(false),
+      debug_stream_(nullptr),
+      last_update_time_(0.0),
+      last_squared_mahalanobis_(0.0) {}
+
+void Ekf::setProcessNoiseCovariance(const StateMatrix& q) { process_noise_ = q; }
+
+void Ekf::setInitialEstimateCovariance(const StateMatrix& p0) {
+  initial_covariance_ = p0;
+  if (!initialized_) covariance_ = p0;
+}
+
+void Ekf::setTwoDMode(bool enabled) {
+  two_d_mode_ = enabled;
+  if (two_d_mode_) enforceTwoD();
+}
+
+void Ekf::setDebug(bool enabled, std::ostream* stream) {
+  debug_ = enabled;
+  debug_stream_ = stream;
+}
+
+void Ekf::reset() {
+  state_.setZero();
+  covariance_ = initial_covariance_;
+  initialized_ = false;
+  last_update_time_ = 0.0;
+  last_squared_mahalanobis_ = 0.0;
+}
+
+void Ekf::setState(const StateVector& state, double time) {
+  state_ = state;
+  wrapStateAngles();
+  if (two_d_mode_) enforceTwoD();
+  initialized_ = true;
+  last_update_time_ = time;
+}
+
+void Ekf::setCovariance(const StateMatrix& covariance) {
+  covariance_ = covariance;
+  if (two_d_mode_) enforceTwoD();
+}
+
+StateMatrix Ekf::transferJacobian(double dt) const {
+  const ModelBlocks b = modelBlocks(state_, dt);
+  StateMatrix f;
+  applyTransfer(b, dt, StateMatrix::Identity(), &f);
+  return f;
+}
+
+void Ekf::predict(double dt) {
+  if (!(dt > 0.0)) return;
+  const ModelBlocks b = modelBlocks(state_, dt);
+
+  // P' = F P F^T + Q dt, using F's block structure: (F (F P)^T)^T.
+  StateMatrix fp, fpft;
+  applyTransfer(b, dt, covariance_, &fp);
+  applyTransfer(b, dt, fp.transpose(), &fpft);
+  covariance_ = fpft.transpose();
+  covariance_.noalias() += process_noise_ * dt;
+  covariance_ = 0.5 * (covariance_ + covariance_.transpose()).eval();
+
+  // State after the Jacobian was taken at the prior state.
+  state_.segment<3>(POSITION_OFFSET) += b.pos_step;
+  state_.segment<3>(ORIENTATION_OFFSET) += b.euler_step;
+  state_.segment<3>(POSITION_V_OFFSET) += state_.segment<3>(POSITION_A_OFFSET) * dt;
+  wrapStateAngles();
+  if (two_d_mode_) enforceTwoD();
+  last_update_time_ += dt;
+
+  if (debugOn()) {
+    *debug_stream_ << "predict dt=" << dt << " state=" << state_.transpose() << "\n";
+  }
+}
+
+void Ekf::predictTo(double time) {
+  if (!initialized_) {
+    last_update_time_ = time;
+    return;
+  }
+  predict(time - last_update_time_);
+}
+
+CorrectResult Ekf::correct(const Measurement& meas) {
+  // Indices this update uses (planar mode drops the members it holds at zero).
+  std::array<int, STATE_SIZE> idx;
+  int m = 0;
+  for (int i = 0; i < STATE_SIZE; ++i) {
+    if (!meas.update_vector[i] || (two_d_mode_ && isTwoDMember(i))) continue;
+    if (!std::isfinite(meas.values(i))) {
+      if (debugOn()) *debug_stream_ << "reject " << meas.source << ": non-finite value at index " << i << "\n";
+      return CorrectResult::kInvalid;
+    }
+    idx[m++] = i;
+  }
+  if (m == 0) return CorrectResult::kInvalid;
+
+  MeasVector innovation(m);
+  MeasMatrix r(m, m);
+  GainMatrix pht(STATE_SIZE, m);
+  MeasMatrix s(m, m);
+  for (int a = 0; a < m; ++a) {
+    const int i = idx[a];
+    double d = meas.values(i) - state_(i);
+    if (isAngleMember(i)) d = wrapAngle(d);
+    innovation(a) = d;
+    pht.col(a) = covariance_.col(i);
+    for (int c = 0; c < m; ++c) {
+      const double rv = meas.covariance(i, idx[c]);
+      if (!std::isfinite(rv)) return CorrectResult::kInvalid;
+      r(a, c) = rv;
+      s(a, c) = covariance_(i, idx[c]);
+    }
+    // A zero or negative variance would make the update singular: floor it.
+    if (r(a, a) < kMinVariance) r(a, a) = kMinVariance;
+  }
+  s += r;
+
+  const Eigen::LLT<MeasMatrix> llt(s);
+  if (llt.info() != Eigen::Success) {
+    if (debugOn()) *debug_stream_ << "reject " << meas.source << ": innovation covariance not PD\n";
+    return CorrectResult::kInvalid;
+  }
+  const MeasVector s_inv_innov = llt.solve(innovation);
+  last_squared_mahalanobis_ = innovation.dot(s_inv_innov);
+  const double gate = meas.mahalanobis_threshold;
+  if (gate < std::sqrt(std::numeric_limits<double>::max()) && last_squared_mahalanobis_ > gate * gate) {
+    if (debugOn()) {
+      *debug_stream_ << "reject " << meas.source << ": squared Mahalanobis " << last_squared_mahalanobis_
+                     << " > " << gate * gate << "\n";
+    }
+    return CorrectResult::kRejected;
+  }
+
+  // K = P H^T S^-1
+  const GainMatrix k = llt.solve(pht.transpose()).transpose();
+  state_.noalias() += k * innovation;
+
+  // Joseph form P' = (I - K H) P (I - K H)^T + K R K^T, using H = rows idx of the identity:
+  // A = P - K (H P);  P' = A - (A H^T) K^T + K R K^T.
+  GainMatrix hp_t(STATE_SIZE, m);  // (H P)^T = P H^T, P symmetric
+  hp_t = pht;
+  StateMatrix a_mat = covariance_;
+  a_mat.noalias() -= k * hp_t.transpose();
+  GainMatrix aht(STATE_SIZE, m);
+  for (int c = 0; c < m; ++c) aht.col(c) = a_mat.col(idx[c]);
+  covariance_ = a_mat;
+  covariance_.noalias() -= aht * k.transpose();
+  covariance_.noalias() += k * r * k.transpose();
+  covariance_ = 0.5 * (covariance_ + covariance_.transpose()).eval();
+
+  wrapStateAngles();
+  if (two_d_mode_) enforceTwoD();
+  if (debugOn()) {
+    *debug_stream_ << "correct " << meas.source << " m=" << m << " state=" << state_.transpose() << "\n";
+  }
+  return CorrectResult::kAccepted;
+}
+
+CorrectResult Ekf::processMeasurement(const Measurement& meas) {
+  if (!initialized_) {
+    // Take the measured members as they are; keep the initial covariance elsewhere.
+    bool any = false;
+    for (int i = 0; i < STATE_SIZE; ++i) {
+      if (!meas.update_vector[i]) continue;
+      if (!std::isfinite(meas.values(i))) return CorrectResult::kInvalid;
+      any = true;
+    }
+    if (!any) return CorrectResult::kInvalid;
+    covariance_ = initial_covariance_;
+    for (int i = 0; i < STATE_SIZE; ++i) {
+      if (!meas.update_vector[i]) continue;
+      state_(i) = meas.values(i);
+      for (int j = 0; j < STATE_SIZE; ++j) {
+        if (meas.update_vector[j]) covariance_(i, j) = meas.covariance(i, j);
+      }
+      if (covariance_(i, i) < kMinVariance) covariance_(i, i) = kMinVariance;
+    }
+    initialized_ = true;
+    last_update_time_ = meas.time;
+    wrapStateAngles();
+    if (two_d_mode_) enforceTwoD();
+    if (debugOn()) *debug_stream_ << "initialised from " << meas.source << "\n";
+    return CorrectResult::kAccepted;
+  }
+  // Measurements older than the state are fused without predicting backwards.
+  if (meas.time > last_update_time_) predict(meas.time - last_update_time_);
+  return correct(meas);
+}
+
+void Ekf::enforceTwoD() {
+  for (int i : kTwoDMembers) {
+    state_(i) = 0.0;
+    covariance_.row(i).setZero();
+    covariance_.col(i).setZero();
+    covariance_(i, i) = kMinVariance;
+  }
+}
+
+void Ekf::wrapStateAngles() {
+  for (int i = ORIENTATION_OFFSET; i < ORIENTATION_OFFSET + 3; ++i) state_(i) = wrapAngle(state_(i));
+}
+
+}  // namespace rbd_localization
