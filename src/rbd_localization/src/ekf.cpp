@@ -79,11 +79,15 @@ ModelBlocks modelBlocks(const StateVector& x, double dt) {
 // Rows of F * M for the three non-identity row blocks, M given with STATE_SIZE rows.
 void applyTransfer(const ModelBlocks& b, double dt, const StateMatrix& m, StateMatrix* out) {
   *out = m;
-  const Rows3 pos = m.middleRows<3>(POSITION_OFFSET) + b.d_pos_d_e * m.middleRows<3>(ORIENTATION_OFFSET) +
-                    (b.rot * dt) * m.middleRows<3>(POSITION_V_OFFSET) +
-                    (b.rot * (0.5 * dt * dt)) * m.middleRows<3>(POSITION_A_OFFSET);
-  const Rows3 ori =
-      b.d_e_d_e * m.middleRows<3>(ORIENTATION_OFFSET) + (b.euler_rate * dt) * m.middleRows<3>(ORIENTATION_V_OFFSET);
+  // Small fixed-size products: lazyProduct keeps them coefficient-based (no GEMM set-up).
+  const Mat3 rot_dt = b.rot * dt;
+  const Mat3 rot_hdt2 = b.rot * (0.5 * dt * dt);
+  const Mat3 euler_dt = b.euler_rate * dt;
+  const Rows3 pos = m.middleRows<3>(POSITION_OFFSET) + b.d_pos_d_e.lazyProduct(m.middleRows<3>(ORIENTATION_OFFSET)) +
+                    rot_dt.lazyProduct(m.middleRows<3>(POSITION_V_OFFSET)) +
+                    rot_hdt2.lazyProduct(m.middleRows<3>(POSITION_A_OFFSET));
+  const Rows3 ori = b.d_e_d_e.lazyProduct(m.middleRows<3>(ORIENTATION_OFFSET)) +
+                    euler_dt.lazyProduct(m.middleRows<3>(ORIENTATION_V_OFFSET));
   out->middleRows<3>(POSITION_V_OFFSET) += dt * m.middleRows<3>(POSITION_A_OFFSET);
   out->middleRows<3>(POSITION_OFFSET) = pos;
   out->middleRows<3>(ORIENTATION_OFFSET) = ori;
@@ -173,7 +177,12 @@ void Ekf::predict(double dt) {
   applyTransfer(b, dt, fp.transpose(), &fpft);
   covariance_ = fpft.transpose();
   covariance_.noalias() += process_noise_ * dt;
-  covariance_ = 0.5 * (covariance_ + covariance_.transpose()).eval();
+  for (int i = 0; i < STATE_SIZE; ++i) {
+    for (int j = i + 1; j < STATE_SIZE; ++j) {
+      const double v = 0.5 * (covariance_(i, j) + covariance_(j, i));
+      covariance_(i, j) = covariance_(j, i) = v;
+    }
+  }
 
   // State after the Jacobian was taken at the prior state.
   state_.segment<3>(POSITION_OFFSET) += b.pos_step;
@@ -208,12 +217,32 @@ CorrectResult Ekf::correct(const Measurement& meas) {
     }
     idx[m++] = i;
   }
-  if (m == 0) return CorrectResult::kInvalid;
+  // Fixed sizes for the common cases (IMU rates / accelerations: 3, planar pose: 3, 6-D pose: 6)
+  // let Eigen unroll the small products; anything else goes through the bounded dynamic path.
+  switch (m) {
+    case 0:
+      return CorrectResult::kInvalid;
+    case 3:
+      return correctSubset<3>(meas, idx);
+    case 6:
+      return correctSubset<6>(meas, idx);
+    default:
+      return correctSubset<Eigen::Dynamic>(meas, idx, m);
+  }
+}
 
-  MeasVector innovation(m);
-  MeasMatrix r(m, m);
-  GainMatrix pht(STATE_SIZE, m);
-  MeasMatrix s(m, m);
+template <int M>
+CorrectResult Ekf::correctSubset(const Measurement& meas, const std::array<int, STATE_SIZE>& idx, int m_dyn) {
+  constexpr int kMax = M == Eigen::Dynamic ? STATE_SIZE : M;
+  using VecM = Eigen::Matrix<double, M, 1, 0, kMax, 1>;
+  using MatM = Eigen::Matrix<double, M, M, 0, kMax, kMax>;
+  using MatNM = Eigen::Matrix<double, STATE_SIZE, M, 0, STATE_SIZE, kMax>;
+  const int m = M == Eigen::Dynamic ? m_dyn : M;
+
+  VecM innovation(m);
+  MatM r(m, m);
+  MatM s(m, m);
+  MatNM pht(STATE_SIZE, m);  // P H^T: the measured columns of P
   for (int a = 0; a < m; ++a) {
     const int i = idx[a];
     double d = meas.values(i) - state_(i);
@@ -231,38 +260,42 @@ CorrectResult Ekf::correct(const Measurement& meas) {
   }
   s += r;
 
-  const Eigen::LLT<MeasMatrix> llt(s);
+  const Eigen::LLT<MatM> llt(s);
   if (llt.info() != Eigen::Success) {
     if (debugOn()) *debug_stream_ << "reject " << meas.source << ": innovation covariance not PD\n";
     return CorrectResult::kInvalid;
   }
-  const MeasVector s_inv_innov = llt.solve(innovation);
+  const VecM s_inv_innov = llt.solve(innovation);
   last_squared_mahalanobis_ = innovation.dot(s_inv_innov);
   const double gate = meas.mahalanobis_threshold;
   if (gate < std::sqrt(std::numeric_limits<double>::max()) && last_squared_mahalanobis_ > gate * gate) {
     if (debugOn()) {
-      *debug_stream_ << "reject " << meas.source << ": squared Mahalanobis " << last_squared_mahalanobis_
-                     << " > " << gate * gate << "\n";
+      *debug_stream_ << "reject " << meas.source << ": squared Mahalanobis " << last_squared_mahalanobis_ << " > "
+                     << gate * gate << "\n";
     }
     return CorrectResult::kRejected;
   }
 
-  // K = P H^T S^-1
-  const GainMatrix k = llt.solve(pht.transpose()).transpose();
+  // K = P H^T S^-1 (S symmetric, so K^T = S^-1 H P).
+  const MatNM k = llt.solve(pht.transpose()).transpose();
   state_.noalias() += k * innovation;
 
-  // Joseph form P' = (I - K H) P (I - K H)^T + K R K^T, using H = rows idx of the identity:
-  // A = P - K (H P);  P' = A - (A H^T) K^T + K R K^T.
-  GainMatrix hp_t(STATE_SIZE, m);  // (H P)^T = P H^T, P symmetric
-  hp_t = pht;
+  // Joseph form P' = (I - K H) P (I - K H)^T + K R K^T with H = rows idx of the identity:
+  //   A = (I - K H) P = P - K (P H^T)^T
+  //   P' = A (I - K H)^T + K R K^T = A + (K R - A H^T) K^T
   StateMatrix a_mat = covariance_;
-  a_mat.noalias() -= k * hp_t.transpose();
-  GainMatrix aht(STATE_SIZE, m);
-  for (int c = 0; c < m; ++c) aht.col(c) = a_mat.col(idx[c]);
+  a_mat.noalias() -= k.lazyProduct(pht.transpose());
+  MatNM b = k * r;
+  for (int c = 0; c < m; ++c) b.col(c) -= a_mat.col(idx[c]);
   covariance_ = a_mat;
-  covariance_.noalias() -= aht * k.transpose();
-  covariance_.noalias() += k * r * k.transpose();
-  covariance_ = 0.5 * (covariance_ + covariance_.transpose()).eval();
+  covariance_.noalias() += b.lazyProduct(k.transpose());
+  // Keep exact symmetry against round-off.
+  for (int i = 0; i < STATE_SIZE; ++i) {
+    for (int j = i + 1; j < STATE_SIZE; ++j) {
+      const double v = 0.5 * (covariance_(i, j) + covariance_(j, i));
+      covariance_(i, j) = covariance_(j, i) = v;
+    }
+  }
 
   wrapStateAngles();
   if (two_d_mode_) enforceTwoD();

@@ -2,6 +2,7 @@
 
 #include <geometry_msgs/TransformStamped.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "rbd_localization/geometry.h"
@@ -94,6 +95,18 @@ bool EkfNode::init(std::string* error) {
                       [this, i](diagnostic_updater::DiagnosticStatusWrapper& st) { diagnoseSensor(i, st); });
     ROS_INFO("ekf: %s %s <- %s", typeName(s.cfg.type), s.cfg.name.c_str(), s.sub.getTopic().c_str());
   }
+  needs_dynamic_tf_ = params_.world_frame != params_.odom_frame;
+  rotation_resolved_.assign(sensors_.size(), true);
+  for (size_t i = 0; i < sensors_.size(); ++i) {
+    const SensorConfig& c = sensors_[i].cfg;
+    bool pose_part = false, rotated_part = false;
+    for (int k = 0; k < 6; ++k) pose_part = pose_part || c.update_vector[k];
+    for (int k = 6; k < STATE_SIZE; ++k) rotated_part = rotated_part || c.update_vector[k];
+    if ((c.type == SensorType::kPose || c.type == SensorType::kOdom) && pose_part && !c.frame_is_world) {
+      needs_dynamic_tf_ = true;
+    }
+    if (c.type == SensorType::kImu || (c.type != SensorType::kPose && rotated_part)) rotation_resolved_[i] = false;
+  }
   start_time_ = ros::Time::now();
   timer_ = nh_.createTimer(ros::Duration(1.0 / params_.frequency), &EkfNode::periodicUpdate, this);
   return true;
@@ -122,11 +135,26 @@ bool EkfNode::staticRotation(const std::string& target, const std::string& sourc
     *out = it->second;
     return true;
   }
+  if (!tf_listener_) {  // released earlier; a new frame appeared
+    tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, nh_));
+    ROS_WARN("ekf: new sensor frame %s: TF listener restarted", source.c_str());
+  }
   Eigen::Isometry3d t;
   if (!lookup(target, source, ros::Time(0), &t)) return false;
   static_rotations_[key] = t.linear();
   *out = t.linear();
   return true;
+}
+
+void EkfNode::maybeReleaseTf(size_t resolved_sensor) {
+  if (rotation_resolved_[resolved_sensor]) return;
+  rotation_resolved_[resolved_sensor] = true;
+  if (needs_dynamic_tf_ || !tf_listener_) return;
+  for (bool r : rotation_resolved_) {
+    if (!r) return;
+  }
+  tf_listener_.reset();
+  ROS_INFO("ekf: all sensor frames resolved, TF listener released");
 }
 
 bool EkfNode::lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
@@ -160,14 +188,14 @@ void EkfNode::imuCallback(const sensor_msgs::Imu::ConstPtr& msg, size_t idx) {
     markInvalid(idx, "no transform " + params_.base_link_frame + " <- " + msg->header.frame_id);
     return;
   }
-  std::vector<Measurement> parts;
+  maybeReleaseTf(idx);
   std::string reason;
   if (!imuMeasurements(*msg, base_from_imu, s.cfg, ekf_.state(), params_.gravitational_acceleration,
-                       stampToTime(msg->header.stamp), &parts, &reason)) {
+                       stampToTime(msg->header.stamp), &imu_parts_, &reason)) {
     markInvalid(idx, reason);
     return;
   }
-  for (const Measurement& m : parts) enqueue(m, idx);
+  for (const Measurement& m : imu_parts_) enqueue(m, idx);
 }
 
 void EkfNode::handlePose(const geometry_msgs::PoseWithCovariance& msg, const std::string& frame,
@@ -232,6 +260,7 @@ void EkfNode::odomCallback(const nav_msgs::Odometry::ConstPtr& msg, size_t idx) 
     markInvalid(idx, "no transform " + params_.base_link_frame + " <- " + msg->child_frame_id);
     return;
   }
+  maybeReleaseTf(idx);
   Measurement m;
   if (!twistMeasurement(msg->twist, base_from_child, s.cfg, stampToTime(msg->header.stamp), &m)) {
     markInvalid(idx, "twist with NaN/inf");
@@ -250,6 +279,7 @@ void EkfNode::twistCallback(const geometry_msgs::TwistWithCovarianceStamped::Con
     markInvalid(idx, "no transform " + params_.base_link_frame + " <- " + msg->header.frame_id);
     return;
   }
+  maybeReleaseTf(idx);
   Measurement m;
   if (!twistMeasurement(msg->twist, base_from_frame, s.cfg, stampToTime(msg->header.stamp), &m)) {
     markInvalid(idx, "twist with NaN/inf");
@@ -258,7 +288,11 @@ void EkfNode::twistCallback(const geometry_msgs::TwistWithCovarianceStamped::Con
   enqueue(m, idx);
 }
 
-void EkfNode::enqueue(const Measurement& m, size_t idx) { queue_.push(Queued{m, idx}); }
+void EkfNode::enqueue(const Measurement& m, size_t idx) {
+  queue_.emplace_back();
+  queue_.back().meas = m;
+  queue_.back().sensor = idx;
+}
 
 bool EkfNode::sensorStale(const SensorState& s, const ros::Time& now) const {
   if (s.received == 0) return (now - start_time_).toSec() > params_.sensor_stale_timeout;
@@ -271,15 +305,18 @@ void EkfNode::periodicUpdate(const ros::TimerEvent&) {
   if (!last_wall_check_.isZero() && now < last_wall_check_ - ros::Duration(1.0)) {
     ROS_WARN("ekf: time moved backwards, resetting the filter");
     ekf_.reset();
-    std::priority_queue<Queued>().swap(queue_);
+    queue_.clear();
     last_published_stamp_ = -1.0;
   }
   last_wall_check_ = now;
 
   bool processed = false;
-  while (!queue_.empty()) {
-    const Queued q = queue_.top();
-    queue_.pop();
+  order_.resize(queue_.size());
+  for (size_t i = 0; i < order_.size(); ++i) order_[i] = i;
+  std::stable_sort(order_.begin(), order_.end(),
+                   [this](size_t a, size_t b) { return queue_[a].meas.time < queue_[b].meas.time; });
+  for (size_t oi : order_) {
+    const Queued& q = queue_[oi];
     SensorState& s = sensors_[q.sensor];
     if (ekf_.initialized() && q.meas.time < ekf_.lastUpdateTime() - kMaxMeasurementAge) {
       markInvalid(q.sensor, "measurement older than the filter by more than 1 s (stamp problem?)");
@@ -303,6 +340,7 @@ void EkfNode::periodicUpdate(const ros::TimerEvent&) {
         break;
     }
   }
+  queue_.clear();
   if (params_.debug && debug_log_.tellp() > 0) {
     ROS_DEBUG_STREAM("ekf: " << debug_log_.str());
     debug_log_.str("");

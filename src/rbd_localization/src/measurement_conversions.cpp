@@ -127,7 +127,7 @@ bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_fr
   if (anyOf(cfg.update_vector, ORIENTATION_OFFSET, 3) && orientation_valid) {
     Measurement m;
     m.time = time;
-    m.source = cfg.name + " orientation";
+    m.source = cfg.name + "/rpy";
     m.mahalanobis_threshold = cfg.pose_rejection_threshold;
     const Eigen::Matrix3d c = cov3(msg.orientation_covariance);
     if (!c.allFinite()) {
@@ -148,7 +148,7 @@ bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_fr
     }
     Measurement m;
     m.time = time;
-    m.source = cfg.name + " angular velocity";
+    m.source = cfg.name + "/w";
     m.mahalanobis_threshold = cfg.twist_rejection_threshold;
     setBlock(&m, ORIENTATION_V_OFFSET, base_from_imu * w, base_from_imu * c * base_from_imu.transpose(),
              cfg.update_vector, ORIENTATION_V_OFFSET);
@@ -169,7 +169,7 @@ bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_fr
     }
     Measurement m;
     m.time = time;
-    m.source = cfg.name + " acceleration";
+    m.source = cfg.name + "/a";
     m.mahalanobis_threshold = cfg.linear_acceleration_rejection_threshold;
     setBlock(&m, POSITION_A_OFFSET, a_base, base_from_imu * c * base_from_imu.transpose(), cfg.update_vector,
              POSITION_A_OFFSET);

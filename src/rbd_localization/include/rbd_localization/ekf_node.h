@@ -15,7 +15,6 @@
 
 #include <map>
 #include <memory>
-#include <queue>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -49,7 +48,6 @@ class EkfNode {
   struct Queued {
     Measurement meas;
     size_t sensor;
-    bool operator<(const Queued& o) const { return meas.time > o.meas.time; }  // min-heap on time
   };
 
   void imuCallback(const sensor_msgs::Imu::ConstPtr& msg, size_t idx);
@@ -65,6 +63,9 @@ class EkfNode {
   bool staticRotation(const std::string& target, const std::string& source, Eigen::Matrix3d* out);
   bool lookup(const std::string& target, const std::string& source, const ros::Time& stamp, Eigen::Isometry3d* out);
   bool sensorStale(const SensorState& s, const ros::Time& now) const;
+  /// Once every sensor's fixed rotation is cached and nothing needs time-varying TF, drop the
+  /// listener: it would otherwise deserialise all /tf traffic (sim, map correction, ourselves).
+  void maybeReleaseTf(size_t resolved_sensor);
 
   void periodicUpdate(const ros::TimerEvent& ev);
   void publish();
@@ -76,7 +77,9 @@ class EkfNode {
   Ekf ekf_;
   std::ostringstream debug_log_;
   std::vector<SensorState> sensors_;
-  std::priority_queue<Queued> queue_;
+  std::vector<Queued> queue_;     // measurements since the last cycle, fused in time order
+  std::vector<size_t> order_;     // scratch: queue_ indices sorted by time
+  std::vector<Measurement> imu_parts_;  // scratch, reused per IMU message
   ros::Publisher odom_pub_;
   ros::Timer timer_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
@@ -89,6 +92,8 @@ class EkfNode {
   double last_published_stamp_ = -1.0;
   double last_measurement_time_ = 0.0;
   bool publishing_ = false;
+  bool needs_dynamic_tf_ = true;
+  std::vector<bool> rotation_resolved_;
 };
 
 }  // namespace rbd_localization
