@@ -14,7 +14,8 @@ int main(int argc, char** argv) {
   const double duration = argc > 1 ? std::atof(argv[1]) : 20.0;
   ros::NodeHandle nh;
   ros::Publisher imu_pub = nh.advertise<sensor_msgs::Imu>("/ouster/imu", 100);
-  ros::Publisher pose_pub = nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("/zed2/zed_node/pose_with_covariance", 10);
+  ros::Publisher pose_pub =
+      nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("/zed2/zed_node/pose_with_covariance", 10);
   tf2_ros::StaticTransformBroadcaster static_tf;
   geometry_msgs::TransformStamped mount;
   mount.header.stamp = ros::Time::now();
@@ -62,6 +63,7 @@ int main(int argc, char** argv) {
     rate.sleep();
   }
   const double elapsed = (ros::Time::now() - start).toSec();
-  std::printf("{\"feeder_imu_hz\": %.1f, \"feeder_pose_hz\": %.1f}\n", imu_count / elapsed, pose_count / elapsed);
+  std::printf("{\"feeder_imu_hz\": %.1f, \"feeder_pose_hz\": %.1f}\n", imu_count / elapsed,
+              pose_count / elapsed);
   return 0;
 }

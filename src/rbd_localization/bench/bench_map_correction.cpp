@@ -11,7 +11,7 @@
 #include "rbd_localization/geometry.h"
 #include "rbd_localization/map_correction.h"
 
-using namespace rbd_localization;               // NOLINT
+using namespace rbd_localization;                // NOLINT
 using namespace rbd_localization::testing_room;  // NOLINT
 
 namespace {
@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
   MapCorrection mc;
   double t = 0.0;
   while (mc.mapping()) {
-    mc.processScan(t, decimate(castScan(pose2d(0, 0, 0), walls, {}, 1024, 0.015, &rng), 360), pose2d(0, 0, 0));
+    mc.processScan(t, decimate(castScan(pose2d(0, 0, 0), walls, {}, 1024, 0.015, &rng), 360),
+                   pose2d(0, 0, 0));
     t += 0.1;
   }
   std::vector<double> ms;
@@ -40,7 +41,8 @@ int main(int argc, char** argv) {
     const double v = 0.03, w = (k % 100 < 80) ? 0.0 : (M_PI / 2) / 20.0;
     truth = truth * pose2d(v, 0, w);
     odom = odom * pose2d(v * 1.03, 0, w + 0.001);
-    const std::vector<Circle> people = {{{1.0 + 0.5 * std::sin(0.1 * k), 1.5}, 0.25}, {{-1.0, 0.5 * std::cos(0.1 * k)}, 0.25}};
+    const std::vector<Circle> people = {{{1.0 + 0.5 * std::sin(0.1 * k), 1.5}, 0.25},
+                                        {{-1.0, 0.5 * std::cos(0.1 * k)}, 0.25}};
     const Points2d scan = decimate(castScan(truth, walls, people, 1024, 0.015, &rng), 360);
     const std::clock_t c0 = std::clock();
     const auto u = mc.processScan(t, scan, odom);

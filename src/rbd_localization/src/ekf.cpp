@@ -29,12 +29,12 @@ bool isTwoDMember(int index) {
 // differ from identity are position (0-2), orientation (3-5) and linear velocity (6-8):
 //   p' = p + R(e) (v dt + a dt^2 / 2)   e' = e + T(e) w dt   v' = v + a dt
 struct ModelBlocks {
-  Mat3 rot;        // R(e) body -> world, R = Rz(yaw) Ry(pitch) Rx(roll)
-  Mat3 d_pos_d_e;  // d p' / d e
-  Mat3 euler_rate; // T(e): body rates -> Euler angle rates
-  Mat3 d_e_d_e;    // d e' / d e (identity + dT/de w dt)
-  Vec3 pos_step;   // R (v dt + a dt^2/2)
-  Vec3 euler_step; // T w dt
+  Mat3 rot;         // R(e) body -> world, R = Rz(yaw) Ry(pitch) Rx(roll)
+  Mat3 d_pos_d_e;   // d p' / d e
+  Mat3 euler_rate;  // T(e): body rates -> Euler angle rates
+  Mat3 d_e_d_e;     // d e' / d e (identity + dT/de w dt)
+  Vec3 pos_step;    // R (v dt + a dt^2/2)
+  Vec3 euler_step;  // T w dt
 };
 
 ModelBlocks modelBlocks(const StateVector& x, double dt) {
@@ -83,7 +83,8 @@ void applyTransfer(const ModelBlocks& b, double dt, const StateMatrix& m, StateM
   const Mat3 rot_dt = b.rot * dt;
   const Mat3 rot_hdt2 = b.rot * (0.5 * dt * dt);
   const Mat3 euler_dt = b.euler_rate * dt;
-  const Rows3 pos = m.middleRows<3>(POSITION_OFFSET) + b.d_pos_d_e.lazyProduct(m.middleRows<3>(ORIENTATION_OFFSET)) +
+  const Rows3 pos = m.middleRows<3>(POSITION_OFFSET) +
+                    b.d_pos_d_e.lazyProduct(m.middleRows<3>(ORIENTATION_OFFSET)) +
                     rot_dt.lazyProduct(m.middleRows<3>(POSITION_V_OFFSET)) +
                     rot_hdt2.lazyProduct(m.middleRows<3>(POSITION_A_OFFSET));
   const Rows3 ori = b.d_e_d_e.lazyProduct(m.middleRows<3>(ORIENTATION_OFFSET)) +
@@ -212,7 +213,8 @@ CorrectResult Ekf::correct(const Measurement& meas) {
   for (int i = 0; i < STATE_SIZE; ++i) {
     if (!meas.update_vector[i] || (two_d_mode_ && isTwoDMember(i))) continue;
     if (!std::isfinite(meas.values(i))) {
-      if (debugOn()) *debug_stream_ << "reject " << meas.source << ": non-finite value at index " << i << "\n";
+      if (debugOn())
+        *debug_stream_ << "reject " << meas.source << ": non-finite value at index " << i << "\n";
       return CorrectResult::kInvalid;
     }
     idx[m++] = i;
@@ -270,8 +272,8 @@ CorrectResult Ekf::correctSubset(const Measurement& meas, const std::array<int, 
   const double gate = meas.mahalanobis_threshold;
   if (gate < std::sqrt(std::numeric_limits<double>::max()) && last_squared_mahalanobis_ > gate * gate) {
     if (debugOn()) {
-      *debug_stream_ << "reject " << meas.source << ": squared Mahalanobis " << last_squared_mahalanobis_ << " > "
-                     << gate * gate << "\n";
+      *debug_stream_ << "reject " << meas.source << ": squared Mahalanobis " << last_squared_mahalanobis_
+                     << " > " << gate * gate << "\n";
     }
     return CorrectResult::kRejected;
   }

@@ -13,7 +13,9 @@ namespace {
 
 Eigen::Isometry3d toEigen(const geometry_msgs::Transform& t) {
   Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  out.linear() = Eigen::Quaterniond(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z).normalized().toRotationMatrix();
+  out.linear() = Eigen::Quaterniond(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z)
+                     .normalized()
+                     .toRotationMatrix();
   out.translation() = Eigen::Vector3d(t.translation.x, t.translation.y, t.translation.z);
   return out;
 }
@@ -70,8 +72,9 @@ bool EkfNode::init(std::string* error) {
     switch (s.cfg.type) {
       case SensorType::kImu:
         s.sub = nh_.subscribe<sensor_msgs::Imu>(
-            s.cfg.topic, s.cfg.queue_size, [this, i](const sensor_msgs::Imu::ConstPtr& m) { imuCallback(m, i); },
-            ros::VoidConstPtr(), hints);
+            s.cfg.topic, s.cfg.queue_size,
+            [this, i](const sensor_msgs::Imu::ConstPtr& m) { imuCallback(m, i); }, ros::VoidConstPtr(),
+            hints);
         break;
       case SensorType::kPose:
         s.sub = nh_.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
@@ -81,8 +84,9 @@ bool EkfNode::init(std::string* error) {
         break;
       case SensorType::kOdom:
         s.sub = nh_.subscribe<nav_msgs::Odometry>(
-            s.cfg.topic, s.cfg.queue_size, [this, i](const nav_msgs::Odometry::ConstPtr& m) { odomCallback(m, i); },
-            ros::VoidConstPtr(), hints);
+            s.cfg.topic, s.cfg.queue_size,
+            [this, i](const nav_msgs::Odometry::ConstPtr& m) { odomCallback(m, i); }, ros::VoidConstPtr(),
+            hints);
         break;
       case SensorType::kTwist:
         s.sub = nh_.subscribe<geometry_msgs::TwistWithCovarianceStamped>(
@@ -105,7 +109,8 @@ bool EkfNode::init(std::string* error) {
     if ((c.type == SensorType::kPose || c.type == SensorType::kOdom) && pose_part && !c.frame_is_world) {
       needs_dynamic_tf_ = true;
     }
-    if (c.type == SensorType::kImu || (c.type != SensorType::kPose && rotated_part)) rotation_resolved_[i] = false;
+    if (c.type == SensorType::kImu || (c.type != SensorType::kPose && rotated_part))
+      rotation_resolved_[i] = false;
   }
   start_time_ = ros::Time::now();
   timer_ = nh_.createTimer(ros::Duration(1.0 / params_.frequency), &EkfNode::periodicUpdate, this);
@@ -253,7 +258,8 @@ void EkfNode::odomCallback(const nav_msgs::Odometry::ConstPtr& msg, size_t idx) 
   for (int i = 0; i < 6; ++i) pose_used = pose_used || s.cfg.update_vector[i];
   if (pose_used) handlePose(msg->pose, msg->header.frame_id, msg->header.stamp, idx);
   bool twist_used = false;
-  for (int i = POSITION_V_OFFSET; i < POSITION_V_OFFSET + 6; ++i) twist_used = twist_used || s.cfg.update_vector[i];
+  for (int i = POSITION_V_OFFSET; i < POSITION_V_OFFSET + 6; ++i)
+    twist_used = twist_used || s.cfg.update_vector[i];
   if (!twist_used) return;
   Eigen::Matrix3d base_from_child;
   if (!staticRotation(params_.base_link_frame, msg->child_frame_id, &base_from_child)) {
@@ -355,7 +361,8 @@ void EkfNode::periodicUpdate(const ros::TimerEvent&) {
   const bool was_publishing = publishing_;
   publishing_ = ekf_.initialized() && !all_stale;
   if (was_publishing && !publishing_) {
-    ROS_ERROR("ekf: every sensor is stale (> %.2f s): estimate no longer published", params_.sensor_stale_timeout);
+    ROS_ERROR("ekf: every sensor is stale (> %.2f s): estimate no longer published",
+              params_.sensor_stale_timeout);
   }
   if (publishing_) publish();
   diagnostics_->update();
@@ -432,7 +439,8 @@ void EkfNode::diagnoseSensor(size_t idx, diagnostic_updater::DiagnosticStatusWra
     stat.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "stale: %s",
                   s.received ? "no message within sensor_stale_timeout" : "no message received yet");
   } else if (s.window_rejected > 0) {
-    stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "rejected %lu measurement(s) since last report: %s",
+    stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                  "rejected %lu measurement(s) since last report: %s",
                   static_cast<unsigned long>(s.window_rejected), s.last_problem.c_str());
   } else if (s.window_invalid > 0) {
     stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%lu invalid message(s) since last report: %s",

@@ -9,7 +9,8 @@ namespace rbd_localization {
 
 namespace {
 
-bool readDoubleList(const ros::NodeHandle& pnh, const std::string& key, std::vector<double>* out, std::string* error) {
+bool readDoubleList(const ros::NodeHandle& pnh, const std::string& key, std::vector<double>* out,
+                    std::string* error) {
   XmlRpc::XmlRpcValue v;
   if (!pnh.getParam(key, v)) return false;
   if (v.getType() != XmlRpc::XmlRpcValue::TypeArray) {
@@ -114,7 +115,8 @@ bool loadFilterParams(const ros::NodeHandle& pnh, FilterParams* p, std::string* 
       return false;
     }
   }
-  if (p->map_frame == p->odom_frame || p->odom_frame == p->base_link_frame || p->map_frame == p->base_link_frame) {
+  if (p->map_frame == p->odom_frame || p->odom_frame == p->base_link_frame ||
+      p->map_frame == p->base_link_frame) {
     *error = "map_frame, odom_frame and base_link_frame must differ";
     return false;
   }
@@ -143,8 +145,10 @@ bool loadFilterParams(const ros::NodeHandle& pnh, FilterParams* p, std::string* 
     return false;
   }
 
-  const std::pair<const char*, SensorType> kinds[] = {
-      {"imu", SensorType::kImu}, {"pose", SensorType::kPose}, {"odom", SensorType::kOdom}, {"twist", SensorType::kTwist}};
+  const std::pair<const char*, SensorType> kinds[] = {{"imu", SensorType::kImu},
+                                                      {"pose", SensorType::kPose},
+                                                      {"odom", SensorType::kOdom},
+                                                      {"twist", SensorType::kTwist}};
   p->sensors.clear();
   for (const auto& kind : kinds) {
     for (int n = 0;; ++n) {
@@ -169,7 +173,8 @@ bool loadFilterParams(const ros::NodeHandle& pnh, FilterParams* p, std::string* 
           s.twist_rejection_threshold = threshold(pnh, s.name + "_twist_rejection_threshold");
           s.linear_acceleration_rejection_threshold =
               threshold(pnh, s.name + "_linear_acceleration_rejection_threshold");
-          pnh.param(s.name + "_remove_gravitational_acceleration", s.remove_gravitational_acceleration, false);
+          pnh.param(s.name + "_remove_gravitational_acceleration", s.remove_gravitational_acceleration,
+                    false);
           break;
         case SensorType::kPose:
           s.pose_rejection_threshold = threshold(pnh, s.name + "_rejection_threshold");

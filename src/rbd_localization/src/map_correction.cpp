@@ -11,7 +11,10 @@ namespace rbd_localization {
 MapCorrection::MapCorrection() : MapCorrection(Params()) {}
 
 MapCorrection::MapCorrection(const Params& params)
-    : params_(params), map_(params.map), matcher_(params.matcher), map_from_odom_(Eigen::Isometry2d::Identity()) {}
+    : params_(params),
+      map_(params.map),
+      matcher_(params.matcher),
+      map_from_odom_(Eigen::Isometry2d::Identity()) {}
 
 const char* MapCorrection::statusName(Status s) {
   switch (s) {
@@ -49,7 +52,8 @@ MapCorrection::Update MapCorrection::processScan(double time, const Points2d& po
     ++mapping_scans_;
     u.status = Status::kMapping;
     u.map_changed = true;
-    if (time - start_time_ >= params_.initial_mapping_duration && mapping_scans_ >= params_.initial_mapping_min_scans) {
+    if (time - start_time_ >= params_.initial_mapping_duration &&
+        mapping_scans_ >= params_.initial_mapping_min_scans) {
       mapping_ = false;
       map_.updateDistanceField();
       last_accept_time_ = time;
@@ -60,8 +64,8 @@ MapCorrection::Update MapCorrection::processScan(double time, const Points2d& po
 
   u.match = matcher_.match(map_, points, prior);
   const ScanMatcher::Result& m = u.match;
-  if (m.inliers < params_.min_inliers || m.inlier_ratio < params_.min_inlier_ratio || m.rms > params_.max_rms ||
-      m.min_translation_information < params_.min_translation_information) {
+  if (m.inliers < params_.min_inliers || m.inlier_ratio < params_.min_inlier_ratio ||
+      m.rms > params_.max_rms || m.min_translation_information < params_.min_translation_information) {
     u.status = Status::kRejectedFit;
     u.reason = "inliers " + std::to_string(m.inliers) + " ratio " + std::to_string(m.inlier_ratio) + " rms " +
                std::to_string(m.rms) + " info " + std::to_string(m.min_translation_information);

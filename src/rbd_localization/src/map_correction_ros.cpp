@@ -15,7 +15,9 @@ namespace {
 
 Eigen::Isometry3d toEigen(const geometry_msgs::Transform& t) {
   Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  out.linear() = Eigen::Quaterniond(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z).normalized().toRotationMatrix();
+  out.linear() = Eigen::Quaterniond(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z)
+                     .normalized()
+                     .toRotationMatrix();
   out.translation() = Eigen::Vector3d(t.translation.x, t.translation.y, t.translation.z);
   return out;
 }
@@ -52,6 +54,7 @@ bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams
   pnh.param("pose_timeout", n->pose_timeout, n->pose_timeout);
   pnh.param("map_publish_interval", n->map_publish_interval, n->map_publish_interval);
   pnh.param("scan_timeout", n->scan_timeout, n->scan_timeout);
+  pnh.param("correction_enabled", n->correction_enabled, n->correction_enabled);
 
   pnh.param("initial_mapping_duration", c->initial_mapping_duration, c->initial_mapping_duration);
   pnh.param("initial_mapping_min_scans", c->initial_mapping_min_scans, c->initial_mapping_min_scans);
@@ -72,23 +75,29 @@ bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams
   pnh.param("outlier_distance", c->matcher.outlier_distance_end, c->matcher.outlier_distance_end);
   pnh.param("inlier_distance", c->matcher.inlier_distance, c->matcher.inlier_distance);
 
-  if (n->map_frame.empty() || n->odom_frame.empty() || n->base_frame.empty() || n->map_frame == n->odom_frame) {
+  if (n->map_frame.empty() || n->odom_frame.empty() || n->base_frame.empty() ||
+      n->map_frame == n->odom_frame) {
     *error = "map_frame, odom_frame, base_frame must be set and map_frame != odom_frame";
     return false;
   }
   if (!positive(n->max_match_rate) || !positive(n->transform_publish_rate) || !positive(c->map.resolution) ||
-      !positive(c->map.size) || n->max_points < 10 || !(n->max_range > n->min_range) || c->map.size / c->map.resolution > 8000) {
-    *error = "rates, resolution, map_size must be > 0, max_points >= 10, max_range > min_range, map <= 8000 cells wide";
+      !positive(c->map.size) || n->max_points < 10 || !(n->max_range > n->min_range) ||
+      c->map.size / c->map.resolution > 8000) {
+    *error =
+        "rates, resolution, map_size must be > 0, max_points >= 10, max_range > min_range, map <= 8000 cells "
+        "wide";
     return false;
   }
-  if (!(c->matcher.outlier_distance_start >= c->matcher.outlier_distance_end) || !positive(c->matcher.inlier_distance)) {
+  if (!(c->matcher.outlier_distance_start >= c->matcher.outlier_distance_end) ||
+      !positive(c->matcher.inlier_distance)) {
     *error = "outlier_distance_start must be >= outlier_distance; inlier_distance > 0";
     return false;
   }
   return true;
 }
 
-MapCorrectionNode::MapCorrectionNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh), pnh_(pnh) {}
+MapCorrectionNode::MapCorrectionNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh)
+    : nh_(nh), pnh_(pnh) {}
 
 bool MapCorrectionNode::init(std::string* error) {
   MapCorrection::Params core;
@@ -105,14 +114,20 @@ bool MapCorrectionNode::init(std::string* error) {
   diagnostics_->setHardwareID("none");
   diagnostics_->add("Map correction", this, &MapCorrectionNode::diagnose);
   start_time_ = ros::Time::now();
-  timer_ = nh_.createTimer(ros::Duration(1.0 / params_.transform_publish_rate), &MapCorrectionNode::timerCallback, this);
+  timer_ = nh_.createTimer(ros::Duration(1.0 / params_.transform_publish_rate),
+                           &MapCorrectionNode::timerCallback, this);
   return true;
 }
 
 void MapCorrectionNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
   last_scan_receive_ = ros::Time::now();
   ++scans_;
-  if (!last_match_stamp_.isZero() && (msg->header.stamp - last_match_stamp_).toSec() < 1.0 / params_.max_match_rate &&
+  if (!params_.correction_enabled) {
+    last_status_ = "correction disabled (correction_enabled: false)";
+    return;
+  }
+  if (!last_match_stamp_.isZero() &&
+      (msg->header.stamp - last_match_stamp_).toSec() < 1.0 / params_.max_match_rate &&
       msg->header.stamp >= last_match_stamp_) {
     ++skipped_;
     return;
@@ -130,8 +145,8 @@ void MapCorrectionNode::odomCallback(const nav_msgs::Odometry::ConstPtr& msg) {
   const auto& p = msg->pose.pose;
   Eigen::Isometry3d odom_from_base = Eigen::Isometry3d::Identity();
   const Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
-  if (!q.coeffs().allFinite() || q.norm() < 1e-6 || !std::isfinite(p.position.x) || !std::isfinite(p.position.y) ||
-      !std::isfinite(p.position.z)) {
+  if (!q.coeffs().allFinite() || q.norm() < 1e-6 || !std::isfinite(p.position.x) ||
+      !std::isfinite(p.position.y) || !std::isfinite(p.position.z)) {
     ROS_WARN_THROTTLE(2.0, "map_correction: odometry with NaN/inf or zero quaternion ignored");
     return;
   }
@@ -209,7 +224,8 @@ void MapCorrectionNode::processPendingScan() {
   if (!scanToBase(*scan, &points)) return;
 
   const double cpu0 = cpuSeconds();
-  const MapCorrection::Update u = core_->processScan(scan->header.stamp.toSec(), points, planar(odom_from_base));
+  const MapCorrection::Update u =
+      core_->processScan(scan->header.stamp.toSec(), points, planar(odom_from_base));
   last_cpu_ms_ = (cpuSeconds() - cpu0) * 1e3;
   last_status_ = MapCorrection::statusName(u.status);
   if (u.status == MapCorrection::Status::kAccepted) {
@@ -221,7 +237,8 @@ void MapCorrectionNode::processPendingScan() {
   }
   if (u.map_changed) map_dirty_ = true;
   if (map_dirty_ && !core_->mapping() &&
-      (last_map_publish_.isZero() || (ros::Time::now() - last_map_publish_).toSec() >= params_.map_publish_interval)) {
+      (last_map_publish_.isZero() ||
+       (ros::Time::now() - last_map_publish_).toSec() >= params_.map_publish_interval)) {
     publishMap(scan->header.stamp);
   }
 }
@@ -273,7 +290,9 @@ void MapCorrectionNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   stat.add("mapping", core_->mapping());
   const bool stale = last_scan_receive_.isZero() ? (now - start_time_).toSec() > params_.scan_timeout
                                                  : (now - last_scan_receive_).toSec() > params_.scan_timeout;
-  if (stale) {
+  if (!params_.correction_enabled) {
+    stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "correction disabled: map -> odom is identity");
+  } else if (stale) {
     stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "stale: no scan within scan_timeout");
   } else if (last_status_.find("rejected") == 0) {
     stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, last_status_);

@@ -80,7 +80,8 @@ bool differentialMeasurement(const PoseWithCov& previous, const PoseWithCov& cur
   m.values.segment<3>(ORIENTATION_V_OFFSET) = rpyFromRotation(delta.linear()) / dt;
   // Both poses' uncertainty, expressed in the previous body frame, over dt^2.
   const Matrix6d cov =
-      rotateCovariance(previous.covariance + current.covariance, previous.pose.linear().transpose()) / (dt * dt);
+      rotateCovariance(previous.covariance + current.covariance, previous.pose.linear().transpose()) /
+      (dt * dt);
   m.covariance.block<6, 6>(POSITION_V_OFFSET, POSITION_V_OFFSET) = cov;
   for (int i = 0; i < 6; ++i) m.update_vector[POSITION_V_OFFSET + i] = cfg.update_vector[i];
   *out = m;
@@ -109,9 +110,9 @@ bool twistMeasurement(const geometry_msgs::TwistWithCovariance& msg, const Eigen
   return true;
 }
 
-bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_from_imu, const SensorConfig& cfg,
-                     const StateVector& state, double gravity, double time, std::vector<Measurement>* out,
-                     std::string* reason) {
+bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_from_imu,
+                     const SensorConfig& cfg, const StateVector& state, double gravity, double time,
+                     std::vector<Measurement>* out, std::string* reason) {
   out->clear();
   const auto& q = msg.orientation;
   Eigen::Quaterniond quat(q.w, q.x, q.y, q.z);
@@ -134,8 +135,8 @@ bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_fr
       *reason = "non-finite orientation covariance";
       return false;
     }
-    setBlock(&m, ORIENTATION_OFFSET, rpyFromRotation(world_from_base), base_from_imu * c * base_from_imu.transpose(),
-             cfg.update_vector, ORIENTATION_OFFSET);
+    setBlock(&m, ORIENTATION_OFFSET, rpyFromRotation(world_from_base),
+             base_from_imu * c * base_from_imu.transpose(), cfg.update_vector, ORIENTATION_OFFSET);
     out->push_back(m);
   }
 

@@ -12,7 +12,8 @@ namespace {
 // Huttenlocher 2012). Empty samples hold kFar, a large finite value.
 constexpr double kFar = 1e12;
 
-void edt1d(const std::vector<double>& f, std::vector<double>* d, std::vector<int>* v, std::vector<double>* z) {
+void edt1d(const std::vector<double>& f, std::vector<double>* d, std::vector<int>* v,
+           std::vector<double>* z) {
   const int n = static_cast<int>(f.size());
   int k = 0;
   (*v)[0] = 0;
@@ -57,7 +58,8 @@ bool OccupancyMap::cellOf(const Eigen::Vector2d& p, int* cx, int* cy) const {
   return true;
 }
 
-void OccupancyMap::insertScan(const Eigen::Isometry2d& map_from_sensor, const Points2d& points, double weight) {
+void OccupancyMap::insertScan(const Eigen::Isometry2d& map_from_sensor, const Points2d& points,
+                              double weight) {
   const float clamp = static_cast<float>(params_.clamp_log_odds);
   const float hit = static_cast<float>(params_.hit_log_odds * weight);
   const float miss = static_cast<float>(params_.miss_log_odds * weight);
@@ -117,7 +119,8 @@ void OccupancyMap::updateDistanceField() {
   const double max_d = params_.max_distance;
   const double res = params_.resolution;
   for (int y = 0; y < n; ++y) {  // rows
-    std::copy(grid.begin() + static_cast<size_t>(y) * n, grid.begin() + static_cast<size_t>(y + 1) * n, f.begin());
+    std::copy(grid.begin() + static_cast<size_t>(y) * n, grid.begin() + static_cast<size_t>(y + 1) * n,
+              f.begin());
     edt1d(f, &d, &v, &z);
     for (int x = 0; x < n; ++x) {
       const double dist = d[x] >= 0.5 * kFar ? max_d : std::sqrt(d[x]) * res;

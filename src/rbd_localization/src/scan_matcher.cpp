@@ -18,8 +18,8 @@ ScanMatcher::Result ScanMatcher::match(const OccupancyMap& map, const Points2d& 
   const int iters = std::max(1, params_.max_iterations);
   for (int it = 0; it < iters; ++it) {
     const double frac = iters > 1 ? std::min(1.0, 2.0 * it / (iters - 1)) : 1.0;
-    const double gate =
-        params_.outlier_distance_start + frac * (params_.outlier_distance_end - params_.outlier_distance_start);
+    const double gate = params_.outlier_distance_start +
+                        frac * (params_.outlier_distance_end - params_.outlier_distance_start);
     const double c = std::cos(th), s = std::sin(th);
     Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
     Eigen::Vector3d g = Eigen::Vector3d::Zero();
@@ -30,7 +30,8 @@ ScanMatcher::Result ScanMatcher::match(const OccupancyMap& map, const Points2d& 
       Eigen::Vector2d grad;
       if (!map.distance(q, &d, &grad) || d > gate) continue;
       // d(q)/d(x, y, th) = grad^T [I | dR/dth p]
-      const Eigen::Vector3d j(grad.x(), grad.y(), grad.x() * (-s * p.x() - c * p.y()) + grad.y() * (c * p.x() - s * p.y()));
+      const Eigen::Vector3d j(grad.x(), grad.y(),
+                              grad.x() * (-s * p.x() - c * p.y()) + grad.y() * (c * p.x() - s * p.y()));
       h.noalias() += j * j.transpose();
       g.noalias() += j * d;
       ++used;
@@ -66,7 +67,8 @@ ScanMatcher::Result ScanMatcher::match(const OccupancyMap& map, const Points2d& 
   if (r.points > 0) r.inlier_ratio = static_cast<double>(r.inliers) / r.points;
   if (r.inliers > 0) {
     r.rms = std::sqrt(sum_sq / r.inliers);
-    r.min_translation_information = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(info / r.inliers).eigenvalues()(0);
+    r.min_translation_information =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(info / r.inliers).eigenvalues()(0);
   }
   return r;
 }

@@ -24,8 +24,8 @@ struct Circle {
 /// 8 m x 6 m room with an inner box, a pillar and an L-shaped cupboard (asymmetric on purpose).
 inline std::vector<Segment> room() {
   auto s = [](double ax, double ay, double bx, double by) { return Segment{{ax, ay}, {bx, by}}; };
-  return {s(-3, -2.5, 5, -2.5), s(5, -2.5, 5, 3.5),     s(5, 3.5, -3, 3.5),   s(-3, 3.5, -3, -2.5),
-          s(2, 1, 3, 1),         s(3, 1, 3, 1.6),        s(3, 1.6, 2, 1.6),    s(2, 1.6, 2, 1),
+  return {s(-3, -2.5, 5, -2.5),    s(5, -2.5, 5, 3.5),      s(5, 3.5, -3, 3.5),  s(-3, 3.5, -3, -2.5),
+          s(2, 1, 3, 1),           s(3, 1, 3, 1.6),         s(3, 1.6, 2, 1.6),   s(2, 1.6, 2, 1),
           s(-2, -1.5, -1.5, -1.5), s(-1.5, -1.5, -1.5, -1), s(-1.5, -1, -2, -1), s(-2, -1, -2, -1.5),
           s(3.5, -2.5, 3.5, -1.2), s(3.5, -1.2, 4.2, -1.2)};
 }

@@ -99,7 +99,8 @@ TEST(Ekf, AnalyticJacobianMatchesFiniteDifferences) {
     StateVector diff = plus.state() - minus.state();
     for (int i = 3; i < 6; ++i) diff(i) = wrapAngle(diff(i));
     const StateVector numeric = diff / (2 * h);
-    for (int i = 0; i < STATE_SIZE; ++i) EXPECT_NEAR(f(i, j), numeric(i), 1e-6) << "F(" << i << "," << j << ")";
+    for (int i = 0; i < STATE_SIZE; ++i)
+      EXPECT_NEAR(f(i, j), numeric(i), 1e-6) << "F(" << i << "," << j << ")";
   }
 }
 
@@ -114,7 +115,8 @@ TEST(Ekf, FullCovarianceUpdateEqualsMeasurementWhenPriorIsVague) {
     m.values(i) = 0.1 * (i + 1) * (i % 2 ? -1 : 1);
   }
   // Off-diagonal terms too: a full covariance.
-  Eigen::Matrix<double, STATE_SIZE, STATE_SIZE> l = Eigen::Matrix<double, STATE_SIZE, STATE_SIZE>::Identity() * 0.01;
+  Eigen::Matrix<double, STATE_SIZE, STATE_SIZE> l =
+      Eigen::Matrix<double, STATE_SIZE, STATE_SIZE>::Identity() * 0.01;
   l(4, 1) = 0.003;
   l(10, 7) = -0.002;
   m.covariance = l * l.transpose();

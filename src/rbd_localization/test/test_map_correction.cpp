@@ -11,7 +11,7 @@
 #include "rbd_localization/scan_matcher.h"
 #include "synthetic_room.h"
 
-using namespace rbd_localization;               // NOLINT
+using namespace rbd_localization;                // NOLINT
 using namespace rbd_localization::testing_room;  // NOLINT
 
 namespace {
@@ -26,7 +26,9 @@ OccupancyMap builtMap(std::mt19937* rng, int scans = 10) {
   return map;
 }
 
-double yawErr(const Eigen::Isometry2d& a, const Eigen::Isometry2d& b) { return std::fabs(wrapAngle(yawOf(a) - yawOf(b))); }
+double yawErr(const Eigen::Isometry2d& a, const Eigen::Isometry2d& b) {
+  return std::fabs(wrapAngle(yawOf(a) - yawOf(b)));
+}
 
 }  // namespace
 
@@ -41,7 +43,8 @@ TEST(OccupancyMap, DistanceFieldIsEuclidean) {
   map.updateDistanceField();
   int cx, cy;
   ASSERT_TRUE(map.cellOf(Eigen::Vector2d(1.0, 0.0), &cx, &cy));
-  const Eigen::Vector2d centre(map.originX() + (cx + 0.5) * p.resolution, map.originY() + (cy + 0.5) * p.resolution);
+  const Eigen::Vector2d centre(map.originX() + (cx + 0.5) * p.resolution,
+                               map.originY() + (cy + 0.5) * p.resolution);
   double d;
   Eigen::Vector2d g;
   ASSERT_TRUE(map.distance(centre + Eigen::Vector2d(0.3, 0.4), &d, &g));
@@ -157,7 +160,8 @@ TEST(MapCorrection, GatesBadFitsAndLimitsJumpRate) {
   EXPECT_NEAR((mc.mapFromOdom() * pose2d(0.3, 0, 0)).translation().x(), 0.0, 0.02);
   // A 2 m jump of the prior is refused outright.
   t += 0.1;
-  u = mc.processScan(t, castScan(pose2d(0, 0, 0), walls, {}, 1024, 0.01, &rng), pose2d(0.3, 0.0, 0.0) * pose2d(2.0, 0, 0));
+  u = mc.processScan(t, castScan(pose2d(0, 0, 0), walls, {}, 1024, 0.01, &rng),
+                     pose2d(0.3, 0.0, 0.0) * pose2d(2.0, 0, 0));
   EXPECT_NE(u.status, MapCorrection::Status::kAccepted);
   // Too few points: refused, no crash.
   u = mc.processScan(t, Points2d{}, pose2d(0, 0, 0));

@@ -82,7 +82,8 @@ class Ekf {
 
  private:
   template <int M>
-  CorrectResult correctSubset(const Measurement& measurement, const std::array<int, STATE_SIZE>& idx, int m = M);
+  CorrectResult correctSubset(const Measurement& measurement, const std::array<int, STATE_SIZE>& idx,
+                              int m = M);
   void enforceTwoD();
   void wrapStateAngles();
   bool debugOn() const { return debug_ && debug_stream_ != nullptr; }

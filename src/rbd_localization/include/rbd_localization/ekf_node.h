@@ -55,13 +55,14 @@ class EkfNode {
   void odomCallback(const nav_msgs::Odometry::ConstPtr& msg, size_t idx);
   void twistCallback(const geometry_msgs::TwistWithCovarianceStamped::ConstPtr& msg, size_t idx);
 
-  void handlePose(const geometry_msgs::PoseWithCovariance& msg, const std::string& frame, const ros::Time& stamp,
-                  size_t idx);
+  void handlePose(const geometry_msgs::PoseWithCovariance& msg, const std::string& frame,
+                  const ros::Time& stamp, size_t idx);
   void enqueue(const Measurement& m, size_t idx);
   void markInvalid(size_t idx, const std::string& why);
   double stampToTime(const ros::Time& stamp) const;
   bool staticRotation(const std::string& target, const std::string& source, Eigen::Matrix3d* out);
-  bool lookup(const std::string& target, const std::string& source, const ros::Time& stamp, Eigen::Isometry3d* out);
+  bool lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
+              Eigen::Isometry3d* out);
   bool sensorStale(const SensorState& s, const ros::Time& now) const;
   /// Once every sensor's fixed rotation is cached and nothing needs time-varying TF, drop the
   /// listener: it would otherwise deserialise all /tf traffic (sim, map correction, ourselves).
@@ -77,8 +78,8 @@ class EkfNode {
   Ekf ekf_;
   std::ostringstream debug_log_;
   std::vector<SensorState> sensors_;
-  std::vector<Queued> queue_;     // measurements since the last cycle, fused in time order
-  std::vector<size_t> order_;     // scratch: queue_ indices sorted by time
+  std::vector<Queued> queue_;           // measurements since the last cycle, fused in time order
+  std::vector<size_t> order_;           // scratch: queue_ indices sorted by time
   std::vector<Measurement> imu_parts_;  // scratch, reused per IMU message
   ros::Publisher odom_pub_;
   ros::Timer timer_;

@@ -15,17 +15,17 @@ namespace rbd_localization {
 class MapCorrection {
  public:
   struct Params {
-    double initial_mapping_duration = 2.0;  ///< [s] scans inserted without matching
-    int initial_mapping_min_scans = 5;      ///< ... and at least this many
-    double map_update_interval = 1.0;       ///< [s] between refinements from matched scans
-    double map_update_weight = 0.3;         ///< scales hit/miss log-odds during refinement
-    double min_inlier_ratio = 0.5;          ///< fit gate: share of points near structure
-    double max_rms = 0.06;                  ///< fit gate: inliers' RMS distance [m]
-    int min_inliers = 40;                   ///< fit gate
+    double initial_mapping_duration = 2.0;      ///< [s] scans inserted without matching
+    int initial_mapping_min_scans = 5;          ///< ... and at least this many
+    double map_update_interval = 1.0;           ///< [s] between refinements from matched scans
+    double map_update_weight = 0.3;             ///< scales hit/miss log-odds during refinement
+    double min_inlier_ratio = 0.5;              ///< fit gate: share of points near structure
+    double max_rms = 0.06;                      ///< fit gate: inliers' RMS distance [m]
+    int min_inliers = 40;                       ///< fit gate
     double min_translation_information = 0.02;  ///< fit gate: degenerate geometry (corridor)
-    double max_jump_translation = 0.5;      ///< [m] matched pose vs prior beyond this: rejected
-    double max_jump_rotation = 0.35;        ///< [rad]
-    double max_correction_speed = 0.5;      ///< [m/s] how fast the corrected pose may move
+    double max_jump_translation = 0.5;          ///< [m] matched pose vs prior beyond this: rejected
+    double max_jump_rotation = 0.35;            ///< [rad]
+    double max_correction_speed = 0.5;          ///< [m/s] how fast the corrected pose may move
     double max_correction_angular_speed = 0.5;  ///< [rad/s]
     OccupancyMap::Params map;
     ScanMatcher::Params matcher;

@@ -34,11 +34,12 @@ struct MapCorrectionNodeParams {
   double pose_timeout = 0.5;             ///< [s] no pose output from odometry older than this
   double map_publish_interval = 2.0;     ///< [s]
   double scan_timeout = 1.0;             ///< [s] diagnostics: scans stale after this
+  bool correction_enabled = true;        ///< false: map -> odom stays identity (comparison runs)
 };
 
 /// Reads node + MapCorrection parameters; false with reason on invalid values.
-bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams* node, MapCorrection::Params* core,
-                             std::string* error);
+bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams* node,
+                             MapCorrection::Params* core, std::string* error);
 
 class MapCorrectionNode {
  public:

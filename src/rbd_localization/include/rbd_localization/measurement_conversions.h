@@ -48,9 +48,9 @@ bool twistMeasurement(const geometry_msgs::TwistWithCovariance& msg, const Eigen
 /// (e.g. /ouster/imu orientation) or nothing in it is configured. Gravity is removed using the
 /// message orientation when valid, else the filter's current roll/pitch (state).
 /// Returns false (with reason) if the message has NaN/inf in a used part.
-bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_from_imu, const SensorConfig& cfg,
-                     const StateVector& state, double gravity, double time, std::vector<Measurement>* out,
-                     std::string* reason);
+bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_from_imu,
+                     const SensorConfig& cfg, const StateVector& state, double gravity, double time,
+                     std::vector<Measurement>* out, std::string* reason);
 
 }  // namespace rbd_localization
 

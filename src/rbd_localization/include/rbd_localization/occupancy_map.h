@@ -14,10 +14,10 @@ using Points2d = std::vector<Eigen::Vector2d, Eigen::aligned_allocator<Eigen::Ve
 class OccupancyMap {
  public:
   struct Params {
-    double resolution = 0.05;    ///< cell size [m]
-    double size = 30.0;          ///< side length [m]; the map spans [-size/2, size/2)
-    double hit_log_odds = 0.85;  ///< added to the cell a beam ends in
-    double miss_log_odds = -0.4; ///< added to cells a beam passes through
+    double resolution = 0.05;        ///< cell size [m]
+    double size = 30.0;              ///< side length [m]; the map spans [-size/2, size/2)
+    double hit_log_odds = 0.85;      ///< added to the cell a beam ends in
+    double miss_log_odds = -0.4;     ///< added to cells a beam passes through
     double occupied_log_odds = 1.5;  ///< a cell is structure above this
     double clamp_log_odds = 3.5;     ///< |log-odds| limit (so the map can still change)
     double max_distance = 1.0;       ///< distance field saturates here [m]

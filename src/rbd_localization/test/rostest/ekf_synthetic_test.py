@@ -40,7 +40,7 @@ def quat_yaw(yaw):
     return 0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)
 
 
-class Feeder(object):
+class Feeder:
     """Publishes the synthetic sensors from a thread."""
 
     def __init__(self):
