@@ -1,0 +1,196 @@
+"""The driver's safety gate (ROS-free): what HighCmd goes to the A1, given the inputs and their ages.
+
+Rules (DESIGN.md §5.2/§5.3, CONTRACT.md):
+
+* No velocity command for ``cmd_timeout`` (0.25 s) => zero velocity.
+* A velocity command with a NaN/inf component is rejected and replaced by zero velocity.
+* Finite velocities are clamped per axis to ``max_vx`` / ``max_vy`` / ``max_wz``.
+* E-stop engaged (``/rbd_controller/estop`` true) => zero velocity; velocity commands are ignored
+  until it is released; the last command is forgotten, so motion only resumes on a new command.
+  Never received => no gate.
+* No HighState for ``state_timeout`` (0.5 s), or none yet => zero velocity (the link is suspect).
+* Modes: a fresh non-zero velocity => mode 2 (velocity walking, trot). After the velocity has been
+  zero for ``stand_delay`` the A1 is put in mode 1 (force stand) with the requested body pose
+  (euler + bodyHeight); until then mode 2 with zero velocity lets the trot settle in place.
+  A body pose requested while walking is stored and applied when standing.
+
+All times are seconds on one monotonic clock chosen by the caller.
+"""
+
+import math
+
+from rbd_a1_driver import unitree_layout as ul
+
+
+class GateConfig:
+    """Limits and timeouts of the gate (defaults match README.md)."""
+
+    def __init__(
+        self,
+        max_vx: float = 0.5,
+        max_vy: float = 0.3,
+        max_wz: float = 1.0,
+        cmd_timeout: float = 0.25,
+        state_timeout: float = 0.5,
+        stand_delay: float = 0.5,
+        max_roll: float = 0.75,
+        max_pitch: float = 0.75,
+        max_yaw: float = 0.6,
+        min_body_height: float = -0.16,
+        max_body_height: float = 0.06,
+    ) -> None:
+        values = dict(locals())
+        values.pop("self")
+        for name, value in values.items():
+            if not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ValueError("%s must be a finite number, got %r" % (name, value))
+        for name in ("max_vx", "max_vy", "max_wz", "cmd_timeout", "state_timeout", "max_roll", "max_pitch"):
+            if values[name] <= 0.0:
+                raise ValueError("%s must be > 0, got %r" % (name, values[name]))
+        if stand_delay < 0.0 or max_yaw < 0.0:
+            raise ValueError("stand_delay and max_yaw must be >= 0")
+        if not min_body_height <= 0.0 <= max_body_height:
+            raise ValueError("body height range must contain 0")
+        self.max_vx = float(max_vx)
+        self.max_vy = float(max_vy)
+        self.max_wz = float(max_wz)
+        self.cmd_timeout = float(cmd_timeout)
+        self.state_timeout = float(state_timeout)
+        self.stand_delay = float(stand_delay)
+        self.max_roll = float(max_roll)
+        self.max_pitch = float(max_pitch)
+        self.max_yaw = float(max_yaw)
+        self.min_body_height = float(min_body_height)
+        self.max_body_height = float(max_body_height)
+
+
+def _clamp(value: float, limit: float) -> float:
+    return max(-limit, min(limit, value))
+
+
+class GateOutput:
+    """What the gate decided for one send cycle."""
+
+    __slots__ = ("mode", "gait_type", "velocity", "yaw_speed", "euler", "body_height", "reason")
+
+    def __init__(self, mode: int, gait_type: int, velocity: tuple, yaw_speed: float, euler: tuple,
+                 body_height: float, reason: str) -> None:
+        self.mode = mode
+        self.gait_type = gait_type
+        self.velocity = velocity
+        self.yaw_speed = yaw_speed
+        self.euler = euler
+        self.body_height = body_height
+        self.reason = reason  # why the velocity is zero ("" when moving as commanded)
+
+    def to_high_cmd(self) -> ul.HighCmd:
+        """Fill a HighCmd with this decision."""
+        cmd = ul.HighCmd()
+        cmd.mode = self.mode
+        cmd.gait_type = self.gait_type
+        cmd.velocity = self.velocity
+        cmd.yaw_speed = self.yaw_speed
+        cmd.euler = self.euler
+        cmd.body_height = self.body_height
+        return cmd
+
+
+class SafetyGate:
+    """Turns cmd_vel, body-pose requests, e-stop and state freshness into the HighCmd to send."""
+
+    def __init__(self, config: GateConfig = None) -> None:
+        self.config = config if config is not None else GateConfig()
+        self._vel = (0.0, 0.0, 0.0)
+        self._vel_time = None
+        self._last_motion_time = None  # last time a non-zero velocity was being sent
+        self._estop = None  # None = never received
+        self._state_time = None
+        self._euler = (0.0, 0.0, 0.0)
+        self._body_height = 0.0
+        self.rejected = 0  # count of rejected velocity commands
+
+    # ---- inputs ---------------------------------------------------------------------------------
+    def set_velocity(self, vx: float, vy: float, wz: float, now: float, others: tuple = ()) -> str:
+        """Take a velocity command (body frame, SI). Returns "" if used, else why it was not.
+
+        ``others`` are the Twist components the A1 cannot use (linear.z, angular.x/y): they must
+        be finite too, or the whole command is rejected.
+        """
+        values = (vx, vy, wz) + tuple(others)
+        if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
+            self._vel = (0.0, 0.0, 0.0)
+            self._vel_time = now
+            self.rejected += 1
+            return "non-finite velocity %r rejected: zero velocity sent" % (values,)
+        if self._estop:
+            return "e-stop engaged: velocity command ignored"
+        c = self.config
+        self._vel = (_clamp(float(vx), c.max_vx), _clamp(float(vy), c.max_vy), _clamp(float(wz), c.max_wz))
+        self._vel_time = now
+        if self._vel != (vx, vy, wz):
+            return "clamped to %r" % (self._vel,)
+        return ""
+
+    def set_estop(self, engaged: bool, now: float) -> None:
+        """Latch the e-stop state; engaging it forgets the last velocity command."""
+        self._estop = bool(engaged)
+        if self._estop:
+            self._vel = (0.0, 0.0, 0.0)
+            self._vel_time = None
+
+    def set_body_pose(self, roll: float, pitch: float, yaw: float, body_height: float) -> str:
+        """Request a standing body pose. Returns "" if accepted, else the reason it was rejected."""
+        values = (roll, pitch, yaw, body_height)
+        if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
+            return "non-finite body pose %r rejected" % (values,)
+        c = self.config
+        if abs(roll) > c.max_roll or abs(pitch) > c.max_pitch or abs(yaw) > c.max_yaw:
+            return "attitude (%.3f, %.3f, %.3f) rad outside limits (+-%.2f, +-%.2f, +-%.2f)" % (
+                roll, pitch, yaw, c.max_roll, c.max_pitch, c.max_yaw)
+        if not c.min_body_height <= body_height <= c.max_body_height:
+            return "body_height %.3f m outside [%.3f, %.3f]" % (body_height, c.min_body_height, c.max_body_height)
+        if self._estop:
+            return "e-stop engaged: body pose ignored"
+        self._euler = (float(roll), float(pitch), float(yaw))
+        self._body_height = float(body_height)
+        return ""
+
+    def note_state(self, now: float) -> None:
+        """Record that a valid HighState arrived."""
+        self._state_time = now
+
+    # ---- queries --------------------------------------------------------------------------------
+    @property
+    def estop(self) -> bool:
+        """True while the e-stop is engaged."""
+        return bool(self._estop)
+
+    def state_fresh(self, now: float) -> bool:
+        """True if a HighState arrived within state_timeout."""
+        return self._state_time is not None and now - self._state_time <= self.config.state_timeout
+
+    def command(self, now: float) -> GateOutput:
+        """Decide the command for this send cycle."""
+        reason = ""
+        vel = self._vel
+        if self._estop:
+            reason = "e-stop"
+        elif self._vel_time is None:
+            reason = "no velocity command yet"
+        elif now - self._vel_time > self.config.cmd_timeout:
+            reason = "velocity command stale (> %.2f s)" % self.config.cmd_timeout
+        elif not self.state_fresh(now):
+            reason = "HighState stale (> %.2f s)" % self.config.state_timeout
+        if reason:
+            vel = (0.0, 0.0, 0.0)
+        moving = vel != (0.0, 0.0, 0.0)
+        if moving:
+            self._last_motion_time = now
+        walking = moving or (
+            self._last_motion_time is not None and now - self._last_motion_time < self.config.stand_delay
+        )
+        if walking:
+            return GateOutput(ul.MODE_VELOCITY_WALK, ul.GAIT_TROT, (vel[0], vel[1]), vel[2], (0.0, 0.0, 0.0),
+                              self._body_height, reason)
+        return GateOutput(ul.MODE_FORCE_STAND, ul.GAIT_IDLE, (0.0, 0.0), 0.0, self._euler, self._body_height,
+                          reason)

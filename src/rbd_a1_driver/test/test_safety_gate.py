@@ -1,0 +1,129 @@
+"""The driver's safety gate: timeouts, clamps, NaN, e-stop, stale state, modes, body pose."""
+
+import math
+
+import pytest
+
+from rbd_a1_driver import unitree_layout as ul
+from rbd_a1_driver.safety_gate import GateConfig, SafetyGate
+
+
+def gate(**kw):
+    g = SafetyGate(GateConfig(**kw))
+    g.note_state(0.0)
+    return g
+
+
+def moving(out):
+    return out.velocity != (0.0, 0.0) or out.yaw_speed != 0.0
+
+
+def test_fresh_velocity_walks_in_trot():
+    g = gate()
+    assert g.set_velocity(0.3, 0.1, 0.2, 0.0) == ""
+    out = g.command(0.1)
+    assert out.mode == ul.MODE_VELOCITY_WALK and out.gait_type == ul.GAIT_TROT
+    assert out.velocity == (0.3, 0.1) and out.yaw_speed == 0.2 and out.reason == ""
+
+
+def test_no_command_for_cmd_timeout_gives_zero():
+    g = gate()
+    g.set_velocity(0.3, 0.0, 0.0, 0.0)
+    g.note_state(0.2)
+    assert moving(g.command(0.24))
+    out = g.command(0.26)
+    assert not moving(out) and "stale" in out.reason
+
+
+def test_no_command_ever_is_zero():
+    out = gate().command(5.0)
+    assert not moving(out) and out.mode == ul.MODE_FORCE_STAND
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), -float("inf")])
+def test_non_finite_rejected_and_zeroed(bad):
+    g = gate()
+    g.set_velocity(0.3, 0.0, 0.0, 0.0)
+    assert "non-finite" in g.set_velocity(bad, 0.0, 0.0, 0.05)
+    assert not moving(g.command(0.06))
+    assert g.rejected == 1
+    assert "non-finite" in g.set_velocity(0.1, 0.0, 0.0, 0.07, others=(0.0, bad, 0.0))
+    assert not moving(g.command(0.08))
+
+
+def test_clamped_to_limits():
+    g = gate(max_vx=0.4, max_vy=0.2, max_wz=0.5)
+    assert "clamped" in g.set_velocity(2.0, -3.0, 9.0, 0.0)
+    out = g.command(0.0)
+    assert out.velocity == (0.4, -0.2) and out.yaw_speed == 0.5
+
+
+def test_estop_gate_contract():
+    g = gate()
+    g.set_velocity(0.3, 0.0, 0.0, 0.0)
+    assert moving(g.command(0.01))  # never received => no gate
+    g.set_estop(True, 0.02)
+    assert not moving(g.command(0.03))
+    assert "e-stop" in g.set_velocity(0.3, 0.0, 0.0, 0.04)
+    g.note_state(0.05)
+    assert not moving(g.command(0.05))
+    g.set_estop(False, 0.06)
+    assert not moving(g.command(0.07))  # the old command is forgotten
+    g.set_velocity(0.2, 0.0, 0.0, 0.08)
+    assert moving(g.command(0.09))
+
+
+def test_stale_state_gives_zero():
+    g = gate()
+    g.set_velocity(0.3, 0.0, 0.0, 0.0)
+    g.set_velocity(0.3, 0.0, 0.0, 0.45)
+    assert moving(g.command(0.45))
+    g.set_velocity(0.3, 0.0, 0.0, 0.55)
+    out = g.command(0.55)
+    assert not moving(out) and "HighState" in out.reason
+    g2 = SafetyGate()
+    g2.set_velocity(0.3, 0.0, 0.0, 0.0)
+    assert not moving(g2.command(0.0))  # never had a state
+
+
+def test_stand_after_delay_with_body_pose():
+    g = gate(stand_delay=0.5)
+    assert g.set_body_pose(0.2, -0.1, 0.0, -0.05) == ""
+    g.set_velocity(0.3, 0.0, 0.0, 0.0)
+    out = g.command(0.0)
+    assert out.mode == ul.MODE_VELOCITY_WALK and out.euler == (0.0, 0.0, 0.0)
+    g.set_velocity(0.0, 0.0, 0.0, 0.1)
+    g.note_state(0.3)
+    assert g.command(0.3).mode == ul.MODE_VELOCITY_WALK  # settling in place
+    g.note_state(0.6)
+    out = g.command(0.6)
+    assert out.mode == ul.MODE_FORCE_STAND and out.euler == pytest.approx((0.2, -0.1, 0.0))
+    assert out.body_height == pytest.approx(-0.05) and not moving(out)
+    hc = ul.decode_high_cmd(out.to_high_cmd().pack())
+    assert hc.mode == 1 and hc.euler == pytest.approx((0.2, -0.1, 0.0))
+
+
+@pytest.mark.parametrize(
+    "pose",
+    [(math.nan, 0, 0, 0), (0, 0, 0, math.inf), (0.9, 0, 0, 0), (0, -0.8, 0, 0), (0, 0, 0.7, 0), (0, 0, 0, -0.2),
+     (0, 0, 0, 0.1)],
+)
+def test_bad_body_pose_rejected(pose):
+    g = gate()
+    assert g.set_body_pose(*pose) != ""
+    assert g.command(1.0).euler == (0.0, 0.0, 0.0)
+
+
+def test_body_pose_rejected_during_estop():
+    g = gate()
+    g.set_estop(True, 0.0)
+    assert "e-stop" in g.set_body_pose(0.2, 0.0, 0.0, 0.0)
+
+
+def test_config_validation():
+    with pytest.raises(ValueError):
+        GateConfig(max_vx=float("nan"))
+    with pytest.raises(ValueError):
+        GateConfig(cmd_timeout=0.0)
+    with pytest.raises(ValueError):
+        GateConfig(min_body_height=0.1)

@@ -1,0 +1,44 @@
+import math
+
+import pytest
+
+from rbd_bringup.metrics import ContactMonitor, footprint_clearance
+
+
+def test_clearance_in_front_and_to_the_side():
+    # Person of radius 0.2 m, 1.0 m ahead of a 0.5 x 0.3 footprint: 1.0 - 0.25 - 0.2.
+    assert footprint_clearance((0, 0), 0.0, (1.0, 0.0), 0.2) == pytest.approx(0.55)
+    assert footprint_clearance((0, 0), 0.0, (0.0, 1.0), 0.2) == pytest.approx(1.0 - 0.15 - 0.2)
+
+
+def test_clearance_follows_heading():
+    # Robot turned 90 degrees: the person ahead in the world is now beside it.
+    assert footprint_clearance((0, 0), math.pi / 2, (0.0, 1.0), 0.2) == pytest.approx(0.55)
+    assert footprint_clearance((0, 0), math.pi / 2, (1.0, 0.0), 0.2) == pytest.approx(0.65)
+
+
+def test_corner_distance_is_euclidean():
+    d = footprint_clearance((0, 0), 0.0, (0.25 + 0.3, 0.15 + 0.4), 0.0)
+    assert d == pytest.approx(0.5)
+
+
+def test_contact_is_non_positive():
+    assert footprint_clearance((0, 0), 0.0, (0.4, 0.0), 0.2) < 0
+    assert footprint_clearance((0, 0), 0.0, (0.0, 0.0), 0.2) < 0
+
+
+def test_bad_sizes_rejected():
+    with pytest.raises(ValueError):
+        footprint_clearance((0, 0), 0.0, (1, 1), -0.1)
+
+
+def test_monitor_counts_each_contact_once_and_tracks_minimum():
+    mon = ContactMonitor()
+    mon.update(0.0, (0, 0), 0.0, [("p1", 2.0, 0.0, 0.2)])
+    mon.update(0.1, (0, 0), 0.0, [("p1", 0.3, 0.0, 0.2)])
+    mon.update(0.2, (0, 0), 0.0, [("p1", 0.3, 0.0, 0.2)])
+    mon.update(0.3, (0, 0), 0.0, [("p1", 2.0, 0.0, 0.2)])
+    mon.update(0.4, (0, 0), 0.0, [("p1", 0.3, 0.0, 0.2)])
+    assert [c[0] for c in mon.contacts] == [0.1, 0.4]
+    assert mon.min_clearance == pytest.approx(0.3 - 0.25 - 0.2)
+    assert mon.min_clearance_at == 0.1

@@ -1,0 +1,443 @@
+"""Simulated world: static geometry, people on scripted paths, obstacles placed at run time.
+
+ROS-free. A world file is YAML (see ``worlds/lab.yaml``)::
+
+    name: lab
+    floor: {z: 0.0}                      # optional, default z 0
+    ceiling: {z: 3.0}                    # optional, no ceiling when absent
+    walls:   [{from: [x, y], to: [x, y], thickness: 0.1, height: 2.5}]
+    boxes:   [{name: crate, center: [x, y], size: [lx, ly, lz], yaw: 0.0, z: 0.0}]
+    tables:  [{name: t1, center: [x, y], size: [lx, ly], height: 0.75, yaw: 0.0}]
+    cylinders: [{name: pillar, center: [x, y], radius: 0.2, height: 2.5}]
+    people:  [{name: p1, path: [[x, y], ...], speed: 0.8, mode: loop, radius: 0.25, height: 1.75}]
+
+Every entry may carry ``reflectivity`` (0..255, the OS1's calibrated reflectivity). Unknown
+keys anywhere, missing required keys and bad values raise :class:`WorldError` naming the file
+and the entry, so a typo never silently drops an obstacle.
+
+People move along their polyline at constant speed; ``mode`` is ``loop`` (closed polygon),
+``pingpong`` (there and back) or ``stand`` (stays at the first point). ``phase`` [s] shifts a
+person along the path. Positions are a pure function of time, so every node that loads the
+same file computes the same people at the same time.
+"""
+
+import math
+import os
+
+import yaml
+
+DEFAULT_REFLECTIVITY = {"wall": 60, "box": 40, "table": 50, "cylinder": 30, "person": 25, "placed": 25}
+
+_KEYS = {
+    "wall": ({"from", "to"}, {"thickness", "height", "z", "reflectivity", "name"}),
+    "box": ({"center", "size"}, {"name", "yaw", "z", "reflectivity"}),
+    "table": ({"center", "size"}, {"name", "height", "yaw", "top_thickness", "leg_size", "reflectivity"}),
+    "cylinder": ({"center", "radius", "height"}, {"name", "z", "reflectivity"}),
+    "person": ({"name", "path"}, {"speed", "mode", "radius", "height", "phase", "reflectivity"}),
+}
+_TOP_KEYS = {"name", "description", "floor", "ceiling", "walls", "boxes", "tables", "cylinders", "people"}
+_SECTION_KIND = {"walls": "wall", "boxes": "box", "tables": "table", "cylinders": "cylinder", "people": "person"}
+PERSON_MODES = ("loop", "pingpong", "stand")
+
+
+class WorldError(ValueError):
+    """A world file or a world request is invalid; the message says where and why."""
+
+
+class Box:
+    """A box standing on z0 with a yaw about the vertical axis.
+
+    Attributes:
+        name: Entry name.
+        cx, cy: Centre in the world frame [m].
+        hx, hy: Half sizes along the box's own x and y axes [m].
+        z0, z1: Bottom and top height [m].
+        yaw: Rotation about z [rad].
+        reflectivity: OS1 reflectivity 0..255.
+    """
+
+    __slots__ = ("name", "cx", "cy", "hx", "hy", "z0", "z1", "yaw", "reflectivity")
+
+    def __init__(
+        self,
+        name: str,
+        cx: float,
+        cy: float,
+        hx: float,
+        hy: float,
+        z0: float,
+        z1: float,
+        yaw: float = 0.0,
+        reflectivity: int = 40,
+    ) -> None:
+        self.name = name
+        self.cx, self.cy, self.hx, self.hy = float(cx), float(cy), float(hx), float(hy)
+        self.z0, self.z1, self.yaw = float(z0), float(z1), float(yaw)
+        self.reflectivity = int(reflectivity)
+
+    def bounding_radius(self) -> float:
+        """Radius of the vertical cylinder around the box's footprint [m]."""
+        return math.hypot(self.hx, self.hy)
+
+
+class Cylinder:
+    """A vertical cylinder (person, pillar, placed obstacle).
+
+    Attributes:
+        name: Entry name.
+        cx, cy: Axis position in the world frame [m].
+        radius: Radius [m].
+        z0, z1: Bottom and top height [m].
+        reflectivity: OS1 reflectivity 0..255.
+        kind: "cylinder", "person" or "placed".
+    """
+
+    __slots__ = ("name", "cx", "cy", "radius", "z0", "z1", "reflectivity", "kind")
+
+    def __init__(
+        self,
+        name: str,
+        cx: float,
+        cy: float,
+        radius: float,
+        z0: float,
+        z1: float,
+        reflectivity: int = 30,
+        kind: str = "cylinder",
+    ) -> None:
+        self.name = name
+        self.cx, self.cy, self.radius = float(cx), float(cy), float(radius)
+        self.z0, self.z1 = float(z0), float(z1)
+        self.reflectivity = int(reflectivity)
+        self.kind = kind
+
+    def bounding_radius(self) -> float:
+        """Radius of the footprint [m]."""
+        return self.radius
+
+
+class Person:
+    """A person walking a scripted polyline at constant speed.
+
+    Args:
+        name: Unique name.
+        path: List of (x, y) way points [m].
+        speed: Walking speed [m/s].
+        mode: "loop", "pingpong" or "stand".
+        radius: Body radius [m].
+        height: Body height [m].
+        phase: Time offset along the path [s].
+        reflectivity: OS1 reflectivity 0..255.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        path: list,
+        speed: float = 0.8,
+        mode: str = "loop",
+        radius: float = 0.25,
+        height: float = 1.75,
+        phase: float = 0.0,
+        reflectivity: int = 25,
+    ) -> None:
+        self.name = name
+        pts = [(float(p[0]), float(p[1])) for p in path]
+        if mode == "loop" and len(pts) > 1:
+            pts = pts + [pts[0]]
+        elif mode == "pingpong" and len(pts) > 1:
+            pts = pts + pts[-2::-1]
+        self.points = pts
+        self.speed, self.mode = float(speed), mode
+        self.radius, self.height, self.phase = float(radius), float(height), float(phase)
+        self.reflectivity = int(reflectivity)
+        self.seg_len = [math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(pts[:-1], pts[1:])]
+        self.length = sum(self.seg_len)
+
+    def position(self, t: float) -> tuple:
+        """Return the (x, y) position at time t [s] since the world epoch."""
+        if self.mode == "stand" or self.length <= 0.0 or self.speed <= 0.0:
+            return self.points[0]
+        s = math.fmod((t + self.phase) * self.speed, self.length)
+        if s < 0.0:
+            s += self.length
+        for (a, b), seg in zip(zip(self.points[:-1], self.points[1:]), self.seg_len):
+            if s <= seg and seg > 0.0:
+                f = s / seg
+                return (a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]))
+            s -= seg
+        return self.points[-1]
+
+    def cylinder(self, t: float) -> Cylinder:
+        """Return the person's body as a cylinder at time t [s]."""
+        x, y = self.position(t)
+        return Cylinder(self.name, x, y, self.radius, 0.0, self.height, self.reflectivity, "person")
+
+
+class World:
+    """Static geometry, scripted people and run-time obstacles.
+
+    Attributes:
+        name: World name.
+        floor_z: Floor height [m].
+        ceiling_z: Ceiling height [m] or None.
+        boxes: Static boxes (walls and tables are boxes too).
+        cylinders: Static cylinders.
+        people: Scripted people.
+        placed: Run-time obstacles by name (see :meth:`place`).
+    """
+
+    def __init__(self, name: str = "empty", floor_z: float = 0.0, ceiling_z: float = None) -> None:
+        self.name = name
+        self.floor_z = float(floor_z)
+        self.ceiling_z = None if ceiling_z is None else float(ceiling_z)
+        self.boxes = []
+        self.cylinders = []
+        self.people = []
+        self.placed = {}
+
+    # -- run-time obstacles -------------------------------------------------------------------
+    def place(self, name: str, x: float, y: float, radius: float, height: float) -> str:
+        """Add or move the cylinder called name.
+
+        Returns:
+            "added" or "moved".
+
+        Raises:
+            WorldError: empty name, non-finite values, radius or height not > 0.
+        """
+        if not name:
+            raise WorldError("place_obstacle: name must not be empty")
+        for label, v in (("x", x), ("y", y), ("radius", radius), ("height", height)):
+            if not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise WorldError("place_obstacle %r: %s must be a finite number, got %r" % (name, label, v))
+        if radius <= 0.0 or height <= 0.0:
+            raise WorldError("place_obstacle %r: radius and height must be > 0 (got %g, %g)" % (name, radius, height))
+        if radius > 5.0 or height > 10.0:
+            raise WorldError(
+                "place_obstacle %r: radius <= 5 m and height <= 10 m (got %g, %g)" % (name, radius, height)
+            )
+        result = "moved" if name in self.placed else "added"
+        self.placed[name] = Cylinder(
+            name, x, y, radius, self.floor_z, self.floor_z + height, DEFAULT_REFLECTIVITY["placed"], "placed"
+        )
+        return result
+
+    def remove(self, name: str) -> None:
+        """Remove the run-time obstacle called name.
+
+        Raises:
+            WorldError: no obstacle has that name.
+        """
+        if name not in self.placed:
+            raise WorldError("remove obstacle %r: no such obstacle (known: %s)" % (name, sorted(self.placed) or "none"))
+        del self.placed[name]
+
+    # -- snapshots ----------------------------------------------------------------------------
+    def dynamic_cylinders(self, t: float) -> list:
+        """People at time t [s] since the epoch, then placed obstacles."""
+        placed = self.placed  # one read: another thread may swap the dict
+        return [p.cylinder(t) for p in self.people] + [placed[k] for k in sorted(placed)]
+
+    def all_cylinders(self, t: float) -> list:
+        """Static cylinders, people at time t and placed obstacles."""
+        return list(self.cylinders) + self.dynamic_cylinders(t)
+
+
+# -- loading ----------------------------------------------------------------------------------
+def resolve_world_path(name: str, worlds_dir: str) -> str:
+    """Map a world name ("lab") or a path to an existing YAML file.
+
+    Raises:
+        WorldError: the file does not exist.
+    """
+    if not name:
+        raise WorldError("world name is empty")
+    if name.endswith((".yaml", ".yml")) or os.sep in name:
+        path = name
+    else:
+        path = os.path.join(worlds_dir, name + ".yaml")
+    if not os.path.isfile(path):
+        known = (
+            sorted(f[:-5] for f in os.listdir(worlds_dir) if f.endswith(".yaml")) if os.path.isdir(worlds_dir) else []
+        )
+        raise WorldError("world %r: file %s not found (known worlds: %s)" % (name, path, ", ".join(known) or "none"))
+    return path
+
+
+def load_world(path: str) -> World:
+    """Load and validate a world YAML file.
+
+    Raises:
+        WorldError: unreadable file, unknown or missing keys, bad values.
+    """
+    try:
+        with open(path) as f:
+            data = yaml.safe_load(f)
+    except (OSError, yaml.YAMLError) as e:
+        raise WorldError("%s: cannot read world file: %s" % (path, e)) from e
+    return world_from_dict(data, path)
+
+
+def world_from_dict(data: dict, where: str = "world") -> World:
+    """Build a world from parsed YAML (see the module docstring for the schema).
+
+    Raises:
+        WorldError: unknown or missing keys, bad values.
+    """
+    if not isinstance(data, dict):
+        raise WorldError("%s: top level must be a mapping, got %s" % (where, type(data).__name__))
+    unknown = set(data) - _TOP_KEYS
+    if unknown:
+        raise WorldError(
+            "%s: unknown top-level key(s) %s (allowed: %s)" % (where, sorted(unknown), ", ".join(sorted(_TOP_KEYS)))
+        )
+    floor = _section_dict(data, "floor", where, {"z"})
+    ceiling = _section_dict(data, "ceiling", where, {"z"})
+    world = World(
+        str(data.get("name", os.path.splitext(os.path.basename(where))[0])),
+        _num(floor.get("z", 0.0), where + ": floor.z"),
+        None if not ceiling else _num(ceiling.get("z"), where + ": ceiling.z", lo=0.5),
+    )
+    names = set()
+    for section, kind in sorted(_SECTION_KIND.items()):
+        entries = data.get(section) or []
+        if not isinstance(entries, list):
+            raise WorldError("%s: %s must be a list" % (where, section))
+        for i, e in enumerate(entries):
+            ctx = "%s: %s[%d]" % (where, section, i)
+            if not isinstance(e, dict):
+                raise WorldError("%s: must be a mapping, got %r" % (ctx, e))
+            required, optional = _KEYS[kind]
+            bad = set(e) - required - optional
+            if bad:
+                raise WorldError(
+                    "%s: unknown key(s) %s for a %s (allowed: %s)"
+                    % (ctx, sorted(bad), kind, ", ".join(sorted(required | optional)))
+                )
+            missing = required - set(e)
+            if missing:
+                raise WorldError("%s: missing required key(s) %s" % (ctx, sorted(missing)))
+            name = str(e.get("name", "%s%d" % (kind, i)))
+            if "name" in e:
+                if name in names:
+                    raise WorldError("%s: duplicate name %r" % (ctx, name))
+                names.add(name)
+            refl = _num(e.get("reflectivity", DEFAULT_REFLECTIVITY[kind]), ctx + ".reflectivity", lo=0, hi=255)
+            _ADD[kind](world, e, ctx, world.floor_z + 0.0, name, refl)
+    return world
+
+
+def _add_wall(world: World, e: dict, ctx: str, floor: float, name: str, refl: float) -> None:
+    ax, ay = _xy(e["from"], ctx + ".from")
+    bx, by = _xy(e["to"], ctx + ".to")
+    length = math.hypot(bx - ax, by - ay)
+    if length <= 0.0:
+        raise WorldError("%s: wall has zero length" % ctx)
+    thick = _num(e.get("thickness", 0.1), ctx + ".thickness", lo=0.01)
+    height = _num(e.get("height", 2.5), ctx + ".height", lo=0.01)
+    z = floor + _num(e.get("z", 0.0), ctx + ".z")
+    world.boxes.append(
+        Box(
+            name, (ax + bx) / 2, (ay + by) / 2, length / 2, thick / 2, z, z + height, math.atan2(by - ay, bx - ax), refl
+        )
+    )
+
+
+def _add_box(world: World, e: dict, ctx: str, floor: float, name: str, refl: float) -> None:
+    cx, cy = _xy(e["center"], ctx + ".center")
+    size = e["size"]
+    if not isinstance(size, list) or len(size) != 3:
+        raise WorldError("%s.size: expected [lx, ly, lz], got %r" % (ctx, size))
+    lx, ly, lz = (_num(v, ctx + ".size", lo=0.01) for v in size)
+    z = floor + _num(e.get("z", 0.0), ctx + ".z")
+    yaw = _num(e.get("yaw", 0.0), ctx + ".yaw")
+    world.boxes.append(Box(name, cx, cy, lx / 2, ly / 2, z, z + lz, yaw, refl))
+
+
+def _add_table(world: World, e: dict, ctx: str, floor: float, name: str, refl: float) -> None:
+    """A table is a top slab plus four legs, so the LiDAR sees under it as a real one does."""
+    cx, cy = _xy(e["center"], ctx + ".center")
+    lx, ly = _xy(e["size"], ctx + ".size")
+    if lx <= 0.1 or ly <= 0.1:
+        raise WorldError("%s.size: table must be larger than 0.1 m each way" % ctx)
+    height = _num(e.get("height", 0.75), ctx + ".height", lo=0.1)
+    top = _num(e.get("top_thickness", 0.04), ctx + ".top_thickness", lo=0.005, hi=height)
+    leg = _num(e.get("leg_size", 0.05), ctx + ".leg_size", lo=0.005, hi=min(lx, ly) / 2)
+    yaw = _num(e.get("yaw", 0.0), ctx + ".yaw")
+    world.boxes.append(Box(name + "/top", cx, cy, lx / 2, ly / 2, floor + height - top, floor + height, yaw, refl))
+    c, s = math.cos(yaw), math.sin(yaw)
+    for i, (sx, sy) in enumerate(((1, 1), (1, -1), (-1, -1), (-1, 1))):
+        ux, uy = sx * (lx / 2 - leg / 2), sy * (ly / 2 - leg / 2)
+        world.boxes.append(
+            Box(
+                "%s/leg%d" % (name, i),
+                cx + c * ux - s * uy,
+                cy + s * ux + c * uy,
+                leg / 2,
+                leg / 2,
+                floor,
+                floor + height - top,
+                yaw,
+                refl,
+            )
+        )
+
+
+def _add_cylinder(world: World, e: dict, ctx: str, floor: float, name: str, refl: float) -> None:
+    cx, cy = _xy(e["center"], ctx + ".center")
+    radius = _num(e["radius"], ctx + ".radius", lo=0.01)
+    height = _num(e["height"], ctx + ".height", lo=0.01)
+    z = floor + _num(e.get("z", 0.0), ctx + ".z")
+    world.cylinders.append(Cylinder(name, cx, cy, radius, z, z + height, refl, "cylinder"))
+
+
+def _add_person(world: World, e: dict, ctx: str, floor: float, name: str, refl: float) -> None:
+    path = e["path"]
+    if not isinstance(path, list) or not path:
+        raise WorldError("%s.path: expected a non-empty list of [x, y]" % ctx)
+    pts = [_xy(p, "%s.path[%d]" % (ctx, j)) for j, p in enumerate(path)]
+    mode = e.get("mode", "loop")
+    if mode not in PERSON_MODES:
+        raise WorldError("%s.mode: %r is not one of %s" % (ctx, mode, ", ".join(PERSON_MODES)))
+    world.people.append(
+        Person(
+            name,
+            pts,
+            _num(e.get("speed", 0.8), ctx + ".speed", lo=0.0, hi=5.0),
+            mode,
+            _num(e.get("radius", 0.25), ctx + ".radius", lo=0.05, hi=2.0),
+            _num(e.get("height", 1.75), ctx + ".height", lo=0.1, hi=3.0),
+            _num(e.get("phase", 0.0), ctx + ".phase"),
+            refl,
+        )
+    )
+
+
+_ADD = {"wall": _add_wall, "box": _add_box, "table": _add_table, "cylinder": _add_cylinder, "person": _add_person}
+
+
+def _section_dict(data: dict, key: str, where: str, allowed: set) -> dict:
+    value = data.get(key)
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise WorldError("%s: %s must be a mapping like {z: 0.0}" % (where, key))
+    bad = set(value) - allowed
+    if bad:
+        raise WorldError("%s: %s: unknown key(s) %s (allowed: %s)" % (where, key, sorted(bad), sorted(allowed)))
+    return value
+
+
+def _num(v: object, ctx: str, lo: float = None, hi: float = None) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise WorldError("%s: expected a finite number, got %r" % (ctx, v))
+    if lo is not None and v < lo or hi is not None and v > hi:
+        raise WorldError("%s: %r out of range [%s, %s]" % (ctx, v, lo, hi))
+    return float(v)
+
+
+def _xy(v: object, ctx: str) -> tuple:
+    if not isinstance(v, (list, tuple)) or len(v) != 2:
+        raise WorldError("%s: expected [x, y], got %r" % (ctx, v))
+    return _num(v[0], ctx), _num(v[1], ctx)

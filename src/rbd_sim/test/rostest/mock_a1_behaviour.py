@@ -1,0 +1,229 @@
+#!/usr/bin/env python3
+"""rostest node: drive the real rbd_a1_driver (-> LCM -> mock_a1) and measure the ground truth.
+
+Private param ``expect_drift``: expected drift of a 180 deg turn [m] (0 = drift off).
+Argument ``--turn-only``: run only the turn (the drift-off launch).
+"""
+
+import math
+import sys
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
+from std_msgs.msg import Bool
+
+from rbd_msgs.srv import SetBodyPose
+
+PKG = "rbd_sim"
+RATE = 20.0  # cmd_vel rate of the test, like a controller [Hz]
+
+
+def rpy_from_quaternion(q):
+    roll = math.atan2(2 * (q.w * q.x + q.y * q.z), 1 - 2 * (q.x * q.x + q.y * q.y))
+    pitch = math.asin(max(-1.0, min(1.0, 2 * (q.w * q.y - q.z * q.x))))
+    yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+    return roll, pitch, yaw
+
+
+class GroundTruth:
+    """Latest ground truth (x, y, z, roll, pitch, yaw)."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.pose = None
+        self.frame = None
+        rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self._cb, queue_size=5)
+
+    def _cb(self, msg):
+        p = msg.pose.pose.position
+        with self.lock:
+            self.pose = (p.x, p.y, p.z) + rpy_from_quaternion(msg.pose.pose.orientation)
+            self.frame = (msg.header.frame_id, msg.child_frame_id)
+
+    def get(self):
+        with self.lock:
+            return self.pose
+
+
+def dist(a, b):
+    return math.hypot(a[0] - b[0], a[1] - b[1])
+
+
+def twist(vx=0.0, vy=0.0, wz=0.0):
+    t = Twist()
+    t.linear.x, t.linear.y, t.angular.z = vx, vy, wz
+    return t
+
+
+class MockA1Behaviour(unittest.TestCase):
+    gt = None
+    pub = None
+    estop = None
+    diag = None
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("mock_a1_behaviour")
+        cls.gt = GroundTruth()
+        cls.pub = rospy.Publisher("/cmd_vel", Twist, queue_size=5)
+        cls.estop = rospy.Publisher("/rbd_controller/estop", Bool, queue_size=1, latch=True)
+        cls.diag = []
+        rospy.Subscriber("/diagnostics", DiagnosticArray, cls.diag.append, queue_size=5)
+        rospy.wait_for_message("/rbd_a1_driver/odom", Odometry, timeout=60.0)
+        deadline = time.monotonic() + 30.0
+        while cls.gt.get() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        deadline = time.monotonic() + 30.0
+        while cls.pub.get_num_connections() == 0 and time.monotonic() < deadline:
+            time.sleep(0.05)
+
+    def setUp(self):
+        self.assertIsNotNone(self.gt.get(), "no ground truth")
+
+    def send(self, msg, duration):
+        """Publish msg at RATE for duration seconds (monotonic)."""
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < duration:
+            self.pub.publish(msg)
+            time.sleep(1.0 / RATE)
+        return self.gt.get()
+
+    def settle(self, timeout=5.0):
+        """Wait until the ground truth has not moved for 0.3 s; return the pose."""
+        deadline = time.monotonic() + timeout
+        last = self.gt.get()
+        while time.monotonic() < deadline:
+            time.sleep(0.3)
+            now = self.gt.get()
+            if dist(now, last) < 1e-4 and abs(now[5] - last[5]) < 1e-4:
+                return now
+            last = now
+        self.fail("ground truth still moving after %.1f s" % timeout)
+
+    def assert_still(self, duration, what):
+        start = self.gt.get()
+        time.sleep(duration)
+        end = self.gt.get()
+        self.assertLess(dist(start, end), 0.005, "%s: moved %.3f m" % (what, dist(start, end)))
+        self.assertLess(abs(end[5] - start[5]), 0.005, "%s: turned" % what)
+
+    def test_0_frames(self):
+        self.assertEqual(self.gt.frame, ("world", "base_link_gt"))
+
+    def test_1_forward_03_for_3s(self):
+        start = self.settle()
+        self.send(twist(0.3), 3.0)
+        self.send(twist(), 0.5)
+        end = self.settle()
+        moved = end[0] - start[0]
+        rospy.loginfo("MEASURED forward 0.3 m/s x 3 s: %.3f m", moved)
+        self.assertAlmostEqual(moved, 0.9, delta=0.045, msg="moved %.3f m" % moved)
+        self.assertLess(abs(end[1] - start[1]), 0.01)
+
+    def test_2_no_cmd_vel_for_025s_stops(self):
+        self.settle()
+        at_last = self.send(twist(0.3), 1.0)
+        t_last = time.monotonic()
+        time.sleep(1.0)
+        stopped = self.gt.get()
+        coast = stopped[0] - at_last[0]
+        rospy.loginfo("MEASURED coast after the last cmd_vel: %.3f m", coast)
+        # 0.25 s gate + 0.05 s latency at 0.3 m/s + 0.03 m braking = 0.12 m; a 1 s gate would give 0.33 m.
+        self.assertGreater(coast, 0.03, "was not moving?")
+        self.assertLess(coast, 0.2, "coasted %.3f m after the last cmd_vel" % coast)
+        self.assertLess(time.monotonic() - t_last, 1.5, "test too slow to judge")
+        self.assert_still(0.5, "after cmd_vel stopped")
+
+    def test_3_turn_180(self):
+        expect = float(rospy.get_param("~expect_drift", 0.4))
+        start = self.settle()
+        wz = 0.5
+        self.send(twist(wz=wz), math.pi / wz)
+        self.send(twist(), 0.5)
+        end = self.settle()
+        turned = (end[5] - start[5]) % (2 * math.pi)
+        self.assertAlmostEqual(turned, math.pi, delta=0.15, msg="turned %.3f rad" % turned)
+        drift = dist(start, end)
+        rospy.loginfo("MEASURED 180 deg turn: %.3f rad, drift %.3f m", turned, drift)
+        if expect > 0.0:
+            self.assertAlmostEqual(drift, expect, delta=0.25 * expect, msg="drift %.3f m" % drift)
+        else:
+            self.assertLess(drift, 0.02, "drift %.3f m with drift off" % drift)
+
+    def test_4_estop_gate(self):
+        try:
+            self.settle()
+            self.estop.publish(Bool(True))
+            time.sleep(0.3)
+            start = self.gt.get()
+            self.send(twist(0.3), 1.0)
+            self.assertLess(dist(self.gt.get(), start), 0.005, "moved while e-stop engaged")
+            self.estop.publish(Bool(False))
+            time.sleep(0.2)
+            start = self.gt.get()
+            self.send(twist(0.3), 1.0)
+            self.assertGreater(dist(self.gt.get(), start), 0.15, "no motion after release")
+            self.estop.publish(Bool(True))
+            at_stop = self.gt.get()
+            self.send(twist(0.3), 1.0)  # cmd_vel keeps coming: ignored
+            coast = dist(self.gt.get(), at_stop)
+            self.assertLess(coast, 0.12, "coasted %.3f m after e-stop" % coast)
+            self.assert_still(0.3, "e-stop with cmd_vel streaming")
+        finally:
+            self.estop.publish(Bool(False))
+            time.sleep(0.2)
+
+    def test_5_nan_cmd_vel_holds_still(self):
+        self.settle()
+        start = self.gt.get()
+        nan = float("nan")
+        for msg in (twist(nan, 0, 0), twist(0.3, 0, nan), twist(0.3, float("inf"), 0)):
+            self.send(msg, 0.5)
+        self.assertLess(dist(self.gt.get(), start), 0.005)
+        self.assertLess(abs(self.gt.get()[5] - start[5]), 0.005)
+
+    def test_6_body_pose_tilts_and_lowers(self):
+        self.settle()
+        rospy.wait_for_service("/set_body_pose", timeout=10.0)
+        call = rospy.ServiceProxy("/set_body_pose", SetBodyPose)
+        time.sleep(0.6)  # stand_delay: the driver puts the A1 in force stand
+        before = self.gt.get()
+        res = call(0.3, -0.2, 0.0, -0.1)
+        self.assertTrue(res.success, res.message)
+        time.sleep(1.5)
+        x, y, z, roll, pitch, _ = self.gt.get()
+        self.assertAlmostEqual(roll, 0.3, delta=0.02)
+        self.assertAlmostEqual(pitch, -0.2, delta=0.02)
+        self.assertAlmostEqual(z, before[2] - 0.1, delta=0.01)
+        self.assertLess(dist((x, y), before), 0.005, "body pose must not walk")
+        res = call(float("nan"), 0.0, 0.0, 0.0)
+        self.assertFalse(res.success)
+        time.sleep(0.5)
+        self.assertAlmostEqual(self.gt.get()[3], 0.3, delta=0.02, msg="NaN body pose changed the body")
+        self.assertTrue(call(0.0, 0.0, 0.0, 0.0).success)
+        time.sleep(1.0)
+        self.assertAlmostEqual(self.gt.get()[3], 0.0, delta=0.02)
+        self.assertAlmostEqual(self.gt.get()[2], before[2], delta=0.01)
+
+
+class TurnOnly(MockA1Behaviour):
+    """Only the 180 deg turn (for the drift-off configuration)."""
+
+    test_1_forward_03_for_3s = None
+    test_2_no_cmd_vel_for_025s_stops = None
+    test_4_estop_gate = None
+    test_5_nan_cmd_vel_holds_still = None
+    test_6_body_pose_tilts_and_lowers = None
+
+
+if __name__ == "__main__":
+    if "--turn-only" in sys.argv:
+        rostest.rosrun(PKG, "mock_a1_turn", TurnOnly)
+    else:
+        rostest.rosrun(PKG, "mock_a1_behaviour", MockA1Behaviour)

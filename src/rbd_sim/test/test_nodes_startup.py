@@ -1,0 +1,32 @@
+"""Node wiring that is quickest to check with a private master: bad worlds stop the nodes at startup."""
+
+import os
+import subprocess
+
+import pytest
+
+
+def run_node(ros_env, node, world, timeout=40):
+    proc = ros_env.start(["rosrun", "rbd_sim", node, "_world:=%s" % world])
+    proc.wait(timeout=timeout)
+    log = open(os.path.join(ros_env.home, "proc-%d.log" % (len(ros_env.procs) - 1))).read()
+    return proc.returncode, log
+
+
+@pytest.mark.parametrize("node", ["world", "os1_sim"])
+def test_unknown_world_entry_is_a_clear_startup_error(ros_env, tmp_path, node):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("walls:\n  - {from: [0, 0], to: [1, 0], heigth: 2.0}\n")
+    code, log = run_node(ros_env, node, str(bad))
+    assert code == 1, log
+    assert "unknown key(s) ['heigth']" in log and "walls[0]" in log, log
+
+
+def test_missing_world_lists_known_worlds(ros_env):
+    code, log = run_node(ros_env, "world", "atlantis")
+    assert code == 1
+    assert "known worlds" in log and "lab" in log and "fair" in log, log
+
+
+def test_rosrun_available():
+    assert subprocess.call(["which", "rosrun"], stdout=subprocess.DEVNULL) == 0
