@@ -3,9 +3,12 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/OccupancyGrid.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
 
 #include <cmath>
 #include <ctime>
+#include <limits>
+#include <vector>
 
 #include "rbd_localization/geometry.h"
 
@@ -55,6 +58,18 @@ bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams
   pnh.param("map_publish_interval", n->map_publish_interval, n->map_publish_interval);
   pnh.param("scan_timeout", n->scan_timeout, n->scan_timeout);
   pnh.param("correction_enabled", n->correction_enabled, n->correction_enabled);
+  pnh.param<std::string>("input", n->input, n->input);
+  pnh.param("slice_z_min", n->slice_z_min, n->slice_z_min);
+  pnh.param("slice_z_max", n->slice_z_max, n->slice_z_max);
+  pnh.param("slice_bins", n->slice_bins, n->slice_bins);
+  if (n->input != "scan" && n->input != "points") {
+    *error = "input must be 'scan' or 'points'";
+    return false;
+  }
+  if (!(n->slice_z_max > n->slice_z_min) || n->slice_bins < 36) {
+    *error = "slice_z_max must be > slice_z_min and slice_bins >= 36";
+    return false;
+  }
 
   pnh.param("initial_mapping_duration", c->initial_mapping_duration, c->initial_mapping_duration);
   pnh.param("initial_mapping_min_scans", c->initial_mapping_min_scans, c->initial_mapping_min_scans);
@@ -107,7 +122,11 @@ bool MapCorrectionNode::init(std::string* error) {
   tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, nh_));
   map_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("map", 1, true);
   pose_pub_ = nh_.advertise<geometry_msgs::PoseStamped>("rbd_localization/pose", 10);
-  scan_sub_ = nh_.subscribe("scan", 2, &MapCorrectionNode::scanCallback, this);
+  if (params_.input == "points") {
+    scan_sub_ = nh_.subscribe("points", 2, &MapCorrectionNode::cloudCallback, this);
+  } else {
+    scan_sub_ = nh_.subscribe("scan", 2, &MapCorrectionNode::scanCallback, this);
+  }
   odom_sub_ = nh_.subscribe("odometry/filtered", 10, &MapCorrectionNode::odomCallback, this,
                             ros::TransportHints().tcpNoDelay());
   diagnostics_.reset(new diagnostic_updater::Updater(nh_, pnh_));
@@ -119,20 +138,27 @@ bool MapCorrectionNode::init(std::string* error) {
   return true;
 }
 
-void MapCorrectionNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
+bool MapCorrectionNode::acceptInput(const ros::Time& stamp) {
   last_scan_receive_ = ros::Time::now();
   ++scans_;
   if (!params_.correction_enabled) {
     last_status_ = "correction disabled (correction_enabled: false)";
-    return;
+    return false;
   }
-  if (!last_match_stamp_.isZero() &&
-      (msg->header.stamp - last_match_stamp_).toSec() < 1.0 / params_.max_match_rate &&
-      msg->header.stamp >= last_match_stamp_) {
+  if (!last_match_stamp_.isZero() && (stamp - last_match_stamp_).toSec() < 1.0 / params_.max_match_rate &&
+      stamp >= last_match_stamp_) {
     ++skipped_;
-    return;
+    return false;
   }
-  pending_scan_ = msg;  // processed by the timer once odom -> base_link at its stamp is known
+  return true;
+}
+
+void MapCorrectionNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
+  if (acceptInput(msg->header.stamp)) pending_scan_ = msg;  // processed once odom -> base is known
+}
+
+void MapCorrectionNode::cloudCallback(const sensor_msgs::PointCloud2::ConstPtr& msg) {
+  if (acceptInput(msg->header.stamp)) pending_cloud_ = msg;
 }
 
 void MapCorrectionNode::odomCallback(const nav_msgs::Odometry::ConstPtr& msg) {
@@ -167,19 +193,72 @@ void MapCorrectionNode::odomCallback(const nav_msgs::Odometry::ConstPtr& msg) {
   pose_pub_.publish(out);
 }
 
-bool MapCorrectionNode::scanToBase(const sensor_msgs::LaserScan& scan, Points2d* out) {
-  auto it = base_from_sensor_.find(scan.header.frame_id);
+bool MapCorrectionNode::sensorTransform(const std::string& frame, Eigen::Isometry3d* out) {
+  auto it = base_from_sensor_.find(frame);
   if (it == base_from_sensor_.end()) {
     try {
-      const auto ts = tf_buffer_->lookupTransform(params_.base_frame, scan.header.frame_id, ros::Time(0));
-      it = base_from_sensor_.emplace(scan.header.frame_id, toEigen(ts.transform)).first;
+      const auto ts = tf_buffer_->lookupTransform(params_.base_frame, frame, ros::Time(0));
+      it = base_from_sensor_.emplace(frame, toEigen(ts.transform)).first;
     } catch (const tf2::TransformException& ex) {
-      ROS_WARN_THROTTLE(2.0, "map_correction: no transform %s <- %s: %s", params_.base_frame.c_str(),
-                        scan.header.frame_id.c_str(), ex.what());
+      ROS_WARN_THROTTLE(2.0, "map_correction: no transform %s <- %s: %s", params_.base_frame.c_str(), frame.c_str(),
+                        ex.what());
       return false;
     }
   }
-  const Eigen::Isometry3d& t = it->second;
+  *out = it->second;
+  return true;
+}
+
+bool MapCorrectionNode::cloudToBase(const sensor_msgs::PointCloud2& cloud, Points2d* out) {
+  Eigen::Isometry3d t;
+  if (!sensorTransform(cloud.header.frame_id, &t)) return false;
+  bool has_xyz[3] = {false, false, false};
+  for (const auto& f : cloud.fields) {
+    for (int k = 0; k < 3; ++k) {
+      if (f.name == std::string(1, "xyz"[k]) && f.datatype == sensor_msgs::PointField::FLOAT32) has_xyz[k] = true;
+    }
+  }
+  if (!has_xyz[0] || !has_xyz[1] || !has_xyz[2] || cloud.point_step < 12 ||
+      cloud.data.size() < static_cast<size_t>(cloud.row_step) * cloud.height) {
+    ROS_WARN_THROTTLE(2.0, "map_correction: cloud without float x/y/z or with a short data array ignored");
+    return false;
+  }
+  // Horizontal slice around the sensor height, nearest return per azimuth bin (a LaserScan).
+  const int bins = params_.slice_bins;
+  std::vector<double> best(bins, std::numeric_limits<double>::infinity());
+  std::vector<Eigen::Vector2d, Eigen::aligned_allocator<Eigen::Vector2d>> pts(bins);
+  const Eigen::Vector3d origin = t.translation();
+  sensor_msgs::PointCloud2ConstIterator<float> ix(cloud, "x"), iy(cloud, "y"), iz(cloud, "z");
+  for (; ix != ix.end(); ++ix, ++iy, ++iz) {
+    if (!std::isfinite(*ix) || !std::isfinite(*iy) || !std::isfinite(*iz)) continue;
+    const Eigen::Vector3d p = t * Eigen::Vector3d(*ix, *iy, *iz);
+    if (p.z() < params_.slice_z_min || p.z() > params_.slice_z_max) continue;
+    const double dx = p.x() - origin.x(), dy = p.y() - origin.y();
+    const double r = std::hypot(dx, dy);
+    if (r < params_.min_range || r > params_.max_range) continue;
+    int b = static_cast<int>((std::atan2(dy, dx) + M_PI) / (2.0 * M_PI) * bins);
+    b = std::min(std::max(b, 0), bins - 1);
+    if (r < best[b]) {
+      best[b] = r;
+      pts[b] = p.head<2>();
+    }
+  }
+  out->clear();
+  for (int b = 0; b < bins; ++b) {
+    if (std::isfinite(best[b])) out->push_back(pts[b]);
+  }
+  const size_t step = std::max<size_t>(1, (out->size() + params_.max_points - 1) / params_.max_points);
+  if (step > 1) {
+    Points2d dec;
+    for (size_t i = 0; i < out->size(); i += step) dec.push_back((*out)[i]);
+    out->swap(dec);
+  }
+  return true;
+}
+
+bool MapCorrectionNode::scanToBase(const sensor_msgs::LaserScan& scan, Points2d* out) {
+  Eigen::Isometry3d t;
+  if (!sensorTransform(scan.header.frame_id, &t)) return false;
   const double lo = std::max(static_cast<double>(scan.range_min), params_.min_range);
   const double hi = std::min(static_cast<double>(scan.range_max), params_.max_range);
   size_t valid = 0;
@@ -202,30 +281,33 @@ bool MapCorrectionNode::scanToBase(const sensor_msgs::LaserScan& scan, Points2d*
 }
 
 void MapCorrectionNode::processPendingScan() {
-  if (!pending_scan_) return;
-  const sensor_msgs::LaserScan::ConstPtr scan = pending_scan_;
+  if (!pending_scan_ && !pending_cloud_) return;
+  const ros::Time stamp = pending_scan_ ? pending_scan_->header.stamp : pending_cloud_->header.stamp;
   Eigen::Isometry3d odom_from_base;
   try {
-    odom_from_base = toEigen(
-        tf_buffer_->lookupTransform(params_.odom_frame, params_.base_frame, scan->header.stamp).transform);
+    odom_from_base =
+        toEigen(tf_buffer_->lookupTransform(params_.odom_frame, params_.base_frame, stamp).transform);
   } catch (const tf2::TransformException& ex) {
     // Wait for the EKF to catch up, but not forever.
-    if ((ros::Time::now() - scan->header.stamp).toSec() > 0.5) {
+    if ((ros::Time::now() - stamp).toSec() > 0.5) {
       ROS_WARN_THROTTLE(2.0, "map_correction: dropping scan, no %s -> %s at its stamp: %s",
                         params_.odom_frame.c_str(), params_.base_frame.c_str(), ex.what());
       pending_scan_.reset();
+      pending_cloud_.reset();
       ++skipped_;
     }
     return;
   }
-  pending_scan_.reset();
-  last_match_stamp_ = scan->header.stamp;
+  last_match_stamp_ = stamp;
   Points2d points;
-  if (!scanToBase(*scan, &points)) return;
+  const bool ok = pending_scan_ ? scanToBase(*pending_scan_, &points) : cloudToBase(*pending_cloud_, &points);
+  pending_scan_.reset();
+  pending_cloud_.reset();
+  if (!ok) return;
 
   const double cpu0 = cpuSeconds();
   const MapCorrection::Update u =
-      core_->processScan(scan->header.stamp.toSec(), points, planar(odom_from_base));
+      core_->processScan(stamp.toSec(), points, planar(odom_from_base));
   last_cpu_ms_ = (cpuSeconds() - cpu0) * 1e3;
   last_status_ = MapCorrection::statusName(u.status);
   if (u.status == MapCorrection::Status::kAccepted) {
@@ -239,7 +321,7 @@ void MapCorrectionNode::processPendingScan() {
   if (map_dirty_ && !core_->mapping() &&
       (last_map_publish_.isZero() ||
        (ros::Time::now() - last_map_publish_).toSec() >= params_.map_publish_interval)) {
-    publishMap(scan->header.stamp);
+    publishMap(stamp);
   }
 }
 

@@ -8,6 +8,7 @@
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
+#include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
@@ -35,6 +36,11 @@ struct MapCorrectionNodeParams {
   double map_publish_interval = 2.0;     ///< [s]
   double scan_timeout = 1.0;             ///< [s] diagnostics: scans stale after this
   bool correction_enabled = true;        ///< false: map -> odom stays identity (comparison runs)
+  /// Input: "scan" (LaserScan on `scan`) or "points" (PointCloud2 on `points`, sliced here).
+  std::string input = "scan";
+  double slice_z_min = 0.0;   ///< [m] in base_frame: cloud points kept for the 2D slice
+  double slice_z_max = 0.4;   ///< [m]
+  int slice_bins = 720;       ///< azimuth bins of the slice (nearest point per bin)
 };
 
 /// Reads node + MapCorrection parameters; false with reason on invalid values.
@@ -48,6 +54,10 @@ class MapCorrectionNode {
 
  private:
   void scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg);
+  void cloudCallback(const sensor_msgs::PointCloud2::ConstPtr& msg);
+  bool acceptInput(const ros::Time& stamp);
+  bool sensorTransform(const std::string& frame, Eigen::Isometry3d* out);
+  bool cloudToBase(const sensor_msgs::PointCloud2& cloud, Points2d* out);
   void odomCallback(const nav_msgs::Odometry::ConstPtr& msg);
   void timerCallback(const ros::TimerEvent& ev);
   void processPendingScan();
@@ -68,6 +78,7 @@ class MapCorrectionNode {
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   std::map<std::string, Eigen::Isometry3d> base_from_sensor_;
   sensor_msgs::LaserScan::ConstPtr pending_scan_;
+  sensor_msgs::PointCloud2::ConstPtr pending_cloud_;
   ros::Time last_match_stamp_;
   ros::Time last_scan_receive_;
   ros::Time last_map_publish_;

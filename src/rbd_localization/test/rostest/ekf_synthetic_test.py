@@ -22,7 +22,8 @@ from sensor_msgs.msg import Imu
 V = 0.3  # forward speed [m/s]
 W = 0.25  # yaw rate [rad/s]
 G = 9.80665
-JUMP_AT = 8.0  # [s] after start the ZED jumps +1 m in x and stays there
+JUMP_AT = 8.0  # [s] after start the ZED jumps +1 m in x ...
+JUMP_END = 9.5  # [s] ... until it relocalises
 POSE_STOP_AT = 14.0  # [s] ZED goes silent
 IMU_STOP_AT = 18.0  # [s] IMU goes silent
 # base_link -> os_sensor: mount yawed by +90 deg (exercises the frame rotation of the IMU data).
@@ -86,7 +87,7 @@ class Feeder:
 
     def pose(self, stamp, t):
         x, y, yaw = truth(t)
-        if t >= JUMP_AT:
+        if JUMP_AT <= t < JUMP_END:
             x += 1.0
         msg = PoseWithCovarianceStamped()
         msg.header.stamp = stamp
