@@ -1,6 +1,7 @@
 #include "rbd_localization/ekf.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 #include <cmath>
 
 namespace rbd_localization {
@@ -27,10 +28,18 @@ bool isTwoDMember(int index) {
 
 // Blocks of the motion model's Jacobian F at one state for one step dt. Row blocks that
 // differ from identity are position (0-2), orientation (3-5) and linear velocity (6-8):
-//   p' = p + R(e) (v dt + a dt^2 / 2)   e' = e + T(e) w dt   v' = v + a dt
+//   c = a - w x v  (body-frame velocity change: the accelerometer also sees the centripetal
+//                   term of a rotating body, e.g. V*W sideways on a circle at constant v)
+//   p' = p + R(e) (v dt + c dt^2 / 2)   e' = e + T(e) w dt   v' = v + c dt
+// (r_l uses v' = v + a dt, which drifts sideways on every turn between pose updates.)
 struct ModelBlocks {
   Mat3 rot;         // R(e) body -> world, R = Rz(yaw) Ry(pitch) Rx(roll)
   Mat3 d_pos_d_e;   // d p' / d e
+  Mat3 d_u_d_v;     // d u / d v with u = v dt + c dt^2/2 (body-frame displacement)
+  Mat3 d_u_d_w;     // d u / d w
+  Mat3 d_v_d_v;     // d v' / d v = I - [w]x dt
+  Mat3 d_v_d_w;     // d v' / d w = [v]x dt
+  Vec3 vel_step;    // c dt
   Mat3 euler_rate;  // T(e): body rates -> Euler angle rates
   Mat3 d_e_d_e;     // d e' / d e (identity + dT/de w dt)
   Vec3 pos_step;    // R (v dt + a dt^2/2)
@@ -54,7 +63,17 @@ ModelBlocks modelBlocks(const StateVector& x, double dt) {
   b.rot = rzy * rx;
   const Vec3 v = x.segment<3>(POSITION_V_OFFSET);
   const Vec3 a = x.segment<3>(POSITION_A_OFFSET);
-  const Vec3 u = v * dt + a * (0.5 * dt * dt);
+  const Vec3 w = x.segment<3>(ORIENTATION_V_OFFSET);
+  const Vec3 c = a - w.cross(v);
+  const Vec3 u = v * dt + c * (0.5 * dt * dt);
+  Mat3 wx, vx;  // skew-symmetric cross-product matrices
+  wx << 0, -w(2), w(1), w(2), 0, -w(0), -w(1), w(0), 0;
+  vx << 0, -v(2), v(1), v(2), 0, -v(0), -v(1), v(0), 0;
+  b.d_v_d_v = Mat3::Identity() - wx * dt;
+  b.d_v_d_w = vx * dt;
+  b.d_u_d_v = Mat3::Identity() * dt - wx * (0.5 * dt * dt);
+  b.d_u_d_w = vx * (0.5 * dt * dt);
+  b.vel_step = c * dt;
   b.pos_step = b.rot * u;
   b.d_pos_d_e.col(0) = rzy * (drx * u);
   b.d_pos_d_e.col(1) = rz * (dry * (rx * u));
@@ -65,7 +84,6 @@ ModelBlocks modelBlocks(const StateVector& x, double dt) {
   const double tp = sp / cpc;
   const double sec = 1.0 / cpc;
   b.euler_rate << 1, sr * tp, cr * tp, 0, cr, -sr, 0, sr * sec, cr * sec;
-  const Vec3 w = x.segment<3>(ORIENTATION_V_OFFSET);
   b.euler_step = b.euler_rate * w * dt;
   Mat3 dt_droll, dt_dpitch;
   dt_droll << 0, cr * tp, -sr * tp, 0, -sr, -cr, 0, cr * sec, -sr * sec;
@@ -80,16 +98,21 @@ ModelBlocks modelBlocks(const StateVector& x, double dt) {
 void applyTransfer(const ModelBlocks& b, double dt, const StateMatrix& m, StateMatrix* out) {
   *out = m;
   // Small fixed-size products: lazyProduct keeps them coefficient-based (no GEMM set-up).
-  const Mat3 rot_dt = b.rot * dt;
+  const Mat3 rot_duv = b.rot * b.d_u_d_v;
+  const Mat3 rot_duw = b.rot * b.d_u_d_w;
   const Mat3 rot_hdt2 = b.rot * (0.5 * dt * dt);
   const Mat3 euler_dt = b.euler_rate * dt;
   const Rows3 pos = m.middleRows<3>(POSITION_OFFSET) +
                     b.d_pos_d_e.lazyProduct(m.middleRows<3>(ORIENTATION_OFFSET)) +
-                    rot_dt.lazyProduct(m.middleRows<3>(POSITION_V_OFFSET)) +
+                    rot_duv.lazyProduct(m.middleRows<3>(POSITION_V_OFFSET)) +
+                    rot_duw.lazyProduct(m.middleRows<3>(ORIENTATION_V_OFFSET)) +
                     rot_hdt2.lazyProduct(m.middleRows<3>(POSITION_A_OFFSET));
   const Rows3 ori = b.d_e_d_e.lazyProduct(m.middleRows<3>(ORIENTATION_OFFSET)) +
                     euler_dt.lazyProduct(m.middleRows<3>(ORIENTATION_V_OFFSET));
-  out->middleRows<3>(POSITION_V_OFFSET) += dt * m.middleRows<3>(POSITION_A_OFFSET);
+  const Rows3 vel = b.d_v_d_v.lazyProduct(m.middleRows<3>(POSITION_V_OFFSET)) +
+                    b.d_v_d_w.lazyProduct(m.middleRows<3>(ORIENTATION_V_OFFSET)) +
+                    dt * m.middleRows<3>(POSITION_A_OFFSET);
+  out->middleRows<3>(POSITION_V_OFFSET) = vel;
   out->middleRows<3>(POSITION_OFFSET) = pos;
   out->middleRows<3>(ORIENTATION_OFFSET) = ori;
 }
@@ -188,7 +211,7 @@ void Ekf::predict(double dt) {
   // State after the Jacobian was taken at the prior state.
   state_.segment<3>(POSITION_OFFSET) += b.pos_step;
   state_.segment<3>(ORIENTATION_OFFSET) += b.euler_step;
-  state_.segment<3>(POSITION_V_OFFSET) += state_.segment<3>(POSITION_A_OFFSET) * dt;
+  state_.segment<3>(POSITION_V_OFFSET) += b.vel_step;
   wrapStateAngles();
   if (two_d_mode_) enforceTwoD();
   last_update_time_ += dt;

@@ -200,8 +200,8 @@ bool MapCorrectionNode::sensorTransform(const std::string& frame, Eigen::Isometr
       const auto ts = tf_buffer_->lookupTransform(params_.base_frame, frame, ros::Time(0));
       it = base_from_sensor_.emplace(frame, toEigen(ts.transform)).first;
     } catch (const tf2::TransformException& ex) {
-      ROS_WARN_THROTTLE(2.0, "map_correction: no transform %s <- %s: %s", params_.base_frame.c_str(), frame.c_str(),
-                        ex.what());
+      ROS_WARN_THROTTLE(2.0, "map_correction: no transform %s <- %s: %s", params_.base_frame.c_str(),
+                        frame.c_str(), ex.what());
       return false;
     }
   }
@@ -215,7 +215,8 @@ bool MapCorrectionNode::cloudToBase(const sensor_msgs::PointCloud2& cloud, Point
   bool has_xyz[3] = {false, false, false};
   for (const auto& f : cloud.fields) {
     for (int k = 0; k < 3; ++k) {
-      if (f.name == std::string(1, "xyz"[k]) && f.datatype == sensor_msgs::PointField::FLOAT32) has_xyz[k] = true;
+      if (f.name == std::string(1, "xyz"[k]) && f.datatype == sensor_msgs::PointField::FLOAT32)
+        has_xyz[k] = true;
     }
   }
   if (!has_xyz[0] || !has_xyz[1] || !has_xyz[2] || cloud.point_step < 12 ||
@@ -306,8 +307,7 @@ void MapCorrectionNode::processPendingScan() {
   if (!ok) return;
 
   const double cpu0 = cpuSeconds();
-  const MapCorrection::Update u =
-      core_->processScan(stamp.toSec(), points, planar(odom_from_base));
+  const MapCorrection::Update u = core_->processScan(stamp.toSec(), points, planar(odom_from_base));
   last_cpu_ms_ = (cpuSeconds() - cpu0) * 1e3;
   last_status_ = MapCorrection::statusName(u.status);
   if (u.status == MapCorrection::Status::kAccepted) {

@@ -38,9 +38,9 @@ struct MapCorrectionNodeParams {
   bool correction_enabled = true;        ///< false: map -> odom stays identity (comparison runs)
   /// Input: "scan" (LaserScan on `scan`) or "points" (PointCloud2 on `points`, sliced here).
   std::string input = "scan";
-  double slice_z_min = 0.0;   ///< [m] in base_frame: cloud points kept for the 2D slice
-  double slice_z_max = 0.4;   ///< [m]
-  int slice_bins = 720;       ///< azimuth bins of the slice (nearest point per bin)
+  double slice_z_min = 0.0;  ///< [m] in base_frame: cloud points kept for the 2D slice
+  double slice_z_max = 0.4;  ///< [m]
+  int slice_bins = 720;      ///< azimuth bins of the slice (nearest point per bin)
 };
 
 /// Reads node + MapCorrection parameters; false with reason on invalid values.

@@ -188,8 +188,9 @@ class EkfSyntheticTest(unittest.TestCase):
         errs = self.errors(JUMP_AT, POSE_STOP_AT)
         self.assertGreater(len(errs), 100)
         worst = max(errs)
+        series = " ".join("%.1f:%.2f" % (e[2], e[0]) for e in errs[::10])
         # Followed, the jump would put the estimate 1 m off.
-        self.assertLess(worst[0], 0.15, "estimate followed the jump: %.3f m at t=%.2f" % (worst[0], worst[2]))
+        self.assertLess(worst[0], 0.15, "estimate followed the jump: %.3f m at t=%.2f; %s" % (worst[0], worst[2], series))
         with self.lock:
             rejected = [d for d in self.diag if d[1] == "pose0" and "rejected" in d[3] and d[0] >= JUMP_AT]
         self.assertTrue(rejected, "no 'rejected' diagnostic for pose0 after the jump")
