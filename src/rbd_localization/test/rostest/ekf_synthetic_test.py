@@ -190,7 +190,8 @@ class EkfSyntheticTest(unittest.TestCase):
         worst = max(errs)
         series = " ".join("%.1f:%.2f" % (e[2], e[0]) for e in errs[::10])
         # Followed, the jump would put the estimate 1 m off.
-        self.assertLess(worst[0], 0.15, "estimate followed the jump: %.3f m at t=%.2f; %s" % (worst[0], worst[2], series))
+        self.assertLess(worst[0], 0.15,
+                        "estimate followed the jump: %.3f m at t=%.2f; %s" % (worst[0], worst[2], series))
         with self.lock:
             rejected = [d for d in self.diag if d[1] == "pose0" and "rejected" in d[3] and d[0] >= JUMP_AT]
         self.assertTrue(rejected, "no 'rejected' diagnostic for pose0 after the jump")

@@ -152,7 +152,8 @@ def run(loops, settle=4.0):
         e["loop"] = i + 1
         report["loops"].append(e)
         rospy.loginfo("loop %d: %s", i + 1, json.dumps(e))
-    report["tracks"] = r.tracks
+    with r.lock:  # subscribers keep appending
+        report["tracks"] = {k: list(v) for k, v in r.tracks.items()}
     return report
 
 
@@ -164,10 +165,11 @@ def save_png(report, path):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 5))
-    for name, style in (("truth", "k-"), ("ekf", "r-"), ("corrected", "b-")):
+    for name, style in (("ekf", "r-"), ("corrected", "b-"), ("truth", "k--")):
         pts = report["tracks"][name]
+        pts = [p for p in pts if len(p) == 2]
         if pts:
-            ax.plot([p[0] for p in pts], [p[1] for p in pts], style, lw=0.8,
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], style, lw=0.7,
                     label={"truth": "ground truth", "ekf": "EKF only (no map correction)",
                            "corrected": "with map correction"}[name])
     last = report["loops"][-1]
