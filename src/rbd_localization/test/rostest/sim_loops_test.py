@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Two loops of the thesis path in the seeded simulator: the corrected pose ends on the truth.
+"""Loops (1, or RBD_LOC_SIM_LOOPS) of the thesis path in the seeded simulator: the corrected pose ends on the truth.
 
 The robot is steered on ground truth by sim_loops.py; the checks compare, at every loop end,
 /rbd_localization/pose with /rbd_sim/ground_truth (thresholds of the issue: 0.05 m, 1 deg).
@@ -15,7 +15,7 @@ import rostest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sim_loops  # noqa: E402
 
-LOOPS = int(os.environ.get("RBD_LOC_SIM_LOOPS", "2"))
+LOOPS = int(os.environ.get("RBD_LOC_SIM_LOOPS", "1"))
 
 
 class SimLoopsTest(unittest.TestCase):
