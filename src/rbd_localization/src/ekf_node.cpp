@@ -196,11 +196,11 @@ void EkfNode::imuCallback(const sensor_msgs::Imu::ConstPtr& msg, size_t idx) {
   maybeReleaseTf(idx);
   std::string reason;
   if (!imuMeasurements(*msg, base_from_imu, s.cfg, ekf_.state(), params_.gravitational_acceleration,
-                       stampToTime(msg->header.stamp), &imu_parts_, &reason)) {
+                       stampToTime(msg->header.stamp), &queue_, &reason)) {
     markInvalid(idx, reason);
     return;
   }
-  for (const Measurement& m : imu_parts_) enqueue(m, idx);
+  queue_sensor_.resize(queue_.size(), idx);  // the IMU parts were appended in place
 }
 
 void EkfNode::handlePose(const geometry_msgs::PoseWithCovariance& msg, const std::string& frame,
@@ -295,9 +295,8 @@ void EkfNode::twistCallback(const geometry_msgs::TwistWithCovarianceStamped::Con
 }
 
 void EkfNode::enqueue(const Measurement& m, size_t idx) {
-  queue_.emplace_back();
-  queue_.back().meas = m;
-  queue_.back().sensor = idx;
+  queue_.push_back(m);
+  queue_sensor_.push_back(idx);
 }
 
 bool EkfNode::sensorStale(const SensorState& s, const ros::Time& now) const {
@@ -312,6 +311,7 @@ void EkfNode::periodicUpdate(const ros::TimerEvent&) {
     ROS_WARN("ekf: time moved backwards, resetting the filter");
     ekf_.reset();
     queue_.clear();
+    queue_sensor_.clear();
     last_published_stamp_ = -1.0;
   }
   last_wall_check_ = now;
@@ -320,33 +320,35 @@ void EkfNode::periodicUpdate(const ros::TimerEvent&) {
   order_.resize(queue_.size());
   for (size_t i = 0; i < order_.size(); ++i) order_[i] = i;
   std::stable_sort(order_.begin(), order_.end(),
-                   [this](size_t a, size_t b) { return queue_[a].meas.time < queue_[b].meas.time; });
+                   [this](size_t a, size_t b) { return queue_[a].time < queue_[b].time; });
   for (size_t oi : order_) {
-    const Queued& q = queue_[oi];
-    SensorState& s = sensors_[q.sensor];
-    if (ekf_.initialized() && q.meas.time < ekf_.lastUpdateTime() - kMaxMeasurementAge) {
-      markInvalid(q.sensor, "measurement older than the filter by more than 1 s (stamp problem?)");
+    const Measurement& meas = queue_[oi];
+    const size_t sensor = queue_sensor_[oi];
+    SensorState& s = sensors_[sensor];
+    if (ekf_.initialized() && meas.time < ekf_.lastUpdateTime() - kMaxMeasurementAge) {
+      markInvalid(sensor, "measurement older than the filter by more than 1 s (stamp problem?)");
       continue;
     }
-    switch (ekf_.processMeasurement(q.meas)) {
+    switch (ekf_.processMeasurement(meas)) {
       case CorrectResult::kAccepted:
         ++s.accepted;
         processed = true;
-        last_measurement_time_ = q.meas.time;
+        last_measurement_time_ = meas.time;
         break;
       case CorrectResult::kRejected:
         ++s.rejected;
         ++s.window_rejected;
-        s.last_problem = q.meas.source + " rejected: squared Mahalanobis distance " +
+        s.last_problem = meas.source + " rejected: squared Mahalanobis distance " +
                          std::to_string(ekf_.lastSquaredMahalanobis());
         ROS_WARN_THROTTLE(1.0, "ekf: %s", s.last_problem.c_str());
         break;
       case CorrectResult::kInvalid:
-        markInvalid(q.sensor, q.meas.source + " has invalid values or covariance");
+        markInvalid(sensor, meas.source + " has invalid values or covariance");
         break;
     }
   }
   queue_.clear();
+  queue_sensor_.clear();
   if (params_.debug && debug_log_.tellp() > 0) {
     ROS_DEBUG_STREAM("ekf: " << debug_log_.str());
     debug_log_.str("");

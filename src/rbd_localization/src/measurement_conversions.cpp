@@ -113,7 +113,7 @@ bool twistMeasurement(const geometry_msgs::TwistWithCovariance& msg, const Eigen
 bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_from_imu,
                      const SensorConfig& cfg, const StateVector& state, double gravity, double time,
                      std::vector<Measurement>* out, std::string* reason) {
-  out->clear();
+  const size_t first = out->size();
   const auto& q = msg.orientation;
   Eigen::Quaterniond quat(q.w, q.x, q.y, q.z);
   const bool orientation_valid =
@@ -126,18 +126,19 @@ bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_fr
   }
 
   if (anyOf(cfg.update_vector, ORIENTATION_OFFSET, 3) && orientation_valid) {
-    Measurement m;
-    m.time = time;
-    m.source = cfg.name + "/rpy";
-    m.mahalanobis_threshold = cfg.pose_rejection_threshold;
     const Eigen::Matrix3d c = cov3(msg.orientation_covariance);
     if (!c.allFinite()) {
       *reason = "non-finite orientation covariance";
+      out->resize(first);
       return false;
     }
+    out->emplace_back();
+    Measurement& m = out->back();
+    m.time = time;
+    m.source = cfg.name + "/rpy";
+    m.mahalanobis_threshold = cfg.pose_rejection_threshold;
     setBlock(&m, ORIENTATION_OFFSET, rpyFromRotation(world_from_base),
              base_from_imu * c * base_from_imu.transpose(), cfg.update_vector, ORIENTATION_OFFSET);
-    out->push_back(m);
   }
 
   if (anyOf(cfg.update_vector, ORIENTATION_V_OFFSET, 3) && msg.angular_velocity_covariance[0] != -1.0) {
@@ -145,15 +146,16 @@ bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_fr
     const Eigen::Matrix3d c = cov3(msg.angular_velocity_covariance);
     if (!w.allFinite() || !c.allFinite()) {
       *reason = "non-finite angular velocity";
+      out->resize(first);
       return false;
     }
-    Measurement m;
+    out->emplace_back();
+    Measurement& m = out->back();
     m.time = time;
     m.source = cfg.name + "/w";
     m.mahalanobis_threshold = cfg.twist_rejection_threshold;
     setBlock(&m, ORIENTATION_V_OFFSET, base_from_imu * w, base_from_imu * c * base_from_imu.transpose(),
              cfg.update_vector, ORIENTATION_V_OFFSET);
-    out->push_back(m);
   }
 
   if (anyOf(cfg.update_vector, POSITION_A_OFFSET, 3) && msg.linear_acceleration_covariance[0] != -1.0) {
@@ -161,6 +163,7 @@ bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_fr
     const Eigen::Matrix3d c = cov3(msg.linear_acceleration_covariance);
     if (!a.allFinite() || !c.allFinite()) {
       *reason = "non-finite linear acceleration";
+      out->resize(first);
       return false;
     }
     Eigen::Vector3d a_base = base_from_imu * a;
@@ -168,13 +171,13 @@ bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_fr
     if (cfg.remove_gravitational_acceleration) {
       a_base -= world_from_base.transpose() * Eigen::Vector3d(0.0, 0.0, gravity);
     }
-    Measurement m;
+    out->emplace_back();
+    Measurement& m = out->back();
     m.time = time;
     m.source = cfg.name + "/a";
     m.mahalanobis_threshold = cfg.linear_acceleration_rejection_threshold;
     setBlock(&m, POSITION_A_OFFSET, a_base, base_from_imu * c * base_from_imu.transpose(), cfg.update_vector,
              POSITION_A_OFFSET);
-    out->push_back(m);
   }
   return true;
 }

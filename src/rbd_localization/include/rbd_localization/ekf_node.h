@@ -45,10 +45,6 @@ class EkfNode {
     PoseWithCov previous;
     double previous_time = 0.0;
   };
-  struct Queued {
-    Measurement meas;
-    size_t sensor;
-  };
 
   void imuCallback(const sensor_msgs::Imu::ConstPtr& msg, size_t idx);
   void poseCallback(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg, size_t idx);
@@ -78,9 +74,9 @@ class EkfNode {
   Ekf ekf_;
   std::ostringstream debug_log_;
   std::vector<SensorState> sensors_;
-  std::vector<Queued> queue_;           // measurements since the last cycle, fused in time order
-  std::vector<size_t> order_;           // scratch: queue_ indices sorted by time
-  std::vector<Measurement> imu_parts_;  // scratch, reused per IMU message
+  std::vector<Measurement> queue_;    // measurements since the last cycle, fused in time order
+  std::vector<size_t> queue_sensor_;  // sensor index of each queued measurement
+  std::vector<size_t> order_;         // scratch: queue_ indices sorted by time
   ros::Publisher odom_pub_;
   ros::Timer timer_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;

@@ -47,7 +47,8 @@ bool twistMeasurement(const geometry_msgs::TwistWithCovariance& msg, const Eigen
 /// each with its own gate, as r_l does. A part is skipped when its covariance[0] is -1
 /// (e.g. /ouster/imu orientation) or nothing in it is configured. Gravity is removed using the
 /// message orientation when valid, else the filter's current roll/pitch (state).
-/// Returns false (with reason) if the message has NaN/inf in a used part.
+/// The measurements are appended to out. Returns false (with reason, nothing appended) if the
+/// message has NaN/inf in a used part.
 bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_from_imu,
                      const SensorConfig& cfg, const StateVector& state, double gravity, double time,
                      std::vector<Measurement>* out, std::string* reason);
