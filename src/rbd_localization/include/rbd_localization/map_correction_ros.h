@@ -1,0 +1,94 @@
+// map_correction_node: thin ROS wrapper around MapCorrection. Reads /scan and the EKF
+// (odom -> base_link via TF and odometry/filtered), publishes map -> odom, /map and
+// /rbd_localization/pose.
+#ifndef RBD_LOCALIZATION_MAP_CORRECTION_ROS_H
+#define RBD_LOCALIZATION_MAP_CORRECTION_ROS_H
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <sensor_msgs/LaserScan.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <map>
+#include <memory>
+#include <string>
+
+#include "rbd_localization/map_correction.h"
+
+namespace rbd_localization {
+
+/// Node parameters besides the MapCorrection ones (see README).
+struct MapCorrectionNodeParams {
+  std::string map_frame = "map";
+  std::string odom_frame = "odom";
+  std::string base_frame = "base_link";
+  double max_match_rate = 10.0;          ///< [Hz] scans matched at most this often
+  int max_points = 360;                  ///< scan decimated to about this many points
+  double min_range = 0.3;                ///< [m] OS1 blind zone
+  double max_range = 20.0;               ///< [m]
+  double transform_publish_rate = 50.0;  ///< [Hz] map -> odom
+  double transform_tolerance = 0.1;      ///< [s] map -> odom is stamped this far ahead
+  double pose_timeout = 0.5;             ///< [s] no pose output from odometry older than this
+  double map_publish_interval = 2.0;     ///< [s]
+  double scan_timeout = 1.0;             ///< [s] diagnostics: scans stale after this
+  bool correction_enabled = true;        ///< false: map -> odom stays identity (comparison runs)
+  /// Input: "scan" (LaserScan on `scan`) or "points" (PointCloud2 on `points`, sliced here).
+  std::string input = "scan";
+  double slice_z_min = 0.0;  ///< [m] in base_frame: cloud points kept for the 2D slice
+  double slice_z_max = 0.4;  ///< [m]
+  int slice_bins = 720;      ///< azimuth bins of the slice (nearest point per bin)
+};
+
+/// Reads node + MapCorrection parameters; false with reason on invalid values.
+bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams* node,
+                             MapCorrection::Params* core, std::string* error);
+
+class MapCorrectionNode {
+ public:
+  MapCorrectionNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh);
+  bool init(std::string* error);
+
+ private:
+  void scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg);
+  void cloudCallback(const sensor_msgs::PointCloud2::ConstPtr& msg);
+  bool acceptInput(const ros::Time& stamp);
+  bool sensorTransform(const std::string& frame, Eigen::Isometry3d* out);
+  bool cloudToBase(const sensor_msgs::PointCloud2& cloud, Points2d* out);
+  void odomCallback(const nav_msgs::Odometry::ConstPtr& msg);
+  void timerCallback(const ros::TimerEvent& ev);
+  void processPendingScan();
+  bool scanToBase(const sensor_msgs::LaserScan& scan, Points2d* out);
+  void publishTransform();
+  void publishMap(const ros::Time& stamp);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
+
+  ros::NodeHandle nh_, pnh_;
+  MapCorrectionNodeParams params_;
+  std::unique_ptr<MapCorrection> core_;
+  ros::Subscriber scan_sub_, odom_sub_;
+  ros::Publisher map_pub_, pose_pub_;
+  ros::Timer timer_;
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  std::map<std::string, Eigen::Isometry3d> base_from_sensor_;
+  sensor_msgs::LaserScan::ConstPtr pending_scan_;
+  sensor_msgs::PointCloud2::ConstPtr pending_cloud_;
+  ros::Time last_match_stamp_;
+  ros::Time last_scan_receive_;
+  ros::Time last_map_publish_;
+  ros::Time start_time_;
+  bool map_dirty_ = false;
+  uint64_t scans_ = 0, accepted_ = 0, rejected_ = 0, skipped_ = 0;
+  std::string last_status_ = "no scan yet";
+  double last_cpu_ms_ = 0.0;
+};
+
+}  // namespace rbd_localization
+
+#endif  // RBD_LOCALIZATION_MAP_CORRECTION_ROS_H

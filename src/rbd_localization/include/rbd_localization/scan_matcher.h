@@ -1,0 +1,53 @@
+// ROS-free 2D scan-to-map matcher: Gauss-Newton on the map's distance field, starting from a
+// prior pose (the EKF's), with points far from any structure (people, new furniture) ignored.
+#ifndef RBD_LOCALIZATION_SCAN_MATCHER_H
+#define RBD_LOCALIZATION_SCAN_MATCHER_H
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "rbd_localization/occupancy_map.h"
+
+namespace rbd_localization {
+
+class ScanMatcher {
+ public:
+  struct Params {
+    int max_iterations = 30;
+    /// Correspondence gates [m]: points farther than this from structure are outliers. The gate
+    /// shrinks from the first value to the last over the iterations (coarse-to-fine).
+    double outlier_distance_start = 0.5;
+    double outlier_distance_end = 0.15;
+    /// A point within this distance [m] of structure counts as an inlier for the fit quality.
+    double inlier_distance = 0.10;
+    /// Stop when the step is below these [m], [rad].
+    double converged_translation = 1e-4;
+    double converged_rotation = 1e-4;
+  };
+
+  struct Result {
+    Eigen::Isometry2d pose = Eigen::Isometry2d::Identity();  ///< map_from_base
+    int points = 0;
+    int inliers = 0;
+    double inlier_ratio = 0.0;
+    double rms = 0.0;  ///< of the inliers' distances [m]
+    int iterations = 0;
+    /// Smallest eigenvalue of the normalised Gauss-Newton Hessian (translation block, per
+    /// inlier): small means the geometry does not constrain the pose (a corridor).
+    double min_translation_information = 0.0;
+  };
+
+  ScanMatcher() : params_(Params()) {}
+  explicit ScanMatcher(const Params& params) : params_(params) {}
+  const Params& params() const { return params_; }
+
+  /// Aligns points (in the base frame) to the map's distance field starting at prior.
+  Result match(const OccupancyMap& map, const Points2d& points_in_base, const Eigen::Isometry2d& prior) const;
+
+ private:
+  Params params_;
+};
+
+}  // namespace rbd_localization
+
+#endif  // RBD_LOCALIZATION_SCAN_MATCHER_H

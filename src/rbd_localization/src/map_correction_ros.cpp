@@ -1,0 +1,386 @@
+#include "rbd_localization/map_correction_ros.h"
+
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/OccupancyGrid.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+#include <cmath>
+#include <ctime>
+#include <limits>
+#include <vector>
+
+#include "rbd_localization/geometry.h"
+
+namespace rbd_localization {
+
+namespace {
+
+Eigen::Isometry3d toEigen(const geometry_msgs::Transform& t) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::Quaterniond(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z)
+                     .normalized()
+                     .toRotationMatrix();
+  out.translation() = Eigen::Vector3d(t.translation.x, t.translation.y, t.translation.z);
+  return out;
+}
+
+Eigen::Isometry2d planar(const Eigen::Isometry3d& t) {
+  const Eigen::Vector3d rpy = rpyFromRotation(t.linear());
+  return pose2d(t.translation().x(), t.translation().y(), rpy(2));
+}
+
+Eigen::Isometry3d lift(const Eigen::Isometry2d& t) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::AngleAxisd(yawOf(t), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  out.translation() = Eigen::Vector3d(t.translation().x(), t.translation().y(), 0.0);
+  return out;
+}
+
+double cpuSeconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
+bool positive(double v) { return v > 0.0 && std::isfinite(v); }
+
+}  // namespace
+
+bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams* n, MapCorrection::Params* c,
+                             std::string* error) {
+  pnh.param<std::string>("map_frame", n->map_frame, n->map_frame);
+  pnh.param<std::string>("odom_frame", n->odom_frame, n->odom_frame);
+  pnh.param<std::string>("base_frame", n->base_frame, n->base_frame);
+  pnh.param("max_match_rate", n->max_match_rate, n->max_match_rate);
+  pnh.param("max_points", n->max_points, n->max_points);
+  pnh.param("min_range", n->min_range, n->min_range);
+  pnh.param("max_range", n->max_range, n->max_range);
+  pnh.param("transform_publish_rate", n->transform_publish_rate, n->transform_publish_rate);
+  pnh.param("transform_tolerance", n->transform_tolerance, n->transform_tolerance);
+  pnh.param("pose_timeout", n->pose_timeout, n->pose_timeout);
+  pnh.param("map_publish_interval", n->map_publish_interval, n->map_publish_interval);
+  pnh.param("scan_timeout", n->scan_timeout, n->scan_timeout);
+  pnh.param("correction_enabled", n->correction_enabled, n->correction_enabled);
+  pnh.param<std::string>("input", n->input, n->input);
+  pnh.param("slice_z_min", n->slice_z_min, n->slice_z_min);
+  pnh.param("slice_z_max", n->slice_z_max, n->slice_z_max);
+  pnh.param("slice_bins", n->slice_bins, n->slice_bins);
+  if (n->input != "scan" && n->input != "points") {
+    *error = "input must be 'scan' or 'points'";
+    return false;
+  }
+  if (!(n->slice_z_max > n->slice_z_min) || n->slice_bins < 36) {
+    *error = "slice_z_max must be > slice_z_min and slice_bins >= 36";
+    return false;
+  }
+
+  pnh.param("initial_mapping_duration", c->initial_mapping_duration, c->initial_mapping_duration);
+  pnh.param("initial_mapping_min_scans", c->initial_mapping_min_scans, c->initial_mapping_min_scans);
+  pnh.param("map_update_interval", c->map_update_interval, c->map_update_interval);
+  pnh.param("map_update_weight", c->map_update_weight, c->map_update_weight);
+  pnh.param("min_inlier_ratio", c->min_inlier_ratio, c->min_inlier_ratio);
+  pnh.param("max_rms", c->max_rms, c->max_rms);
+  pnh.param("min_inliers", c->min_inliers, c->min_inliers);
+  pnh.param("min_translation_information", c->min_translation_information, c->min_translation_information);
+  pnh.param("max_jump_translation", c->max_jump_translation, c->max_jump_translation);
+  pnh.param("max_jump_rotation", c->max_jump_rotation, c->max_jump_rotation);
+  pnh.param("max_correction_speed", c->max_correction_speed, c->max_correction_speed);
+  pnh.param("max_correction_angular_speed", c->max_correction_angular_speed, c->max_correction_angular_speed);
+  pnh.param("resolution", c->map.resolution, c->map.resolution);
+  pnh.param("map_size", c->map.size, c->map.size);
+  pnh.param("max_iterations", c->matcher.max_iterations, c->matcher.max_iterations);
+  pnh.param("outlier_distance_start", c->matcher.outlier_distance_start, c->matcher.outlier_distance_start);
+  pnh.param("outlier_distance", c->matcher.outlier_distance_end, c->matcher.outlier_distance_end);
+  pnh.param("inlier_distance", c->matcher.inlier_distance, c->matcher.inlier_distance);
+
+  if (n->map_frame.empty() || n->odom_frame.empty() || n->base_frame.empty() ||
+      n->map_frame == n->odom_frame) {
+    *error = "map_frame, odom_frame, base_frame must be set and map_frame != odom_frame";
+    return false;
+  }
+  if (!positive(n->max_match_rate) || !positive(n->transform_publish_rate) || !positive(c->map.resolution) ||
+      !positive(c->map.size) || n->max_points < 10 || !(n->max_range > n->min_range) ||
+      c->map.size / c->map.resolution > 8000) {
+    *error =
+        "rates, resolution, map_size must be > 0, max_points >= 10, max_range > min_range, map <= 8000 cells "
+        "wide";
+    return false;
+  }
+  if (!(c->matcher.outlier_distance_start >= c->matcher.outlier_distance_end) ||
+      !positive(c->matcher.inlier_distance)) {
+    *error = "outlier_distance_start must be >= outlier_distance; inlier_distance > 0";
+    return false;
+  }
+  return true;
+}
+
+MapCorrectionNode::MapCorrectionNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh)
+    : nh_(nh), pnh_(pnh) {}
+
+bool MapCorrectionNode::init(std::string* error) {
+  MapCorrection::Params core;
+  if (!loadMapCorrectionParams(pnh_, &params_, &core, error)) return false;
+  core_.reset(new MapCorrection(core));
+  tf_buffer_.reset(new tf2_ros::Buffer());
+  tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, nh_));
+  map_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("map", 1, true);
+  pose_pub_ = nh_.advertise<geometry_msgs::PoseStamped>("rbd_localization/pose", 10);
+  if (params_.input == "points") {
+    scan_sub_ = nh_.subscribe("points", 2, &MapCorrectionNode::cloudCallback, this);
+  } else {
+    scan_sub_ = nh_.subscribe("scan", 2, &MapCorrectionNode::scanCallback, this);
+  }
+  odom_sub_ = nh_.subscribe("odometry/filtered", 10, &MapCorrectionNode::odomCallback, this,
+                            ros::TransportHints().tcpNoDelay());
+  diagnostics_.reset(new diagnostic_updater::Updater(nh_, pnh_));
+  diagnostics_->setHardwareID("none");
+  diagnostics_->add("Map correction", this, &MapCorrectionNode::diagnose);
+  start_time_ = ros::Time::now();
+  timer_ = nh_.createTimer(ros::Duration(1.0 / params_.transform_publish_rate),
+                           &MapCorrectionNode::timerCallback, this);
+  return true;
+}
+
+bool MapCorrectionNode::acceptInput(const ros::Time& stamp) {
+  last_scan_receive_ = ros::Time::now();
+  ++scans_;
+  if (!params_.correction_enabled) {
+    last_status_ = "correction disabled (correction_enabled: false)";
+    return false;
+  }
+  if (!last_match_stamp_.isZero() && (stamp - last_match_stamp_).toSec() < 1.0 / params_.max_match_rate &&
+      stamp >= last_match_stamp_) {
+    ++skipped_;
+    return false;
+  }
+  return true;
+}
+
+void MapCorrectionNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
+  if (acceptInput(msg->header.stamp)) pending_scan_ = msg;  // processed once odom -> base is known
+}
+
+void MapCorrectionNode::cloudCallback(const sensor_msgs::PointCloud2::ConstPtr& msg) {
+  if (acceptInput(msg->header.stamp)) pending_cloud_ = msg;
+}
+
+void MapCorrectionNode::odomCallback(const nav_msgs::Odometry::ConstPtr& msg) {
+  // Pose for the position controller: map -> odom (ours) composed with the EKF's odom pose.
+  if ((ros::Time::now() - msg->header.stamp).toSec() > params_.pose_timeout) {
+    ROS_WARN_THROTTLE(2.0, "map_correction: odometry is %.2f s old: no pose published",
+                      (ros::Time::now() - msg->header.stamp).toSec());
+    return;
+  }
+  const auto& p = msg->pose.pose;
+  Eigen::Isometry3d odom_from_base = Eigen::Isometry3d::Identity();
+  const Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
+  if (!q.coeffs().allFinite() || q.norm() < 1e-6 || !std::isfinite(p.position.x) ||
+      !std::isfinite(p.position.y) || !std::isfinite(p.position.z)) {
+    ROS_WARN_THROTTLE(2.0, "map_correction: odometry with NaN/inf or zero quaternion ignored");
+    return;
+  }
+  odom_from_base.linear() = q.normalized().toRotationMatrix();
+  odom_from_base.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
+  const Eigen::Isometry3d map_from_base = lift(core_->mapFromOdom()) * odom_from_base;
+  geometry_msgs::PoseStamped out;
+  out.header.stamp = msg->header.stamp;
+  out.header.frame_id = params_.map_frame;
+  out.pose.position.x = map_from_base.translation().x();
+  out.pose.position.y = map_from_base.translation().y();
+  out.pose.position.z = map_from_base.translation().z();
+  const Eigen::Quaterniond qo(map_from_base.linear());
+  out.pose.orientation.x = qo.x();
+  out.pose.orientation.y = qo.y();
+  out.pose.orientation.z = qo.z();
+  out.pose.orientation.w = qo.w();
+  pose_pub_.publish(out);
+}
+
+bool MapCorrectionNode::sensorTransform(const std::string& frame, Eigen::Isometry3d* out) {
+  auto it = base_from_sensor_.find(frame);
+  if (it == base_from_sensor_.end()) {
+    try {
+      const auto ts = tf_buffer_->lookupTransform(params_.base_frame, frame, ros::Time(0));
+      it = base_from_sensor_.emplace(frame, toEigen(ts.transform)).first;
+    } catch (const tf2::TransformException& ex) {
+      ROS_WARN_THROTTLE(2.0, "map_correction: no transform %s <- %s: %s", params_.base_frame.c_str(),
+                        frame.c_str(), ex.what());
+      return false;
+    }
+  }
+  *out = it->second;
+  return true;
+}
+
+bool MapCorrectionNode::cloudToBase(const sensor_msgs::PointCloud2& cloud, Points2d* out) {
+  Eigen::Isometry3d t;
+  if (!sensorTransform(cloud.header.frame_id, &t)) return false;
+  bool has_xyz[3] = {false, false, false};
+  for (const auto& f : cloud.fields) {
+    for (int k = 0; k < 3; ++k) {
+      if (f.name == std::string(1, "xyz"[k]) && f.datatype == sensor_msgs::PointField::FLOAT32)
+        has_xyz[k] = true;
+    }
+  }
+  if (!has_xyz[0] || !has_xyz[1] || !has_xyz[2] || cloud.point_step < 12 ||
+      cloud.data.size() < static_cast<size_t>(cloud.row_step) * cloud.height) {
+    ROS_WARN_THROTTLE(2.0, "map_correction: cloud without float x/y/z or with a short data array ignored");
+    return false;
+  }
+  // Horizontal slice around the sensor height, nearest return per azimuth bin (a LaserScan).
+  const int bins = params_.slice_bins;
+  std::vector<double> best(bins, std::numeric_limits<double>::infinity());
+  std::vector<Eigen::Vector2d, Eigen::aligned_allocator<Eigen::Vector2d>> pts(bins);
+  const Eigen::Vector3d origin = t.translation();
+  sensor_msgs::PointCloud2ConstIterator<float> ix(cloud, "x"), iy(cloud, "y"), iz(cloud, "z");
+  for (; ix != ix.end(); ++ix, ++iy, ++iz) {
+    if (!std::isfinite(*ix) || !std::isfinite(*iy) || !std::isfinite(*iz)) continue;
+    const Eigen::Vector3d p = t * Eigen::Vector3d(*ix, *iy, *iz);
+    if (p.z() < params_.slice_z_min || p.z() > params_.slice_z_max) continue;
+    const double dx = p.x() - origin.x(), dy = p.y() - origin.y();
+    const double r = std::hypot(dx, dy);
+    if (r < params_.min_range || r > params_.max_range) continue;
+    int b = static_cast<int>((std::atan2(dy, dx) + M_PI) / (2.0 * M_PI) * bins);
+    b = std::min(std::max(b, 0), bins - 1);
+    if (r < best[b]) {
+      best[b] = r;
+      pts[b] = p.head<2>();
+    }
+  }
+  out->clear();
+  for (int b = 0; b < bins; ++b) {
+    if (std::isfinite(best[b])) out->push_back(pts[b]);
+  }
+  const size_t step = std::max<size_t>(1, (out->size() + params_.max_points - 1) / params_.max_points);
+  if (step > 1) {
+    Points2d dec;
+    for (size_t i = 0; i < out->size(); i += step) dec.push_back((*out)[i]);
+    out->swap(dec);
+  }
+  return true;
+}
+
+bool MapCorrectionNode::scanToBase(const sensor_msgs::LaserScan& scan, Points2d* out) {
+  Eigen::Isometry3d t;
+  if (!sensorTransform(scan.header.frame_id, &t)) return false;
+  const double lo = std::max(static_cast<double>(scan.range_min), params_.min_range);
+  const double hi = std::min(static_cast<double>(scan.range_max), params_.max_range);
+  size_t valid = 0;
+  for (float r : scan.ranges) {
+    if (std::isfinite(r) && r >= lo && r <= hi) ++valid;
+  }
+  const size_t step = std::max<size_t>(1, (valid + params_.max_points - 1) / params_.max_points);
+  out->clear();
+  out->reserve(valid / step + 1);
+  size_t k = 0;
+  for (size_t i = 0; i < scan.ranges.size(); ++i) {
+    const double r = scan.ranges[i];
+    if (!(std::isfinite(r) && r >= lo && r <= hi)) continue;
+    if (k++ % step != 0) continue;
+    const double a = scan.angle_min + i * static_cast<double>(scan.angle_increment);
+    const Eigen::Vector3d p = t * Eigen::Vector3d(r * std::cos(a), r * std::sin(a), 0.0);
+    out->emplace_back(p.x(), p.y());
+  }
+  return true;
+}
+
+void MapCorrectionNode::processPendingScan() {
+  if (!pending_scan_ && !pending_cloud_) return;
+  const ros::Time stamp = pending_scan_ ? pending_scan_->header.stamp : pending_cloud_->header.stamp;
+  Eigen::Isometry3d odom_from_base;
+  try {
+    odom_from_base =
+        toEigen(tf_buffer_->lookupTransform(params_.odom_frame, params_.base_frame, stamp).transform);
+  } catch (const tf2::TransformException& ex) {
+    // Wait for the EKF to catch up, but not forever.
+    if ((ros::Time::now() - stamp).toSec() > 0.5) {
+      ROS_WARN_THROTTLE(2.0, "map_correction: dropping scan, no %s -> %s at its stamp: %s",
+                        params_.odom_frame.c_str(), params_.base_frame.c_str(), ex.what());
+      pending_scan_.reset();
+      pending_cloud_.reset();
+      ++skipped_;
+    }
+    return;
+  }
+  last_match_stamp_ = stamp;
+  Points2d points;
+  const bool ok = pending_scan_ ? scanToBase(*pending_scan_, &points) : cloudToBase(*pending_cloud_, &points);
+  pending_scan_.reset();
+  pending_cloud_.reset();
+  if (!ok) return;
+
+  const double cpu0 = cpuSeconds();
+  const MapCorrection::Update u = core_->processScan(stamp.toSec(), points, planar(odom_from_base));
+  last_cpu_ms_ = (cpuSeconds() - cpu0) * 1e3;
+  last_status_ = MapCorrection::statusName(u.status);
+  if (u.status == MapCorrection::Status::kAccepted) {
+    ++accepted_;
+  } else if (u.status != MapCorrection::Status::kMapping) {
+    ++rejected_;
+    last_status_ += ": " + u.reason;
+    ROS_WARN_THROTTLE(2.0, "map_correction: scan %s", last_status_.c_str());
+  }
+  if (u.map_changed) map_dirty_ = true;
+  if (map_dirty_ && !core_->mapping() &&
+      (last_map_publish_.isZero() ||
+       (ros::Time::now() - last_map_publish_).toSec() >= params_.map_publish_interval)) {
+    publishMap(stamp);
+  }
+}
+
+void MapCorrectionNode::timerCallback(const ros::TimerEvent&) {
+  processPendingScan();
+  publishTransform();
+  diagnostics_->update();
+}
+
+void MapCorrectionNode::publishTransform() {
+  const Eigen::Isometry2d& t = core_->mapFromOdom();
+  geometry_msgs::TransformStamped tf;
+  tf.header.stamp = ros::Time::now() + ros::Duration(params_.transform_tolerance);
+  tf.header.frame_id = params_.map_frame;
+  tf.child_frame_id = params_.odom_frame;
+  tf.transform.translation.x = t.translation().x();
+  tf.transform.translation.y = t.translation().y();
+  const double yaw = yawOf(t);
+  tf.transform.rotation.z = std::sin(0.5 * yaw);
+  tf.transform.rotation.w = std::cos(0.5 * yaw);
+  tf_broadcaster_.sendTransform(tf);
+}
+
+void MapCorrectionNode::publishMap(const ros::Time& stamp) {
+  const OccupancyMap& m = core_->map();
+  nav_msgs::OccupancyGrid grid;
+  grid.header.stamp = stamp;
+  grid.header.frame_id = params_.map_frame;
+  grid.info.map_load_time = stamp;
+  grid.info.resolution = static_cast<float>(m.params().resolution);
+  grid.info.width = grid.info.height = static_cast<uint32_t>(m.width());
+  grid.info.origin.position.x = m.originX();
+  grid.info.origin.position.y = m.originY();
+  grid.info.origin.orientation.w = 1.0;
+  grid.data = m.toOccupancyData();
+  map_pub_.publish(grid);
+  last_map_publish_ = ros::Time::now();
+  map_dirty_ = false;
+}
+
+void MapCorrectionNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+  const ros::Time now = ros::Time::now();
+  stat.add("scans", scans_);
+  stat.add("accepted", accepted_);
+  stat.add("rejected", rejected_);
+  stat.add("skipped", skipped_);
+  stat.add("last cpu per scan [ms]", last_cpu_ms_);
+  stat.add("mapping", core_->mapping());
+  const bool stale = last_scan_receive_.isZero() ? (now - start_time_).toSec() > params_.scan_timeout
+                                                 : (now - last_scan_receive_).toSec() > params_.scan_timeout;
+  if (!params_.correction_enabled) {
+    stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "correction disabled: map -> odom is identity");
+  } else if (stale) {
+    stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "stale: no scan within scan_timeout");
+  } else if (last_status_.find("rejected") == 0) {
+    stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, last_status_);
+  } else {
+    stat.summary(diagnostic_msgs::DiagnosticStatus::OK, last_status_);
+  }
+}
+
+}  // namespace rbd_localization

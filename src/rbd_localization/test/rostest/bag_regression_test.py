@@ -1,0 +1,65 @@
+#!/usr/bin/env python3
+"""Bag regression (as robot_localization's bag tests): the final corrected pose after playing a
+bag recorded from the seeded simulator must be within `tolerance` of the true final pose
+(`final_x`, `final_y`, `final_yaw` test parameters, taken from the simulator's ground truth).
+"""
+
+import math
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Odometry
+
+
+class BagRegressionTest(unittest.TestCase):
+    """Wait for the bag to end, then compare the last pose."""
+
+    def test_final_pose(self):
+        rospy.init_node("bag_regression_test")
+        final_x = rospy.get_param("~final_x")
+        final_y = rospy.get_param("~final_y")
+        final_yaw = rospy.get_param("~final_yaw")
+        tolerance = rospy.get_param("~tolerance")
+        yaw_tolerance = math.radians(rospy.get_param("~yaw_tolerance_deg", 1.0))
+        bag_duration = rospy.get_param("~bag_duration")
+        lock = threading.Lock()
+        last = {}
+
+        def on_pose(msg):
+            with lock:
+                last["pose"] = msg
+
+        def on_odom(msg):
+            with lock:
+                last["odom"] = msg
+
+        rospy.Subscriber("/rbd_localization/pose", PoseStamped, on_pose)
+        rospy.Subscriber("/odometry/filtered", Odometry, on_odom)
+        # Sim time from the bag (/clock): wait until it has played to its end.
+        wall_end = time.time() + 3 * bag_duration + 60.0
+        while not rospy.is_shutdown() and time.time() < wall_end:
+            if rospy.get_time() > 0.0:
+                break
+            time.sleep(0.1)
+        start = rospy.get_time()
+        deadline = start + bag_duration - 0.5
+        while not rospy.is_shutdown() and rospy.get_time() < deadline and time.time() < wall_end:
+            time.sleep(0.1)
+        with lock:
+            self.assertIn("pose", last, "no /rbd_localization/pose")
+            pose = last["pose"].pose
+        q = pose.orientation
+        yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+        err = math.hypot(pose.position.x - final_x, pose.position.y - final_y)
+        dyaw = abs(math.atan2(math.sin(yaw - final_yaw), math.cos(yaw - final_yaw)))
+        rospy.loginfo("bag final error %.3f m %.2f deg", err, math.degrees(dyaw))
+        self.assertLess(err, tolerance)
+        self.assertLess(dyaw, yaw_tolerance)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("rbd_localization", "bag_regression", BagRegressionTest)

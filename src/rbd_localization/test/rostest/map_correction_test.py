@@ -1,0 +1,255 @@
+#!/usr/bin/env python3
+"""Drives a virtual robot round a square in a known 2D room while people walk nearby.
+
+Odometry (TF odom -> base_link and /odometry/filtered) drifts in scale and heading; scans come
+from the true pose. map_correction_node must build the map while the robot stands still, then
+keep /rbd_localization/pose on the truth and publish map -> odom and /map at their rates.
+"""
+
+import math
+import threading
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+import tf2_ros
+from geometry_msgs.msg import PoseStamped, TransformStamped
+from nav_msgs.msg import OccupancyGrid, Odometry
+from sensor_msgs.msg import LaserScan
+from tf2_msgs.msg import TFMessage
+
+WALLS = np.array([
+    (-3, -2.5, 5, -2.5), (5, -2.5, 5, 3.5), (5, 3.5, -3, 3.5), (-3, 3.5, -3, -2.5),
+    (2, 1, 3, 1), (3, 1, 3, 1.6), (3, 1.6, 2, 1.6), (2, 1.6, 2, 1),
+    (-2, -1.5, -1.5, -1.5), (-1.5, -1.5, -1.5, -1), (-1.5, -1, -2, -1), (-2, -1, -2, -1.5),
+    (3.5, -2.5, 3.5, -1.2), (3.5, -1.2, 4.2, -1.2),
+], dtype=float)
+BEAMS = 720
+STILL = 3.0  # [s] standing still while the map is built
+SIDE_V, SIDE_T = 0.4, 3.0  # forward 1.2 m per side
+TURN_W = 0.8
+TURN_T = (math.pi / 2) / TURN_W
+LOOP_T = 4 * (SIDE_T + TURN_T)
+SCALE_ERR, YAW_RATE_BIAS = 1.06, 0.03  # odometry drift
+LIDAR_X = -0.05  # lidar behind base_link, frame yawed by pi (as the OS1's os_lidar)
+
+
+def command(t):
+    """Return the commanded (v, w) at t seconds after start."""
+    if t < STILL or t >= STILL + LOOP_T:
+        return 0.0, 0.0
+    phase = (t - STILL) % (SIDE_T + TURN_T)
+    return (SIDE_V, 0.0) if phase < SIDE_T else (0.0, TURN_W)
+
+
+def people(t):
+    """Return an (N, 3) array of (x, y, r): three people walking back and forth."""
+    return np.array([
+        (-1.0 + 0.8 * math.sin(0.5 * t), 1.8, 0.25),
+        (0.6, -1.6 + 0.5 * math.sin(0.7 * t), 0.25),
+        (3.9 + 0.4 * math.sin(0.4 * t), 0.5, 0.22),
+    ])
+
+
+def cast(x, y, yaw, t):
+    """Return BEAMS ranges of a planar scan from (x, y) with the beam fan starting at yaw - pi."""
+    ang = yaw + (-math.pi + 2 * math.pi * np.arange(BEAMS) / BEAMS)
+    d = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    a = WALLS[:, :2]
+    e = WALLS[:, 2:] - a
+    den = d[:, 0:1] * e[None, :, 1] - d[:, 1:2] * e[None, :, 0]
+    ao = a[None, :, :] - np.array([x, y])[None, None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tt = (ao[:, :, 0] * e[None, :, 1] - ao[:, :, 1] * e[None, :, 0]) / den
+        uu = (ao[:, :, 0] * d[:, 1:2] - ao[:, :, 1] * d[:, 0:1]) / den
+    hit = (tt > 0) & (uu >= 0) & (uu <= 1) & np.isfinite(tt)
+    best = np.where(hit, tt, np.inf).min(axis=1)
+    for px, py, r in people(t):
+        oc = np.array([x - px, y - py])
+        b = d @ oc
+        disc = b * b - (oc @ oc - r * r)
+        tc = -b - np.sqrt(np.maximum(disc, 0.0))
+        best = np.where((disc >= 0) & (tc > 0), np.minimum(best, tc), best)
+    return best
+
+
+class MapCorrectionTest(unittest.TestCase):
+    """One scripted drive; the checks read what was recorded."""
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("map_correction_test")
+        cls.lock = threading.Lock()
+        cls.truth = []  # (stamp sec, x, y, yaw)
+        cls.poses = []  # (receive sec, PoseStamped)
+        cls.map_to_odom = []  # receive sec
+        cls.maps = []
+        cls.rng = np.random.RandomState(5)
+        static = tf2_ros.StaticTransformBroadcaster()
+        lidar = TransformStamped()
+        lidar.header.stamp = rospy.Time.now()
+        lidar.header.frame_id = "base_link"
+        lidar.child_frame_id = "os_lidar"
+        lidar.transform.translation.x = LIDAR_X
+        lidar.transform.translation.z = 0.15
+        lidar.transform.rotation.z = 1.0  # yaw pi
+        static.sendTransform(lidar)
+        cls.static = static
+        cls.tf_pub = tf2_ros.TransformBroadcaster()
+        cls.odom_pub = rospy.Publisher("/odometry/filtered", Odometry, queue_size=10)
+        cls.scan_pub = rospy.Publisher("/scan", LaserScan, queue_size=2)
+        rospy.Subscriber("/rbd_localization/pose", PoseStamped, cls.on_pose, queue_size=50)
+        rospy.Subscriber("/tf", TFMessage, cls.on_tf, queue_size=100)
+        rospy.Subscriber("/map", OccupancyGrid, cls.on_map, queue_size=2)
+        deadline = rospy.Time.now() + rospy.Duration(20.0)
+        while cls.scan_pub.get_num_connections() == 0 or cls.odom_pub.get_num_connections() == 0:
+            if rospy.Time.now() > deadline:
+                raise AssertionError("map_correction_node did not subscribe")
+            rospy.sleep(0.1)
+        rospy.sleep(0.5)
+        cls.run_drive()
+
+    @classmethod
+    def run_drive(cls):
+        rate = rospy.Rate(50)
+        start = rospy.Time.now()
+        cls.start = start
+        x = y = yaw = 0.0  # truth
+        ox = oy = oyaw = 0.0  # drifting odometry
+        last = start
+        k = 0
+        while not rospy.is_shutdown():
+            now = rospy.Time.now()
+            t = (now - start).to_sec()
+            if t > STILL + LOOP_T + 2.0:
+                break
+            dt = (now - last).to_sec()
+            last = now
+            v, w = command(t)
+            x += v * dt * math.cos(yaw)
+            y += v * dt * math.sin(yaw)
+            yaw += w * dt
+            moving = v != 0.0 or w != 0.0
+            ov, ow = v * SCALE_ERR, w + (YAW_RATE_BIAS if moving else 0.0)
+            ox += ov * dt * math.cos(oyaw)
+            oy += ov * dt * math.sin(oyaw)
+            oyaw += ow * dt
+            with cls.lock:
+                cls.truth.append((now.to_sec(), x, y, yaw))
+            tf = TransformStamped()
+            tf.header.stamp = now
+            tf.header.frame_id = "odom"
+            tf.child_frame_id = "base_link"
+            tf.transform.translation.x, tf.transform.translation.y = ox, oy
+            tf.transform.rotation.z, tf.transform.rotation.w = math.sin(oyaw / 2), math.cos(oyaw / 2)
+            cls.tf_pub.sendTransform(tf)
+            od = Odometry()
+            od.header = tf.header
+            od.child_frame_id = "base_link"
+            od.pose.pose.position.x, od.pose.pose.position.y = ox, oy
+            od.pose.pose.orientation = tf.transform.rotation
+            cls.odom_pub.publish(od)
+            if k % 5 == 0:  # 10 Hz scans
+                lx, ly = x + LIDAR_X * math.cos(yaw), y + LIDAR_X * math.sin(yaw)
+                ranges = cast(lx, ly, yaw + math.pi, t) + cls.rng.normal(0.0, 0.015, BEAMS)
+                scan = LaserScan()
+                scan.header.stamp = now
+                scan.header.frame_id = "os_lidar"
+                scan.angle_min = -math.pi
+                scan.angle_increment = 2 * math.pi / BEAMS
+                scan.angle_max = scan.angle_min + (BEAMS - 1) * scan.angle_increment
+                scan.range_min, scan.range_max = 0.1, 30.0
+                scan.ranges = [float(r) if np.isfinite(r) else float("inf") for r in ranges]
+                cls.scan_pub.publish(scan)
+            k += 1
+            rate.sleep()
+        cls.final_odom = (ox, oy, oyaw)
+
+    @classmethod
+    def on_pose(cls, msg):
+        with cls.lock:
+            cls.poses.append((rospy.Time.now().to_sec(), msg))
+
+    @classmethod
+    def on_tf(cls, msg):
+        for tr in msg.transforms:
+            if tr.header.frame_id == "map" and tr.child_frame_id == "odom":
+                with cls.lock:
+                    cls.map_to_odom.append(rospy.Time.now().to_sec())
+
+    @classmethod
+    def on_map(cls, msg):
+        with cls.lock:
+            cls.maps.append(msg)
+
+    def truth_at(self, stamp):
+        times = np.array([tr[0] for tr in self.truth])
+        i = int(np.argmin(np.abs(times - stamp)))
+        return self.truth[i]
+
+    def pose_error(self, msg):
+        _, x, y, yaw = self.truth_at(msg.header.stamp.to_sec())
+        q = msg.pose.orientation
+        est_yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+        dyaw = math.atan2(math.sin(est_yaw - yaw), math.cos(est_yaw - yaw))
+        return math.hypot(msg.pose.position.x - x, msg.pose.position.y - y), abs(dyaw)
+
+    def test_final_pose_is_corrected(self):
+        with self.lock:
+            poses = list(self.poses)
+        self.assertTrue(poses, "no /rbd_localization/pose received")
+        last = poses[-1][1]
+        self.assertEqual(last.header.frame_id, "map")
+        err, dyaw = self.pose_error(last)
+        rospy.loginfo("final corrected error %.3f m %.2f deg", err, math.degrees(dyaw))
+        self.assertLess(err, 0.05)
+        self.assertLess(dyaw, math.radians(1.0))
+        # The drift the correction removed was real.
+        _, x, y, _ = self.truth[-1]
+        self.assertGreater(math.hypot(self.final_odom[0] - x, self.final_odom[1] - y), 0.3)
+
+    def test_pose_stays_close_during_the_drive(self):
+        with self.lock:
+            poses = [p for t, p in self.poses if p.header.stamp.to_sec() > self.start.to_sec() + STILL + 1.0]
+        errs = [self.pose_error(p)[0] for p in poses]
+        self.assertGreater(len(errs), 100)
+        self.assertLess(max(errs), 0.15, "max error while driving %.3f m" % max(errs))
+
+    def test_output_rates(self):
+        end = self.start.to_sec() + STILL + LOOP_T
+        with self.lock:
+            poses = [t for t, _ in self.poses if end - 5.0 <= t < end]
+            tfs = [t for t in self.map_to_odom if end - 5.0 <= t < end]
+        self.assertGreaterEqual(len(poses) / 5.0, 10.0, "pose rate %.1f Hz" % (len(poses) / 5.0))
+        self.assertGreaterEqual(len(tfs) / 5.0, 20.0, "map->odom rate %.1f Hz" % (len(tfs) / 5.0))
+
+    def test_map_published(self):
+        with self.lock:
+            maps = list(self.maps)
+        self.assertTrue(maps, "no /map")
+        m = maps[-1]
+        self.assertEqual(m.header.frame_id, "map")
+        data = np.array(m.data, dtype=np.int16)
+        self.assertEqual(data.size, m.info.width * m.info.height)
+        occupied = np.count_nonzero(data > 65)
+        free = np.count_nonzero((data >= 0) & (data < 35))
+        self.assertGreater(occupied, 200)
+        self.assertGreater(free, 2000)
+        # Wall cells of the room are occupied, the room's inside is free: west wall at
+        # (-3, 0), east wall at (5, -0.5); (1, -0.5) is open floor.
+        res = m.info.resolution
+        grid = data.reshape(m.info.height, m.info.width)
+
+        def window(x, y):
+            cx = int((x - m.info.origin.position.x) / res)
+            cy = int((y - m.info.origin.position.y) / res)
+            return grid[cy - 1:cy + 2, cx - 1:cx + 2]
+
+        self.assertGreater(window(-3.0, 0.0).max(), 65)
+        self.assertGreater(window(5.0, -0.5).max(), 65)
+        self.assertTrue(((window(1.0, -0.5) >= 0) & (window(1.0, -0.5) < 35)).all())
+
+
+if __name__ == "__main__":
+    rostest.rosrun("rbd_localization", "map_correction_synthetic", MapCorrectionTest)

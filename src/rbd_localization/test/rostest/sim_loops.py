@@ -1,0 +1,203 @@
+#!/usr/bin/env python3
+"""Drives the simulated A1 round the thesis path and measures the localization against ground truth.
+
+Path (thesis 4.1.1): (0,0) -> (1,0), turn 180 deg, -> (-1,0), turn 180 deg, -> (0,0) facing +x.
+The robot is steered on ground truth (/rbd_sim/ground_truth), so the path itself is exact; at
+every loop end the corrected pose (/rbd_localization/pose, map) and the EKF alone
+(/odometry/filtered, odom: what the pose would be without map correction) are compared with the
+truth. Writes a JSON report (and, with --png, the trajectories as a PNG like thesis Fig. 16/17).
+
+Used by the rostest sim_loops.test (few loops, with assertions) and by hand for the 10 loops:
+    rosrun rbd_localization sim_loops.py --loops 10 --out /tmp/loops.json --png /tmp/loops.png
+"""
+
+import argparse
+import json
+import math
+import sys
+import threading
+
+import rospy
+from geometry_msgs.msg import PoseStamped, Twist
+from nav_msgs.msg import Odometry
+
+VX_MAX, WZ_MAX = 0.3, 0.6  # thesis saturations (0.3 m/s, 36 deg/s)
+
+
+def yaw_of(q):
+    """Return the yaw of a geometry_msgs quaternion."""
+    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+
+
+def wrap(a):
+    """Wrap an angle to [-pi, pi)."""
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+class Runner:
+    """Steers on ground truth and records the three trajectories."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.truth = None
+        self.est = None
+        self.ekf = None
+        self.tracks = {"truth": [], "corrected": [], "ekf": []}
+        self.cmd = rospy.Publisher("/cmd_vel", Twist, queue_size=1)
+        rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_truth, queue_size=5)
+        rospy.Subscriber("/rbd_localization/pose", PoseStamped, self.on_est, queue_size=5)
+        rospy.Subscriber("/odometry/filtered", Odometry, self.on_ekf, queue_size=5)
+
+    def on_truth(self, msg):
+        p = msg.pose.pose
+        with self.lock:
+            self.truth = (p.position.x, p.position.y, yaw_of(p.orientation))
+            self.tracks["truth"].append(self.truth[:2])
+
+    def on_est(self, msg):
+        with self.lock:
+            self.est = (msg.pose.position.x, msg.pose.position.y, yaw_of(msg.pose.orientation))
+            self.tracks["corrected"].append(self.est[:2])
+
+    def on_ekf(self, msg):
+        p = msg.pose.pose
+        with self.lock:
+            self.ekf = (p.position.x, p.position.y, yaw_of(p.orientation))
+            self.tracks["ekf"].append(self.ekf[:2])
+
+    def send(self, vx, wz):
+        t = Twist()
+        t.linear.x, t.angular.z = vx, wz
+        self.cmd.publish(t)
+
+    def go_to(self, gx, gy, timeout=40.0):
+        """Walk to (gx, gy): turn towards it, then P control on distance (ground truth)."""
+        rate = rospy.Rate(20)
+        end = rospy.Time.now() + rospy.Duration(timeout)
+        while not rospy.is_shutdown() and rospy.Time.now() < end:
+            with self.lock:
+                x, y, yaw = self.truth
+            dx, dy = gx - x, gy - y
+            rho = math.hypot(dx, dy)
+            if rho < 0.02:
+                break
+            gamma = wrap(math.atan2(dy, dx) - yaw)
+            if abs(gamma) > math.pi / 2:  # goal behind: walk backwards
+                gamma = wrap(gamma + math.pi)
+                sign = -1.0
+            else:
+                sign = 1.0
+            vx = sign * min(VX_MAX, 2.5 * rho * math.cos(gamma))
+            wz = max(-WZ_MAX, min(WZ_MAX, 2.0 * gamma))
+            self.send(vx, wz)
+            rate.sleep()
+        self.stop()
+
+    def turn_to(self, goal_yaw, timeout=30.0):
+        rate = rospy.Rate(20)
+        end = rospy.Time.now() + rospy.Duration(timeout)
+        while not rospy.is_shutdown() and rospy.Time.now() < end:
+            with self.lock:
+                yaw = self.truth[2]
+            err = wrap(goal_yaw - yaw)
+            if abs(err) < 0.01:
+                break
+            self.send(0.0, max(-WZ_MAX, min(WZ_MAX, 1.5 * err)))
+            rate.sleep()
+        self.stop()
+
+    def stop(self):
+        for _ in range(10):
+            self.send(0.0, 0.0)
+            rospy.sleep(0.05)
+
+    def errors(self):
+        with self.lock:
+            tx, ty, tyaw = self.truth
+            out = {"truth": [tx, ty, tyaw]}
+            for name, pose in (("corrected", self.est), ("ekf", self.ekf)):
+                if pose is None:
+                    out[name] = None
+                    continue
+                out[name] = {"pos_err": math.hypot(pose[0] - tx, pose[1] - ty),
+                             "yaw_err_deg": abs(math.degrees(wrap(pose[2] - tyaw)))}
+        return out
+
+    def wait_ready(self, timeout=60.0):
+        end = rospy.Time.now() + rospy.Duration(timeout)
+        while not rospy.is_shutdown() and rospy.Time.now() < end:
+            with self.lock:
+                if self.truth and self.est and self.ekf:
+                    return True
+            rospy.sleep(0.2)
+        return False
+
+
+def run(loops, settle=4.0):
+    """Drive `loops` loops; return the per-loop error report."""
+    r = Runner()
+    if not r.wait_ready():
+        raise RuntimeError("no ground truth / pose / odometry")
+    rospy.sleep(settle)  # map built while standing
+    report = {"loops": []}
+    for i in range(loops):
+        r.go_to(1.0, 0.0)
+        r.turn_to(math.pi)
+        r.go_to(-1.0, 0.0)
+        r.turn_to(0.0)
+        r.go_to(0.0, 0.0)
+        r.turn_to(0.0)
+        rospy.sleep(1.0)
+        e = r.errors()
+        e["loop"] = i + 1
+        report["loops"].append(e)
+        rospy.loginfo("loop %d: %s", i + 1, json.dumps(e))
+    with r.lock:  # subscribers keep appending
+        report["tracks"] = {k: list(v) for k, v in r.tracks.items()}
+    return report
+
+
+def save_png(report, path):
+    """Plot truth, corrected and EKF-only trajectories."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for name, style in (("ekf", "r-"), ("corrected", "b-"), ("truth", "k--")):
+        pts = report["tracks"][name]
+        pts = [p for p in pts if len(p) == 2]
+        if pts:
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], style, lw=0.7,
+                    label={"truth": "ground truth", "ekf": "EKF only (no map correction)",
+                           "corrected": "with map correction"}[name])
+    last = report["loops"][-1]
+    ax.set_title("%d loops: final error %.3f m corrected, %.3f m EKF only"
+                 % (len(report["loops"]), last["corrected"]["pos_err"], last["ekf"]["pos_err"]))
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.axis("equal")
+    ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--loops", type=int, default=10)
+    parser.add_argument("--out", default="")
+    parser.add_argument("--png", default="")
+    args = parser.parse_args(rospy.myargv(sys.argv)[1:])
+    rospy.init_node("sim_loops")
+    report = run(args.loops)
+    if args.out:
+        with open(args.out, "w") as f:
+            json.dump(report, f)
+    if args.png:
+        save_png(report, args.png)
+    print(json.dumps(report["loops"][-1]))
+
+
+if __name__ == "__main__":
+    main()
