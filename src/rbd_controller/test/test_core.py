@@ -64,8 +64,9 @@ class FakeWorld:
                 self.ctl.on_pos_status("idle")
 
 
-def make(operator_timeout=0.0, operator_policy="stop", **kwargs):
+def make(operator_timeout=0.0, operator_policy="stop", ticks_per_pose=3, **kwargs):
     world = FakeWorld(**kwargs)
+    world.ticks_per_pose = ticks_per_pose
     ctl = MainController(world.ports(), operator_timeout=operator_timeout, operator_policy=operator_policy)
     world.ctl = ctl
     ctl.start()
