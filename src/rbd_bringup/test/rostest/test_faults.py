@@ -368,9 +368,10 @@ class Faults(unittest.TestCase):
                 self.em_stop(True)
                 cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.0)
                 with m.lock:
-                    seen = [s for _t, s in m.states[-3:]]
+                    seen = [s for _t, s in m.states[-2:]]
+                self.assertEqual(seen[-1], "EMERGENCY_STOP")
+                caught = seen == ["GENERATING_PATH", "EMERGENCY_STOP"]  # else EXECUTING came first
                 self.em_stop(False)
-                caught = "GENERATING_PATH" in seen and seen[-1] == "EMERGENCY_STOP" or m.state != "EXECUTING"
                 self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "no walk after release")
                 self.record(run=i, state="GENERATING_PATH", cmd_stop_s=cmd, truth_stop_s=truth, caught=caught)
                 break

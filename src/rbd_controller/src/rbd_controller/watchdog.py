@@ -6,7 +6,6 @@ stopped by it) and reports the link lost once no heartbeat came for ``timeout`` 
 the loss).
 """
 
-from typing import Optional
 
 POLICIES = ("stop", "finish")
 
