@@ -314,6 +314,27 @@ class Faults(unittest.TestCase):
         rec = self.assert_recovers()
         self.record(run=i, truth_stop_s=truth, recovery_s=rec, bound_s=1.0)
 
+    def fault_pos_controller_killed(self, i):
+        self.walk()
+        pid = node_pid("/rbd_pos_controller")
+        os.kill(pid, signal.SIGSTOP)  # hung mid-motion: /cmd_vel stops
+        t0 = time.monotonic()
+        try:
+            # the driver's cmd_vel timeout (0.25 s) + margin
+            cmd, truth = self.assert_stops(t0, 1.0, 1.5, hold=1.0)
+        finally:
+            os.kill(pid, signal.SIGKILL)  # then it dies: respawned by roslaunch
+
+        def respawned():
+            try:
+                return node_pid("/rbd_pos_controller") != pid
+            except (OSError, RuntimeError, rosgraph.MasterError):
+                return False  # old URI still registered / new one not up yet
+
+        self.assertTrue(wait_for(respawned, 30.0, step=0.5), "not respawned")
+        rec = self.assert_recovers(60.0)  # respawned position controller, trick goes on or restarts
+        self.record(run=i, cmd_stop_s=cmd, truth_stop_s=truth, recovery_s=rec, bound_s=1.0)
+
     def fault_controller_killed(self, i):
         m = self.m
         self.walk()
