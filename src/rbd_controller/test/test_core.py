@@ -64,10 +64,12 @@ class FakeWorld:
                 self.ctl.on_pos_status("idle")
 
 
-def make(operator_timeout=0.0, operator_policy="stop", ticks_per_pose=3, **kwargs):
+def make(operator_timeout=0.0, operator_policy="stop", ticks_per_pose=3, lidar_timeout=0.0, **kwargs):
     world = FakeWorld(**kwargs)
     world.ticks_per_pose = ticks_per_pose
-    ctl = MainController(world.ports(), operator_timeout=operator_timeout, operator_policy=operator_policy)
+    ctl = MainController(
+        world.ports(), operator_timeout=operator_timeout, operator_policy=operator_policy, lidar_timeout=lidar_timeout
+    )
     world.ctl = ctl
     ctl.start()
     return world, ctl
@@ -337,3 +339,35 @@ def test_estop_never_depends_on_operator_link():
 def test_bad_operator_params_rejected(kwargs):
     with pytest.raises(ValueError):
         make(**kwargs)
+
+
+def test_lidar_monitor_silence_is_a_collision_until_it_reports_again():
+    world, ctl = make(lidar_timeout=0.5, ticks_per_pose=20)
+    run(world, ctl, 10)  # never seen: not armed
+    assert ctl.state == State.EMERGENCY_STOP
+    ctl.on_lidar_state(world.t, False)
+    release(world, ctl)
+    ctl.on_lidar_state(world.t, False)
+    world.gestures.append("walk")
+    for _ in range(4):
+        ctl.on_lidar_state(world.t, False)
+        run(world, ctl, 1)
+    assert ctl.state == State.EXECUTING
+    world.calls.clear()
+    run(world, ctl, 3)  # 0.75 s without a state message
+    assert ctl.state == State.COLLISION_DETECTED and world.calls == [("pos_collision", True)]
+    assert any("monitor lost" in m for _, m in world.logs)
+    ctl.on_lidar_state(world.t, True)  # back, but reporting a collision (stale at start-up)
+    assert ctl.state == State.COLLISION_DETECTED
+    ctl.set_collision(False)  # rbd_lidar clears through its service as usual
+    assert ctl.state == State.EXECUTING
+
+
+def test_lidar_monitor_back_clear_resumes():
+    world, ctl = make(lidar_timeout=0.5)
+    ctl.on_lidar_state(world.t, False)
+    release(world, ctl)
+    run(world, ctl, 4)
+    assert ctl.state == State.COLLISION_DETECTED
+    ctl.on_lidar_state(world.t, False)
+    assert ctl.state == State.WAITING_FOR_GESTURE

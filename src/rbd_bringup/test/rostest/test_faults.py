@@ -163,6 +163,21 @@ class Monitor:
             return None
         return max(0.0, stop - t0)
 
+    def stop_episode(self, series, t0, t1, still, hold):
+        """Delay after t0 of the first run of samples below still lasting >= hold; None if none."""
+        with self.lock:
+            samples = [(t, v) for t, v in getattr(self, series) if t0 <= t <= t1]
+        start = None
+        for t, v in samples:
+            if v >= still:
+                start = None
+                continue
+            if start is None:
+                start = t
+            if t - start >= hold:
+                return max(0.0, start - t0)
+        return None
+
     def max_speed(self, series, t0, t1):
         with self.lock:
             return max([v for t, v in getattr(self, series) if t0 <= t <= t1] or [0.0])
@@ -333,6 +348,31 @@ class Faults(unittest.TestCase):
 
         self.assertTrue(wait_for(respawned, 30.0, step=0.5), "not respawned")
         rec = self.assert_recovers(60.0)  # respawned position controller, trick goes on or restarts
+        self.record(run=i, cmd_stop_s=cmd, truth_stop_s=truth, recovery_s=rec, bound_s=1.0)
+
+    def fault_lidar_killed(self, i):
+        self.walk()
+        pid = node_pid("/rbd_lidar")
+        os.kill(pid, signal.SIGKILL)  # the collision monitor dies; roslaunch respawns it after 1 s
+        t0 = time.monotonic()
+        # rbd_controller's lidar_timeout (0.5 s) + margin; the respawned monitor may release the
+        # robot soon after, so look for a stop episode of >= 0.3 s starting within the bound
+        wait_for(lambda: False, 2.0)
+        cmd = self.m.stop_episode("commands", t0, t0 + 2.0, 1e-6, 0.3)
+        truth = self.m.stop_episode("truth", t0, t0 + 2.0, TRUTH_STILL, 0.3)
+        self.assertIsNotNone(cmd, "no zero-velocity episode at the A1 after the monitor died")
+        self.assertIsNotNone(truth, "the robot did not come to rest after the monitor died")
+        self.assertLessEqual(cmd, 1.0)
+        self.assertLessEqual(truth, 1.5)
+
+        def respawned():
+            try:
+                return node_pid("/rbd_lidar") != pid
+            except (OSError, RuntimeError, rosgraph.MasterError):
+                return False
+
+        self.assertTrue(wait_for(respawned, 30.0, step=0.5), "rbd_lidar not respawned")
+        rec = self.assert_recovers(60.0)
         self.record(run=i, cmd_stop_s=cmd, truth_stop_s=truth, recovery_s=rec, bound_s=1.0)
 
     def fault_controller_killed(self, i):

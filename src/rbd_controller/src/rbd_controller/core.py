@@ -69,6 +69,8 @@ class MainController:
         operator_policy: ``stop`` (stop the current trick at once, resume it when heartbeats
             return or on an e-stop release) or ``finish`` (finish the current trick, then
             wait in OPERATOR_LOST).
+        lidar_timeout: no /rbd_lidar/state for this long counts as a collision (the collision
+            monitor died or hangs) [s]; <= 0 disables. It arms with the first state message.
 
     Raises:
         ValueError: unknown operator_policy or non-finite operator_timeout.
@@ -83,11 +85,14 @@ class MainController:
         start_timeout: float = 3.0,
         operator_timeout: float = 0.0,
         operator_policy: str = "stop",
+        lidar_timeout: float = 0.0,
     ) -> None:
         if operator_policy not in POLICIES:
             raise ValueError("operator_policy must be one of %s, got %r" % (POLICIES, operator_policy))
         self.operator = OperatorWatchdog(operator_timeout)
         self.operator_policy = operator_policy
+        self.lidar = OperatorWatchdog(lidar_timeout)
+        self.lidar_lost = False
         self.ports = ports
         self.attentive_pitch = attentive_pitch
         self.gesture_period = gesture_period
@@ -169,6 +174,29 @@ class MainController:
                 self.ports.publish(self)
                 self.ports.log("info", "operator link back (%s -> %s)" % (before.name, self.fsm.state.name))
 
+    def on_lidar_state(self, now: float, collision: bool) -> None:
+        """A CollisionState from rbd_lidar arrived at ``now`` [s] (its ``collision`` flag)."""
+        with self.lock:
+            self.lidar.beat(now)
+            if not self.lidar_lost:
+                return
+            self.lidar_lost = False
+            self.ports.log("info", "collision monitor back (collision %s)" % collision)
+            self.fsm.fire(Event.COLLISION if collision else Event.COLLISION_CLEAR)
+            self._sync_stops()
+            self.ports.publish(self)
+
+    def check_lidar(self, now: float) -> None:
+        """No state from the collision monitor for lidar_timeout => collision; called from tick()."""
+        with self.lock:
+            if self.lidar_lost or not self.lidar.lost(now):
+                return
+            self.lidar_lost = True
+            self.ports.log("error", "no /rbd_lidar/state for > %.2f s: collision (monitor lost)" % self.lidar.timeout)
+            self.fsm.fire(Event.COLLISION)
+            self._sync_stops()
+            self.ports.publish(self)
+
     def check_operator(self, now: float) -> None:
         """Fire OPERATOR_LOST when the heartbeat is gone (per policy); called from tick()."""
         with self.lock:
@@ -238,6 +266,7 @@ class MainController:
     # ------------------------------------------------------------------ loop
     def tick(self, now: float) -> None:
         """One step of the work states; call periodically from a single thread."""
+        self.check_lidar(now)
         self.check_operator(now)
         with self.lock:
             epoch = self.fsm.epoch
