@@ -64,9 +64,12 @@ class FakeWorld:
                 self.ctl.on_pos_status("idle")
 
 
-def make(**kwargs):
+def make(operator_timeout=0.0, operator_policy="stop", ticks_per_pose=3, lidar_timeout=0.0, **kwargs):
     world = FakeWorld(**kwargs)
-    ctl = MainController(world.ports())
+    world.ticks_per_pose = ticks_per_pose
+    ctl = MainController(
+        world.ports(), operator_timeout=operator_timeout, operator_policy=operator_policy, lidar_timeout=lidar_timeout
+    )
     world.ctl = ctl
     ctl.start()
     return world, ctl
@@ -246,3 +249,125 @@ def test_estop_then_collision_then_release_order():
     assert world.calls == [("pos_collision", True), ("estop", False), ("pos_emergency", False)]
     ctl.set_collision(False)
     assert ctl.state == State.EXECUTING
+
+
+def test_operator_watchdog_off_until_first_heartbeat():
+    world, ctl = make(operator_timeout=1.0)
+    release(world, ctl)
+    world.gestures.append("walk")
+    run(world, ctl, 30)
+    assert world.sent == ["p1", "p2", "p3"] and ctl.state == State.WAITING_FOR_GESTURE
+
+
+def _beating_run(world, ctl, ticks, beat=True):
+    for _ in range(ticks):
+        if beat:
+            ctl.on_heartbeat(world.t)
+        run(world, ctl, 1)
+
+
+def test_operator_loss_stops_trick_and_heartbeat_resumes_it():
+    world, ctl = make(operator_timeout=1.0, operator_policy="stop", ticks_per_pose=20)
+    ctl.on_heartbeat(world.t)
+    release(world, ctl)
+    world.gestures.append("walk")
+    _beating_run(world, ctl, 4)
+    assert ctl.state == State.EXECUTING and world.sent == ["p1"]
+    world.calls.clear()
+    _beating_run(world, ctl, 6, beat=False)  # 1.5 s of silence
+    assert ctl.state == State.OPERATOR_LOST
+    assert world.calls == [("pos_collision", True)]  # position controller held; e-stop gate untouched
+    assert any("operator heartbeat lost" in m for _, m in world.logs)
+    world.pos_busy = 0  # the hold dropped the goal
+    run(world, ctl, 20)
+    assert world.sent == ["p1"] and ctl.state == State.OPERATOR_LOST
+    world.calls.clear()
+    ctl.on_heartbeat(world.t)
+    assert ctl.state == State.EXECUTING and world.calls == [("pos_collision", False)]
+    world.ticks_per_pose = 3
+    _beating_run(world, ctl, 30)
+    assert world.sent == ["p1", "p1", "p2", "p3"] and ctl.state == State.WAITING_FOR_GESTURE
+
+
+def test_operator_loss_release_acknowledges_and_disarms():
+    world, ctl = make(operator_timeout=1.0)
+    ctl.on_heartbeat(world.t)
+    release(world, ctl)
+    _beating_run(world, ctl, 8, beat=False)
+    assert ctl.state == State.OPERATOR_LOST
+    ctl.set_emergency(False)  # operator acknowledges from the robot side
+    assert ctl.state == State.WAITING_FOR_GESTURE
+    run(world, ctl, 20)  # disarmed until the next heartbeat
+    assert ctl.state == State.WAITING_FOR_GESTURE
+    ctl.on_heartbeat(world.t)
+    run(world, ctl, 8)
+    assert ctl.state == State.OPERATOR_LOST
+
+
+def test_operator_loss_finish_policy_finishes_trick_then_waits():
+    world, ctl = make(operator_timeout=1.0, operator_policy="finish", ticks_per_pose=8)
+    ctl.on_heartbeat(world.t)
+    release(world, ctl)
+    world.gestures.append("walk")
+    _beating_run(world, ctl, 3)
+    assert ctl.state == State.EXECUTING
+    run(world, ctl, 8)  # link lost mid-trick: the trick goes on
+    assert ctl.state == State.EXECUTING
+    run(world, ctl, 40)
+    assert world.sent == ["p1", "p2", "p3"] and ctl.state == State.OPERATOR_LOST
+    world.gestures.append("walk")
+    run(world, ctl, 10)
+    assert world.sent == ["p1", "p2", "p3"]  # no new trick while the operator is gone
+    ctl.on_heartbeat(world.t)
+    assert ctl.state == State.WAITING_FOR_GESTURE
+
+
+def test_estop_never_depends_on_operator_link():
+    world, ctl = make(operator_timeout=1.0)
+    ctl.on_heartbeat(world.t)
+    release(world, ctl)
+    _beating_run(world, ctl, 8, beat=False)
+    assert ctl.state == State.OPERATOR_LOST
+    world.calls.clear()
+    ctl.set_emergency(True)
+    assert ctl.state == State.EMERGENCY_STOP and world.calls[0] == ("estop", True)
+    ctl.on_heartbeat(world.t)  # heartbeat back does not release the e-stop
+    assert ctl.state == State.EMERGENCY_STOP and world.estop_flag is True
+
+
+@pytest.mark.parametrize("kwargs", [{"operator_policy": "later"}, {"operator_timeout": float("nan")}])
+def test_bad_operator_params_rejected(kwargs):
+    with pytest.raises(ValueError):
+        make(**kwargs)
+
+
+def test_lidar_monitor_silence_is_a_collision_until_it_reports_again():
+    world, ctl = make(lidar_timeout=0.5, ticks_per_pose=20)
+    run(world, ctl, 10)  # never seen: not armed
+    assert ctl.state == State.EMERGENCY_STOP
+    ctl.on_lidar_state(world.t, False)
+    release(world, ctl)
+    ctl.on_lidar_state(world.t, False)
+    world.gestures.append("walk")
+    for _ in range(4):
+        ctl.on_lidar_state(world.t, False)
+        run(world, ctl, 1)
+    assert ctl.state == State.EXECUTING
+    world.calls.clear()
+    run(world, ctl, 3)  # 0.75 s without a state message
+    assert ctl.state == State.COLLISION_DETECTED and world.calls == [("pos_collision", True)]
+    assert any("monitor lost" in m for _, m in world.logs)
+    ctl.on_lidar_state(world.t, True)  # back, but reporting a collision (stale at start-up)
+    assert ctl.state == State.COLLISION_DETECTED
+    ctl.set_collision(False)  # rbd_lidar clears through its service as usual
+    assert ctl.state == State.EXECUTING
+
+
+def test_lidar_monitor_back_clear_resumes():
+    world, ctl = make(lidar_timeout=0.5)
+    ctl.on_lidar_state(world.t, False)
+    release(world, ctl)
+    run(world, ctl, 4)
+    assert ctl.state == State.COLLISION_DETECTED
+    ctl.on_lidar_state(world.t, False)
+    assert ctl.state == State.WAITING_FOR_GESTURE

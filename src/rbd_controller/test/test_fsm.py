@@ -8,6 +8,7 @@ PATH_TO = {
     State.GENERATING_PATH: [Event.ESTOP_RELEASE, Event.GESTURE],
     State.EXECUTING: [Event.ESTOP_RELEASE, Event.GESTURE, Event.PATH_READY],
     State.COLLISION_DETECTED: [Event.ESTOP_RELEASE, Event.COLLISION],
+    State.OPERATOR_LOST: [Event.ESTOP_RELEASE, Event.OPERATOR_LOST],
 }
 
 
@@ -27,8 +28,12 @@ def test_power_up_is_emergency_stop():
 def test_values_match_controller_state_msg():
     from rbd_msgs.msg import ControllerState
 
+    used = {getattr(ControllerState, n) for n in dir(ControllerState) if n.isupper() and not n.startswith("_")}
     for state in State:
-        assert getattr(ControllerState, state.name) == state.value
+        if hasattr(ControllerState, state.name):
+            assert getattr(ControllerState, state.name) == state.value
+        else:  # OPERATOR_LOST until rbd_msgs gets the constant: must not collide with one
+            assert state == State.OPERATOR_LOST and state.value not in used
 
 
 @pytest.mark.parametrize("state", list(State))
@@ -140,3 +145,45 @@ def test_stop_states_reachable_from_every_state():
             fsm = fsm_in(state)
             fsm.fire(event)
             assert fsm.state in STOP_STATES
+
+
+@pytest.mark.parametrize("state", WORK_STATES)
+def test_operator_lost_preempts_and_resumes_on_heartbeat(state):
+    fsm = fsm_in(state)
+    fsm.fire(Event.OPERATOR_LOST)
+    assert fsm.state == State.OPERATOR_LOST and fsm.resume == state and fsm.operator_lost
+    fsm.fire(Event.COLLISION_CLEAR)
+    assert fsm.state == State.OPERATOR_LOST
+    fsm.fire(Event.OPERATOR_BACK)
+    assert fsm.state == state and not fsm.operator_lost
+
+
+def test_release_acknowledges_operator_loss():
+    fsm = fsm_in(State.EXECUTING)
+    fsm.fire(Event.OPERATOR_LOST)
+    fsm.fire(Event.ESTOP_RELEASE)
+    assert fsm.state == State.EXECUTING and not fsm.operator_lost
+
+
+def test_estop_preempts_operator_lost_and_release_resumes_work():
+    fsm = fsm_in(State.EXECUTING)
+    fsm.fire(Event.OPERATOR_LOST)
+    fsm.fire(Event.ESTOP)
+    assert fsm.state == State.EMERGENCY_STOP and fsm.resume == State.EXECUTING
+    fsm.fire(Event.ESTOP_RELEASE)
+    assert fsm.state == State.EXECUTING
+
+
+def test_collision_and_operator_loss_resume_in_order():
+    fsm = fsm_in(State.EXECUTING)
+    fsm.fire(Event.COLLISION)
+    fsm.fire(Event.OPERATOR_LOST)
+    assert fsm.state == State.COLLISION_DETECTED
+    fsm.fire(Event.COLLISION_CLEAR)
+    assert fsm.state == State.OPERATOR_LOST
+    fsm.fire(Event.COLLISION)
+    assert fsm.state == State.OPERATOR_LOST
+    fsm.fire(Event.OPERATOR_BACK)  # collision still reported
+    assert fsm.state == State.COLLISION_DETECTED
+    fsm.fire(Event.COLLISION_CLEAR)
+    assert fsm.state == State.EXECUTING

@@ -9,6 +9,7 @@ import threading
 from typing import Any, Callable, List, Sequence, Tuple
 
 from rbd_controller.fsm import Event, Fsm, State
+from rbd_controller.watchdog import POLICIES, OperatorWatchdog
 
 PathResult = Tuple[bool, str, Sequence[Any], Sequence[str]]
 
@@ -63,6 +64,16 @@ class MainController:
         gesture_period: minimum time between two gesture polls [s].
         pose_timeout: longest time one pose may take before the trick is aborted [s].
         start_timeout: time for the position controller to report "running" after accepting [s].
+        operator_timeout: operator heartbeat silence that stops the robot [s]; <= 0 disables
+            the watchdog. It arms with the first heartbeat.
+        operator_policy: ``stop`` (stop the current trick at once, resume it when heartbeats
+            return or on an e-stop release) or ``finish`` (finish the current trick, then
+            wait in OPERATOR_LOST).
+        lidar_timeout: no /rbd_lidar/state for this long counts as a collision (the collision
+            monitor died or hangs) [s]; <= 0 disables. It arms with the first state message.
+
+    Raises:
+        ValueError: unknown operator_policy or non-finite operator_timeout.
     """
 
     def __init__(
@@ -72,7 +83,16 @@ class MainController:
         gesture_period: float = 0.2,
         pose_timeout: float = 60.0,
         start_timeout: float = 3.0,
+        operator_timeout: float = 0.0,
+        operator_policy: str = "stop",
+        lidar_timeout: float = 0.0,
     ) -> None:
+        if operator_policy not in POLICIES:
+            raise ValueError("operator_policy must be one of %s, got %r" % (POLICIES, operator_policy))
+        self.operator = OperatorWatchdog(operator_timeout)
+        self.operator_policy = operator_policy
+        self.lidar = OperatorWatchdog(lidar_timeout)
+        self.lidar_lost = False
         self.ports = ports
         self.attentive_pitch = attentive_pitch
         self.gesture_period = gesture_period
@@ -91,10 +111,12 @@ class MainController:
         self._body_pose_wanted = None  # type: Optional[Tuple[float, float, float]]
         self._flush_gesture = False
         self._synced = (None, None)  # (emergency, collision) told to the position controller
+        self._now = 0.0  # latest time seen by tick()/on_heartbeat()
         self.fsm = Fsm(
             on_enter={
                 State.EMERGENCY_STOP: self._enter_stop,
                 State.COLLISION_DETECTED: self._enter_stop,
+                State.OPERATOR_LOST: self._enter_stop,
                 State.WAITING_FOR_GESTURE: self._enter_waiting,
                 State.GENERATING_PATH: self._enter_generating,
                 State.EXECUTING: self._enter_executing,
@@ -124,6 +146,8 @@ class MainController:
         """Engage/release the e-stop (service, CLI, GUI); returns a message."""
         with self.lock:
             before = self.fsm.state
+            if not engaged and self.operator.lost(self._now):
+                self.operator.disarm()  # the release acknowledges the lost link
             self.fsm.fire(Event.ESTOP if engaged else Event.ESTOP_RELEASE)
             self._sync_stops()
             self.ports.publish(self)
@@ -138,10 +162,68 @@ class MainController:
             self.ports.publish(self)
             return "%s -> %s" % (before.name, self.fsm.state.name)
 
+    def on_heartbeat(self, now: float) -> None:
+        """An operator heartbeat arrived at ``now`` [s]."""
+        with self.lock:
+            self._now = max(self._now, now)
+            self.operator.beat(now)
+            if self.fsm.operator_lost:
+                before = self.fsm.state
+                self.fsm.fire(Event.OPERATOR_BACK)
+                self._sync_stops()
+                self.ports.publish(self)
+                self.ports.log("info", "operator link back (%s -> %s)" % (before.name, self.fsm.state.name))
+
+    def on_lidar_state(self, now: float, collision: bool) -> None:
+        """A CollisionState from rbd_lidar arrived at ``now`` [s] (its ``collision`` flag)."""
+        with self.lock:
+            self.lidar.beat(now)
+            if not self.lidar_lost:
+                return
+            self.lidar_lost = False
+            self.ports.log("info", "collision monitor back (collision %s)" % collision)
+            self.fsm.fire(Event.COLLISION if collision else Event.COLLISION_CLEAR)
+            self._sync_stops()
+            self.ports.publish(self)
+
+    def check_lidar(self, now: float) -> None:
+        """No state from the collision monitor for lidar_timeout => collision; called from tick()."""
+        with self.lock:
+            if self.lidar_lost or not self.lidar.lost(now):
+                return
+            self.lidar_lost = True
+            self.ports.log("error", "no /rbd_lidar/state for > %.2f s: collision (monitor lost)" % self.lidar.timeout)
+            self.fsm.fire(Event.COLLISION)
+            self._sync_stops()
+            self.ports.publish(self)
+
+    def check_operator(self, now: float) -> None:
+        """Fire OPERATOR_LOST when the heartbeat is gone (per policy); called from tick()."""
+        with self.lock:
+            self._now = max(self._now, now)
+            if self.fsm.operator_lost or not self.operator.lost(now):
+                return
+            if self.operator_policy == "finish" and self.fsm.state != State.WAITING_FOR_GESTURE:
+                return  # let the current trick (or stop) run its course
+            before = self.fsm.state
+            self.fsm.fire(Event.OPERATOR_LOST)
+            self._sync_stops()
+            self.ports.publish(self)
+            self.ports.log(
+                "warn",
+                "operator heartbeat lost for > %.1f s (policy %s): %s -> %s"
+                % (self.operator.timeout, self.operator_policy, before.name, self.fsm.state.name),
+            )
+
     def _sync_stops(self) -> None:
-        """Tell the driver gate and the position controller; engage before release."""
+        """Tell the driver gate and the position controller; engage before release.
+
+        OPERATOR_LOST holds the position controller like a collision does (it drops its
+        goal and stops; the interrupted pose is re-sent on resume). It never touches the
+        e-stop gate.
+        """
         emergency = self.fsm.state == State.EMERGENCY_STOP
-        collision = self.fsm.state == State.COLLISION_DETECTED
+        collision = self.fsm.state in (State.COLLISION_DETECTED, State.OPERATOR_LOST)
         old_emergency, old_collision = self._synced
         if emergency != old_emergency and emergency:
             self.ports.publish_estop(True)
@@ -184,6 +266,8 @@ class MainController:
     # ------------------------------------------------------------------ loop
     def tick(self, now: float) -> None:
         """One step of the work states; call periodically from a single thread."""
+        self.check_lidar(now)
+        self.check_operator(now)
         with self.lock:
             epoch = self.fsm.epoch
             state = self.fsm.state

@@ -4,6 +4,11 @@ EMERGENCY_STOP and COLLISION_DETECTED are accepted from every state; the state t
 interrupted is kept in a resume slot and restored when the stop is released/cleared. The
 e-stop needs an explicit release; a collision clears by itself. A collision reported while
 the e-stop is engaged is remembered and takes over when the e-stop is released.
+
+OPERATOR_LOST is the operator-link watchdog's stop (the laptop's heartbeat is gone): entered
+from the work states on OPERATOR_LOST (the core decides when, per policy), left on
+OPERATOR_BACK (heartbeats again) or ESTOP_RELEASE (an explicit release acknowledges the loss).
+It never gates the e-stop: ESTOP preempts it like any other state.
 """
 
 import enum
@@ -18,6 +23,7 @@ class State(enum.Enum):
     GENERATING_PATH = 2
     EXECUTING = 3
     COLLISION_DETECTED = 4
+    OPERATOR_LOST = 5  # not yet a constant in rbd_msgs/ControllerState (requested)
 
 
 class Event(enum.Enum):
@@ -32,12 +38,14 @@ class Event(enum.Enum):
     PATH_FAILED = "PATH_FAILED"  # unknown command / navigation unavailable / no pose
     QUEUE_EMPTY = "QUEUE_EMPTY"  # last pose reached
     ABORT = "ABORT"  # the position controller refused a pose or timed out
+    OPERATOR_LOST = "OPERATOR_LOST"  # operator heartbeat lost (watchdog, per policy)
+    OPERATOR_BACK = "OPERATOR_BACK"  # operator heartbeat back
 
 
 #: Target meaning "the state stored in the resume slot".
 RESUME = "RESUME"
 
-STOP_STATES = (State.EMERGENCY_STOP, State.COLLISION_DETECTED)
+STOP_STATES = (State.EMERGENCY_STOP, State.COLLISION_DETECTED, State.OPERATOR_LOST)
 WORK_STATES = (State.WAITING_FOR_GESTURE, State.GENERATING_PATH, State.EXECUTING)
 
 TRANSITIONS = {
@@ -50,10 +58,17 @@ TRANSITIONS = {
     (State.COLLISION_DETECTED, Event.COLLISION_CLEAR): RESUME,
     (State.COLLISION_DETECTED, Event.ESTOP): State.EMERGENCY_STOP,
     (State.EMERGENCY_STOP, Event.COLLISION): State.EMERGENCY_STOP,
+    (State.EMERGENCY_STOP, Event.OPERATOR_LOST): State.EMERGENCY_STOP,
+    (State.COLLISION_DETECTED, Event.OPERATOR_LOST): State.COLLISION_DETECTED,
+    (State.OPERATOR_LOST, Event.OPERATOR_BACK): RESUME,
+    (State.OPERATOR_LOST, Event.ESTOP_RELEASE): RESUME,
+    (State.OPERATOR_LOST, Event.ESTOP): State.EMERGENCY_STOP,
+    (State.OPERATOR_LOST, Event.COLLISION): State.OPERATOR_LOST,
 }  # type: Dict[Tuple[State, Event], object]
 for _state in WORK_STATES:
     TRANSITIONS[(_state, Event.ESTOP)] = State.EMERGENCY_STOP
     TRANSITIONS[(_state, Event.COLLISION)] = State.COLLISION_DETECTED
+    TRANSITIONS[(_state, Event.OPERATOR_LOST)] = State.OPERATOR_LOST
 
 
 class Fsm:
@@ -73,6 +88,7 @@ class Fsm:
         self.resume = State.WAITING_FOR_GESTURE
         self.estop = initial == State.EMERGENCY_STOP
         self.collision = False
+        self.operator_lost = False
         self.epoch = 0
         self.on_enter = dict(on_enter or {})
         self.history = []  # type: List[Tuple[State, Event, State]]
@@ -91,14 +107,22 @@ class Fsm:
             self.collision = True
         elif event == Event.COLLISION_CLEAR:
             self.collision = False
+        elif event == Event.OPERATOR_LOST:
+            self.operator_lost = True
+        elif event == Event.OPERATOR_BACK:
+            self.operator_lost = False
+        if event == Event.ESTOP_RELEASE:
+            self.operator_lost = False  # an explicit release acknowledges a lost operator link
         target = TRANSITIONS.get((self.state, event))
         if target is None:
             return False
         source = self.state
         if target == RESUME:
             target = self.resume
-            if source == State.EMERGENCY_STOP and self.collision:
+            if source != State.COLLISION_DETECTED and self.collision:
                 target = State.COLLISION_DETECTED
+            elif source == State.COLLISION_DETECTED and self.operator_lost:
+                target = State.OPERATOR_LOST
         if target in STOP_STATES and source in WORK_STATES:
             self.resume = source
         if target == source:

@@ -1,0 +1,496 @@
+#!/usr/bin/env python3
+"""rostest fault catalogue (issue 10, DESIGN §5): inject one fault while the robot walks a trick,
+assert zero velocity at the A1 within the bound, clear the fault, assert recovery.
+
+Measured on ground truth (/rbd_sim/ground_truth twist) and on the LCM_High_Cmd stream the mock
+A1 receives. The fault is chosen with the private param ``~fault``; every measurement is printed
+as one ``FAULT_RESULT {json}`` line (and appended to $RBD_FAULT_LOG if set) for docs/RELIABILITY.md.
+"""
+
+import copy
+import json
+import math
+import os
+import signal
+import threading
+import time
+import unittest
+
+import rosgraph
+import rospy
+import rostest
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import PointCloud2
+from std_msgs.msg import Header, String
+from std_srvs.srv import SetBool
+
+TRUTH_STILL = 0.02  # ground-truth speed below this is "stopped" [m/s, rad/s]
+MOVING = 0.08  # ground-truth speed above this is "walking"
+
+
+def speed_of_twist(t):
+    return max(math.hypot(t.linear.x, t.linear.y), abs(t.angular.z))
+
+
+def wait_for(predicate, timeout, step=0.05):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and not rospy.is_shutdown():
+        if predicate():
+            return True
+        time.sleep(step)
+    return predicate()
+
+
+def node_pid(name):
+    """PID of a running ROS node (same host) from its XML-RPC API."""
+    import xmlrpc.client
+
+    uri = rosgraph.Master("/test_faults").lookupNode(name)
+    code, _msg, pid = xmlrpc.client.ServerProxy(uri).getPid("/test_faults")
+    if code != 1:
+        raise RuntimeError("getPid(%s) failed" % name)
+    return int(pid)
+
+
+class Monitor:
+    """Ground truth, controller state, relays for the cloud / pose / heartbeat, LCM command stream."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.truth = []  # (t, speed)
+        self.commands = []  # (t, speed) of every HighCmd the A1 receives
+        self.states = []  # (t, state)
+        self.cloud_mode = "pass"  # pass | silent | malformed
+        self.last_valid_cloud = None
+        self.malformed_sent = 0
+        self.pose_pass = True
+        self.last_pose = None
+        self.heartbeat = False
+        self.cloud_pub = rospy.Publisher("/reliability/points", PointCloud2, queue_size=2)
+        self.pose_pub = rospy.Publisher("/reliability/pose", PoseStamped, queue_size=5)
+        self.hb_pub = rospy.Publisher("/rbd_local/heartbeat", Header, queue_size=2)
+        self.gesture = rospy.Publisher("/rbd_gestrec/gesture", String, queue_size=10)
+        rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_truth, queue_size=50)
+        rospy.Subscriber("/rbd_controller/state", String, self.on_state, queue_size=20)
+        fault = rospy.get_param("~fault")
+        if fault.startswith("lidar"):  # rbd_lidar reads /reliability/points in these tests
+            rospy.Subscriber("/ouster/points", PointCloud2, self.on_cloud, queue_size=2, buff_size=2 ** 24)
+        if fault.startswith("pose"):  # the position controller follows /reliability/pose
+            rospy.Subscriber("/rbd_sim/ground_truth_pose", PoseStamped, self.on_pose, queue_size=5)
+        rospy.Timer(rospy.Duration(0.5), self.on_hb_timer)
+        self._stop = threading.Event()
+        url = rospy.get_param("/rbd_sim/lcm_url")
+        self._lcm = threading.Thread(target=self.lcm_loop, args=(url,), daemon=True)
+        self._lcm.start()
+
+    # ------------------------------------------------------------ inputs
+    def lcm_loop(self, url):
+        import lcm
+
+        from rbd_a1_driver import unitree_layout as ul
+
+        lc = lcm.LCM(url)
+
+        def on_cmd(_channel, data):
+            try:
+                cmd = ul.decode_high_cmd(data)
+            except ValueError:
+                return
+            speed = max(math.hypot(cmd.velocity[0], cmd.velocity[1]), abs(cmd.yaw_speed))
+            if cmd.mode != ul.MODE_VELOCITY_WALK:
+                speed = 0.0
+            with self.lock:
+                self.commands.append((time.monotonic(), speed))
+
+        lc.subscribe(ul.CHANNEL_HIGH_CMD, on_cmd)
+        while not self._stop.is_set():
+            lc.handle_timeout(100)
+
+    def on_truth(self, msg):
+        with self.lock:
+            self.truth.append((time.monotonic(), speed_of_twist(msg.twist.twist)))
+
+    def on_state(self, msg):
+        with self.lock:
+            self.states.append((time.monotonic(), msg.data))
+
+    def on_cloud(self, msg):
+        mode = self.cloud_mode
+        if mode == "pass":
+            self.cloud_pub.publish(msg)
+            self.last_valid_cloud = time.monotonic()
+        elif mode == "malformed":
+            self.cloud_pub.publish(malformed(msg, self.malformed_sent))
+            self.malformed_sent += 1
+
+    def on_pose(self, msg):
+        if self.pose_pass:
+            self.pose_pub.publish(msg)
+            self.last_pose = time.monotonic()
+
+    def on_hb_timer(self, _event):
+        if self.heartbeat:
+            self.hb_pub.publish(Header(stamp=rospy.Time.now(), frame_id="test_faults"))
+
+    def close(self):
+        self._stop.set()
+        self._lcm.join(2.0)
+
+    # ------------------------------------------------------------ queries
+    @property
+    def state(self):
+        with self.lock:
+            return self.states[-1][1] if self.states else ""
+
+    def speed(self):
+        with self.lock:
+            return self.truth[-1][1] if self.truth else 0.0
+
+    def stop_delay(self, series, t0, t1, still):
+        """Delay after t0 from which every sample of series up to t1 is below still; None if never."""
+        with self.lock:
+            samples = [(t, v) for t, v in getattr(self, series) if t0 <= t <= t1]
+        if not samples:
+            return None
+        stop = t0
+        for t, v in samples:
+            if v >= still:
+                stop = None
+            elif stop is None:
+                stop = t
+        if stop is None:
+            return None
+        return max(0.0, stop - t0)
+
+    def stop_episode(self, series, t0, t1, still, hold):
+        """Delay after t0 of the first run of samples below still lasting >= hold; None if none."""
+        with self.lock:
+            samples = [(t, v) for t, v in getattr(self, series) if t0 <= t <= t1]
+        start = None
+        for t, v in samples:
+            if v >= still:
+                start = None
+                continue
+            if start is None:
+                start = t
+            if t - start >= hold:
+                return max(0.0, start - t0)
+        return None
+
+    def max_speed(self, series, t0, t1):
+        with self.lock:
+            return max([v for t, v in getattr(self, series) if t0 <= t <= t1] or [0.0])
+
+    def count(self, series, t0, t1):
+        with self.lock:
+            return len([1 for t, _v in getattr(self, series) if t0 <= t <= t1])
+
+
+def malformed(msg, n):
+    """A broken copy of an ouster-ros cloud; the kind rotates: no range field, truncated, blinded."""
+    bad = copy.copy(msg)
+    kind = n % 3
+    if kind == 0:
+        bad.fields = [f for f in msg.fields if f.name != "range"]
+    elif kind == 1:
+        bad.data = msg.data[: len(msg.data) // 2]
+    else:
+        bad.data = bytes(len(msg.data))  # every range 0: a blinded sensor
+    return bad
+
+
+class Faults(unittest.TestCase):
+    """One fault per rostest (``~fault``)."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.m = Monitor()
+        cls.results = []
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.m.close()
+
+    # ------------------------------------------------------------ helpers
+    def record(self, **result):
+        result["fault"] = rospy.get_param("~fault")
+        line = json.dumps(result, sort_keys=True)
+        print("FAULT_RESULT " + line, flush=True)
+        rospy.loginfo("FAULT_RESULT %s", line)
+        path = os.environ.get("RBD_FAULT_LOG")
+        if path:
+            with open(path, "a") as fh:
+                fh.write(line + "\n")
+
+    def em_stop(self, engaged):
+        rospy.wait_for_service("/rbd_controller/em_stop", 30.0)
+        return rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)(engaged)
+
+    def collision(self, detected):
+        rospy.wait_for_service("/rbd_controller/collision", 30.0)
+        return rospy.ServiceProxy("/rbd_controller/collision", SetBool)(detected)
+
+    def walk(self, timeout=45.0):
+        """Get the robot walking a trick (release the e-stop, show 'walk'); fail if it never moves."""
+        m = self.m
+        deadline = time.monotonic() + timeout
+        last_gesture = 0.0
+        while time.monotonic() < deadline:
+            if m.speed() > MOVING and m.state == "EXECUTING":
+                return
+            if m.state == "EMERGENCY_STOP":
+                self.em_stop(False)
+            if m.state == "WAITING_FOR_GESTURE" and time.monotonic() - last_gesture > 0.4:
+                m.gesture.publish(String("walk"))
+                last_gesture = time.monotonic()
+            time.sleep(0.05)
+        self.fail("robot never walked: state %r, speed %.3f" % (m.state, m.speed()))
+
+    def assert_stops(self, t0, bound_cmd, bound_truth, hold=2.0, lcm=True):
+        """Zero velocity in the A1's commands within bound_cmd and on ground truth within bound_truth
+        after t0, and still for hold seconds after; returns (cmd_delay, truth_delay)."""
+        t1 = t0 + max(bound_cmd, bound_truth) + hold
+        wait_for(lambda: False, t1 - time.monotonic() + 0.1)
+        truth = self.m.stop_delay("truth", t0, t1, TRUTH_STILL)
+        self.assertIsNotNone(truth, "ground truth never came to rest (max %.3f)" % self.m.max_speed("truth", t0, t1))
+        self.assertLessEqual(truth, bound_truth)
+        cmd = None
+        if lcm:
+            cmd = self.m.stop_delay("commands", t0, t1, 1e-6)
+            self.assertIsNotNone(cmd, "the A1 still receives non-zero velocity commands")
+            self.assertLessEqual(cmd, bound_cmd)
+        return cmd, truth
+
+    def assert_recovers(self, timeout=40.0):
+        """After the fault clears the robot walks again (resumed trick, or a new one)."""
+        t0 = time.monotonic()
+        self.walk(timeout)
+        return time.monotonic() - t0
+
+    def wait_ready(self):
+        self.assertTrue(wait_for(lambda: self.m.state and self.m.truth, 90.0), "system not up")
+        self.assertTrue(wait_for(lambda: self.m.count("commands", 0, 1e12) > 10, 30.0), "no LCM HighCmd seen")
+
+    # ------------------------------------------------------------ the catalogue
+    def test_fault(self):
+        self.wait_ready()
+        fault = rospy.get_param("~fault")
+        repeat = int(rospy.get_param("~repeat", 1))
+        for i in range(repeat):
+            getattr(self, "fault_" + fault)(i)
+
+    def fault_lidar_silent(self, i):
+        m = self.m
+        self.walk()
+        m.cloud_mode = "silent"
+        t0 = m.last_valid_cloud
+        # 3 scan periods (0.3 s) + detection/service/latency margin on a loaded host
+        cmd, truth = self.assert_stops(t0, 1.0, 1.5)
+        m.cloud_mode = "pass"
+        rec = self.assert_recovers()
+        self.record(run=i, cmd_stop_s=cmd, truth_stop_s=truth, recovery_s=rec, bound_s=1.0)
+
+    def fault_lidar_malformed(self, i):
+        m = self.m
+        self.walk()
+        m.cloud_mode = "malformed"
+        t0 = m.last_valid_cloud
+        cmd, truth = self.assert_stops(t0, 1.0, 1.5)
+        self.assertGreater(m.malformed_sent, 5)
+        m.cloud_mode = "pass"
+        rec = self.assert_recovers()
+        self.record(run=i, cmd_stop_s=cmd, truth_stop_s=truth, recovery_s=rec, bound_s=1.0)
+
+    def fault_pose_silent(self, i):
+        m = self.m
+        self.walk()
+        m.pose_pass = False
+        t0 = m.last_pose
+        # pose_timeout 0.5 s + margin
+        cmd, truth = self.assert_stops(t0, 1.2, 1.7)
+        m.pose_pass = True
+        rec = self.assert_recovers()
+        self.record(run=i, cmd_stop_s=cmd, truth_stop_s=truth, recovery_s=rec, bound_s=1.2)
+
+    def fault_link_silent(self, i):
+        m = self.m
+        self.walk()
+        pid = node_pid("/rbd_a1_driver")
+        os.kill(pid, signal.SIGSTOP)  # the driver freezes: nothing reaches the A1 any more
+        t0 = time.monotonic()
+        try:
+            # mock A1's own watchdog: cmd_timeout 0.1 s + latency 0.05 s + margin
+            _cmd, truth = self.assert_stops(t0, 1.0, 1.0, lcm=False)
+            silent = m.count("commands", t0 + 0.3, t0 + 2.0)
+        finally:
+            os.kill(pid, signal.SIGCONT)
+        self.assertEqual(silent, 0, "the A1 still received commands: the link was not silent")
+        rec = self.assert_recovers()
+        self.record(run=i, truth_stop_s=truth, recovery_s=rec, bound_s=1.0)
+
+    def fault_pos_controller_killed(self, i):
+        self.walk()
+        pid = node_pid("/rbd_pos_controller")
+        os.kill(pid, signal.SIGSTOP)  # hung mid-motion: /cmd_vel stops
+        t0 = time.monotonic()
+        try:
+            # the driver's cmd_vel timeout (0.25 s) + margin
+            cmd, truth = self.assert_stops(t0, 1.0, 1.5, hold=1.0)
+        finally:
+            os.kill(pid, signal.SIGKILL)  # then it dies: respawned by roslaunch
+
+        def respawned():
+            try:
+                return node_pid("/rbd_pos_controller") != pid
+            except (OSError, RuntimeError, rosgraph.MasterError):
+                return False  # old URI still registered / new one not up yet
+
+        self.assertTrue(wait_for(respawned, 30.0, step=0.5), "not respawned")
+        rec = self.assert_recovers(60.0)  # respawned position controller, trick goes on or restarts
+        self.record(run=i, cmd_stop_s=cmd, truth_stop_s=truth, recovery_s=rec, bound_s=1.0)
+
+    def fault_lidar_killed(self, i):
+        self.walk()
+        pid = node_pid("/rbd_lidar")
+        os.kill(pid, signal.SIGKILL)  # the collision monitor dies; roslaunch respawns it after 1 s
+        t0 = time.monotonic()
+        # rbd_controller's lidar_timeout (0.5 s) + margin; the respawned monitor may release the
+        # robot soon after, so look for a stop episode of >= 0.3 s starting within the bound
+        wait_for(lambda: False, 2.0)
+        cmd = self.m.stop_episode("commands", t0, t0 + 2.0, 1e-6, 0.3)
+        truth = self.m.stop_episode("truth", t0, t0 + 2.0, TRUTH_STILL, 0.3)
+        self.assertIsNotNone(cmd, "no zero-velocity episode at the A1 after the monitor died")
+        self.assertIsNotNone(truth, "the robot did not come to rest after the monitor died")
+        self.assertLessEqual(cmd, 1.0)
+        self.assertLessEqual(truth, 1.5)
+
+        def respawned():
+            try:
+                return node_pid("/rbd_lidar") != pid
+            except (OSError, RuntimeError, rosgraph.MasterError):
+                return False
+
+        self.assertTrue(wait_for(respawned, 30.0, step=0.5), "rbd_lidar not respawned")
+        rec = self.assert_recovers(60.0)
+        self.record(run=i, cmd_stop_s=cmd, truth_stop_s=truth, recovery_s=rec, bound_s=1.0)
+
+    def fault_controller_killed(self, i):
+        m = self.m
+        self.walk()
+        with m.lock:
+            n_states = len(m.states)
+        os.kill(node_pid("/rbd_controller"), signal.SIGKILL)
+        t0 = time.monotonic()
+
+        def respawned():
+            with m.lock:
+                return [t for t, s in m.states[n_states:] if s == "EMERGENCY_STOP"]
+
+        self.assertTrue(wait_for(lambda: respawned(), 60.0), "controller did not come back in EMERGENCY_STOP")
+        t_back = respawned()[0]
+        cmd, truth = self.assert_stops(t_back, 0.5, 1.0, hold=3.0)
+        rec = self.assert_recovers()
+        self.record(
+            run=i,
+            respawn_s=t_back - t0,
+            cmd_stop_after_respawn_s=cmd,
+            truth_stop_after_kill_s=m.stop_delay("truth", t0, t_back + 4.0, TRUTH_STILL),
+            recovery_s=rec,
+        )
+
+    def fault_estop_states(self, i):
+        m = self.m
+        # EXECUTING
+        self.walk()
+        t0 = time.monotonic()
+        self.em_stop(True)
+        cmd, truth = self.assert_stops(t0, 0.5, 1.0)
+        self.assertEqual(m.state, "EMERGENCY_STOP")
+        self.em_stop(False)
+        self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume after release")
+        self.record(run=i, state="EXECUTING", cmd_stop_s=cmd, truth_stop_s=truth)
+        # WAITING_FOR_GESTURE
+        self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0), "trick did not finish")
+        t0 = time.monotonic()
+        self.em_stop(True)
+        cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.0)
+        self.assertEqual(m.state, "EMERGENCY_STOP")
+        self.em_stop(False)
+        self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 10.0))
+        self.record(run=i, state="WAITING_FOR_GESTURE", cmd_stop_s=cmd, truth_stop_s=truth)
+        # GENERATING_PATH (short-lived: try to catch it a few times)
+        caught = False
+        for _ in range(4):
+            self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0))
+            m.gesture.publish(String("walk"))
+            if wait_for(lambda: m.state != "WAITING_FOR_GESTURE", 5.0, step=0.002) and m.state == "GENERATING_PATH":
+                t0 = time.monotonic()
+                self.em_stop(True)
+                cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.0)
+                with m.lock:
+                    seen = [s for _t, s in m.states[-2:]]
+                self.assertEqual(seen[-1], "EMERGENCY_STOP")
+                caught = seen == ["GENERATING_PATH", "EMERGENCY_STOP"]  # else EXECUTING came first
+                self.em_stop(False)
+                self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "no walk after release")
+                self.record(run=i, state="GENERATING_PATH", cmd_stop_s=cmd, truth_stop_s=truth, caught=caught)
+                break
+            wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0)
+        # COLLISION_DETECTED, then e-stop: e-stop wins, the collision clearing does not release it
+        self.walk()
+        self.collision(True)
+        t0 = time.monotonic()
+        cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.0)
+        self.em_stop(True)
+        self.assertEqual(m.state, "EMERGENCY_STOP")
+        self.collision(False)
+        t1 = time.monotonic()
+        time.sleep(1.5)
+        self.assertEqual(m.state, "EMERGENCY_STOP")
+        self.assertLess(m.max_speed("truth", t1, time.monotonic()), TRUTH_STILL)
+        self.em_stop(False)
+        self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume")
+        self.record(run=i, state="COLLISION_DETECTED", cmd_stop_s=cmd, truth_stop_s=truth)
+        # collision and e-stop at once
+        self.walk()
+        threads = [
+            threading.Thread(target=self.collision, args=(True,)),
+            threading.Thread(target=self.em_stop, args=(True,)),
+        ]
+        t0 = time.monotonic()
+        for th in threads:
+            th.start()
+        for th in threads:
+            th.join(10.0)
+        cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.0)
+        self.assertEqual(m.state, "EMERGENCY_STOP")
+        self.em_stop(False)  # collision still set: stays stopped
+        self.assertTrue(wait_for(lambda: m.state == "COLLISION_DETECTED", 5.0), m.state)
+        t1 = time.monotonic()
+        time.sleep(1.0)
+        self.assertLess(m.max_speed("truth", t1, time.monotonic()), TRUTH_STILL)
+        self.collision(False)
+        self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume")
+        self.record(run=i, state="COLLISION+ESTOP", cmd_stop_s=cmd, truth_stop_s=truth)
+
+    def fault_operator_link(self, i):
+        m = self.m
+        m.heartbeat = True
+        time.sleep(1.0)
+        self.walk()
+        m.heartbeat = False
+        t0 = time.monotonic()
+        timeout = float(rospy.get_param("/rbd_controller/operator_timeout"))
+        cmd, truth = self.assert_stops(t0, timeout + 1.5, timeout + 2.0)
+        self.assertGreater(truth, timeout - 0.6, "stopped before the heartbeat timed out: not the watchdog")
+        self.assertEqual(m.state, "OPERATOR_LOST")
+        m.heartbeat = True
+        self.assertTrue(wait_for(lambda: m.state == "EXECUTING", 5.0), m.state)
+        self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume with the heartbeat")
+        self.record(run=i, cmd_stop_s=cmd, truth_stop_s=truth, timeout_s=timeout)
+
+
+if __name__ == "__main__":
+    rospy.init_node("test_faults")
+    rostest.rosrun("rbd_bringup", "faults_" + rospy.get_param("~fault"), Faults)
