@@ -9,9 +9,10 @@ import unittest
 import rospy
 import rostest
 from nav_msgs.msg import Odometry
+from std_srvs.srv import SetBool, SetBoolResponse
+
 from rbd_msgs.msg import CollisionState
 from rbd_msgs.srv import PlaceObstacle, SetBodyPose
-from std_srvs.srv import SetBool, SetBoolResponse
 
 
 class SimLidarTest(unittest.TestCase):
