@@ -306,7 +306,7 @@ CloudError ScanPipeline::process(const sensor_msgs::PointCloud2& cloud, Outputs*
     if (params_.floor_from_cloud) {
       SensorPose floor = pose_;
       if (zone_.estimateFloor(range_bytes, stride, 3.0, params_.floor_max_tilt,
-                              std::max<size_t>(1, cloud.width / 256), 50, &floor)) {
+                              std::max<size_t>(1, cloud.width / 64), 50, &floor)) {
         const double tol = std::max(0.0, params_.floor_height_tolerance);
         floor.height = std::min(pose_.height + tol, std::max(pose_.height - tol, floor.height));
         std::string ignored;
