@@ -97,6 +97,7 @@ class LidarNode {
     pparams_.min_valid_fraction = param("min_valid_fraction", 0.01);
     pparams_.floor_from_cloud = param("floor_from_cloud", true);
     pparams_.floor_height_tolerance = param("floor_height_tolerance", 0.20);
+    pparams_.floor_max_tilt = param("floor_max_tilt", 0.35);
 
     std::vector<double> alt, az;
     std::vector<int> shift;

@@ -299,17 +299,27 @@ CloudError ScanPipeline::process(const sensor_msgs::PointCloud2& cloud, Outputs*
       range_bytes = reinterpret_cast<const uint8_t*>(range_.data());
       stride = sizeof(uint32_t);
     }
-    // Floor: the sensor height measured from downward returns within 3 m, bounded around the
-    // nominal height from the body pose.
+    // Floor: the sensor attitude and height measured every scan from the floor plane under the
+    // sensor (the body-pose attitude is only a prior; it lags during body-pose transitions), the
+    // height bounded around the nominal height from the body pose.
     height_measured_ = false;
     if (params_.floor_from_cloud) {
-      double h;
-      if (zone_.estimateHeight(range_bytes, stride, 3.0, 0.8, std::max<size_t>(1, cloud.width / 128), 50,
-                               &h) &&
-          std::isfinite(h)) {
+      SensorPose floor = pose_;
+      if (zone_.estimateFloor(range_bytes, stride, 3.0, params_.floor_max_tilt,
+                              std::max<size_t>(1, cloud.width / 64), 50, &floor)) {
         const double tol = std::max(0.0, params_.floor_height_tolerance);
-        zone_.setHeight(std::min(pose_.height + tol, std::max(pose_.height - tol, h)));
-        height_measured_ = true;
+        floor.height = std::min(pose_.height + tol, std::max(pose_.height - tol, floor.height));
+        std::string ignored;
+        if (zone_.configure(model_, zone_params_, floor, &ignored)) height_measured_ = true;
+      } else {
+        double h;
+        if (zone_.estimateHeight(range_bytes, stride, 3.0, 0.8, std::max<size_t>(1, cloud.width / 128), 50,
+                                 &h) &&
+            std::isfinite(h)) {
+          const double tol = std::max(0.0, params_.floor_height_tolerance);
+          zone_.setHeight(std::min(pose_.height + tol, std::max(pose_.height - tol, h)));
+          height_measured_ = true;
+        }
       }
     }
     zone_.evaluateStrided(range_bytes, stride, &out->zone);

@@ -314,6 +314,52 @@ TEST(ScanPipeline, FloorHeightMeasuredFromCloud) {
   EXPECT_NEAR(measured.sensorHeight(), 0.60, 1e-9);
 }
 
+// The attitude prior (IMU / odom) lags a body-pose transition: the real sensor is pitched or rolled
+// while the pipeline still believes it level. The per-scan floor-plane fit must keep the floor out
+// of the zone and still see a person 0.5 m in front.
+TEST(ScanPipeline, FloorPlaneCorrectsLaggingAttitude) {
+  const BeamModel m = u0(1024);
+  struct Case {
+    double roll, pitch, height;
+  };
+  const Case cases[] = {
+      {0.0, -0.26, 0.33}, {0.0, 0.26, 0.40}, {0.3, 0.0, 0.36}, {-0.3, 0.0, 0.36}, {0.2, -0.2, 0.30}};
+  for (const Case& k : cases) {
+    SensorPose truth;
+    truth.level_from_sensor = (Eigen::AngleAxisd(k.pitch, Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(k.roll, Eigen::Vector3d::UnitX()))
+                                  .toRotationMatrix();
+    truth.height = k.height;
+    SensorPose believed;  // level, nominal height
+    believed.height = 0.38;
+    const auto floor_cloud = rbd_lidar::makeOusterCloud(m, rbd_lidar::castScene(m, truth, 3.0, false));
+    ScanPipeline::Outputs out;
+    std::string msg;
+
+    ScanPipeline prior_only = makePipeline();
+    rbd_lidar::PipelineParams params;
+    params.floor_from_cloud = false;
+    prior_only.setParams(params);
+    prior_only.setPose(believed);
+    ASSERT_EQ(prior_only.process(floor_cloud, &out, &msg), CloudError::NONE) << msg;
+    if (std::fabs(k.pitch) > 0.2) {
+      EXPECT_GT(out.zone.total(), 5u) << "pitch " << k.pitch;  // the bug
+    }
+
+    ScanPipeline fitted = makePipeline();
+    fitted.setPose(believed);
+    ASSERT_EQ(fitted.process(floor_cloud, &out, &msg), CloudError::NONE) << msg;
+    EXPECT_EQ(out.zone.total(), 0u) << "roll " << k.roll << " pitch " << k.pitch;
+    EXPECT_NEAR(fitted.sensorHeight(), k.height, 0.01);
+    ASSERT_EQ(
+        fitted.process(rbd_lidar::makeOusterCloud(m, rbd_lidar::castScene(m, truth, 3.0, true, 0.5, 0.0)),
+                       &out, &msg),
+        CloudError::NONE);
+    EXPECT_GT(out.zone.counts[rbd_lidar::FRONT], 20u) << "roll " << k.roll << " pitch " << k.pitch;
+    EXPECT_EQ(out.zone.counts[rbd_lidar::BACK], 0u);
+  }
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

@@ -132,6 +132,14 @@ class CriticalZone {
   // false if fewer than `min_samples` such returns exist. Strided source as evaluateStrided.
   bool estimateHeight(const uint8_t* range_bytes, size_t stride, double max_distance, double quantile,
                       size_t column_step, size_t min_samples, double* height) const;
+  // Floor plane measured from the returns themselves (the configured attitude is only a prior):
+  // downward returns within `max_distance` horizontally whose height lies within a band around the
+  // prior floor that widens with distance by `max_tilt` (tolerating that much attitude error) are
+  // fitted with a least-squares plane; two more fits with shrinking bands reject obstacles. On
+  // success *pose is the corrected sensor pose (floor plane = z 0) and true is returned; false if
+  // fewer than `min_samples` returns support the plane or the correction exceeds `max_tilt`.
+  bool estimateFloor(const uint8_t* range_bytes, size_t stride, double max_distance, double max_tilt,
+                     size_t column_step, size_t min_samples, SensorPose* pose) const;
   // Change only the sensor height (cheap; the candidate table does not depend on it).
   void setHeight(double height) { pose_.height = height; }
 

@@ -41,6 +41,7 @@ struct PipelineParams {
   unsigned hysteresis_scans = 3;         // clear scans needed to release a collision
   bool floor_from_cloud = true;          // measure the sensor height above the floor from the returns
   double floor_height_tolerance = 0.20;  // the measurement may move the nominal height by at most this [m]
+  double floor_max_tilt = 0.35;          // the floor fit may correct the prior attitude by at most this [rad]
 };
 
 class ScanPipeline {

@@ -1,0 +1,146 @@
+#!/usr/bin/env python3
+"""rbd_lidar on the simulator: ground truth from rbd_sim, body poses through the driver."""
+import math
+import sys
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from nav_msgs.msg import Odometry
+from std_srvs.srv import SetBool, SetBoolResponse
+
+from rbd_msgs.msg import CollisionState
+from rbd_msgs.srv import PlaceObstacle, SetBodyPose
+
+
+class SimLidarTest(unittest.TestCase):
+    """Measures the collision monitor against the simulator's ground truth."""
+
+    @classmethod
+    def setUpClass(cls) -> None:
+        """Starts the node, the fake collision service and the subscribers."""
+        rospy.init_node("sim_lidar_test")
+        cls.lock = threading.Lock()
+        cls.states = []
+        cls.calls = []
+        cls.gt = None
+        rospy.Service("/rbd_controller/collision", SetBool, cls._collision)
+        rospy.Subscriber("/rbd_lidar/state", CollisionState, cls._state, queue_size=50)
+        rospy.Subscriber("/rbd_sim/ground_truth", Odometry, cls._gt, queue_size=10)
+        rospy.wait_for_service("/set_body_pose", 30.0)
+        rospy.wait_for_service("/rbd_sim/place_obstacle", 30.0)
+        cls.body = rospy.ServiceProxy("/set_body_pose", SetBodyPose)
+        cls.place = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
+
+    @classmethod
+    def _collision(cls, req: SetBool) -> SetBoolResponse:
+        with cls.lock:
+            cls.calls.append((rospy.get_time(), req.data))
+        return SetBoolResponse(success=True, message="")
+
+    @classmethod
+    def _state(cls, msg: CollisionState) -> None:
+        with cls.lock:
+            cls.states.append((rospy.get_time(), msg))
+
+    @classmethod
+    def _gt(cls, msg: Odometry) -> None:
+        cls.gt = msg
+
+    def _wait_clear(self, timeout: float = 20.0) -> None:
+        end = time.time() + timeout
+        while time.time() < end and not rospy.is_shutdown():
+            with self.lock:
+                if self.states and not self.states[-1][1].collision:
+                    return
+            time.sleep(0.05)
+        self.fail("rbd_lidar never reported clear")
+
+    def _pitch_roll(self) -> tuple:
+        q = self.gt.pose.pose.orientation
+        roll = math.atan2(2 * (q.w * q.x + q.y * q.z), 1 - 2 * (q.x * q.x + q.y * q.y))
+        pitch = math.asin(max(-1.0, min(1.0, 2 * (q.w * q.y - q.z * q.x))))
+        return roll, pitch
+
+    def test_1_floor_in_every_body_pose(self) -> None:
+        """The commanded body poses (attentive, wiggle, lie down) never trip the zone."""
+        self._wait_clear()
+        with self.lock:
+            start = len(self.states)
+        poses = [(0.0, -0.25, 0.0), (0.0, 0.0, 0.0), (0.3, 0.0, 0.0), (-0.3, 0.0, 0.0), (0.3, 0.0, 0.0),
+                 (0.0, 0.0, 0.0), (0.0, 0.0, -0.16), (0.0, -0.25, 0.0), (0.0, 0.0, 0.0)]
+        reached = []
+        for roll, pitch, dz in poses:
+            self.assertTrue(self.body(roll=roll, pitch=pitch, yaw=0.0, body_height=dz).success)
+            time.sleep(1.5)
+            reached.append(self._pitch_roll())
+        # The simulator really was in those attitudes (ground truth, not the node's belief).
+        self.assertLess(abs(reached[0][1] - (-0.25)), 0.05, reached)
+        self.assertLess(abs(reached[2][0] - 0.3), 0.05, reached)
+        self.assertLess(abs(reached[3][0] + 0.3), 0.05, reached)
+        with self.lock:
+            seen = [s for _, s in self.states[start:]]
+        self.assertGreater(len(seen), 60)
+        bad = [(list(s.points), list(s.min_distance)) for s in seen if s.collision]
+        self.assertEqual(bad, [], "floor tripped the zone")
+
+    def test_2_person_in_front(self) -> None:
+        """A person 0.5 m ahead: collision on the first full scan, one service call; clear after removal."""
+        self._wait_clear()
+        x = self.gt.pose.pose.position.x
+        y = self.gt.pose.pose.position.y
+        with self.lock:
+            ncalls = len(self.calls)
+        t0 = rospy.get_time()
+        self.assertTrue(self.place(name="p", x=x + 0.5, y=y, radius=0.25, height=1.7, remove=False).success)
+        time.sleep(1.5)
+        with self.lock:
+            after = [(t, s) for t, s in self.states if t > t0]
+            calls = self.calls[ncalls:]
+        # Scans received more than one scan period (0.1 s) plus the cloud latency after placing
+        # must all be collisions; the first of them is the first scan that fully contains it.
+        late = [s for t, s in after if t > t0 + 0.25]
+        self.assertTrue(late)
+        self.assertTrue(all(s.collision for s in late))
+        self.assertGreater(late[0].points[0], 0)
+        self.assertEqual([c[1] for c in calls], [True])
+        self.assertTrue(self.place(name="p", remove=True).success)
+        t1 = rospy.get_time()
+        time.sleep(1.5)
+        with self.lock:
+            after = [(t, s) for t, s in self.states if t > t1]
+            calls = self.calls[ncalls:]
+        self.assertFalse(after[-1][1].collision)
+        first_clear = next(i for i, (_, s) in enumerate(after) if not s.collision)
+        self.assertGreaterEqual(first_clear, 2)  # hysteresis: 3 clear scans
+        self.assertEqual([c[1] for c in calls], [True, False])
+
+    def test_3_front_boundary(self) -> None:
+        """A wide cylinder approaching in 10 mm steps trips the zone at 700 +- 80 mm."""
+        self._wait_clear()
+        x = self.gt.pose.pose.position.x
+        y = self.gt.pose.pose.position.y
+        radius = 0.3
+        gap = 1.0
+        tripped = None
+        while gap > 0.4:
+            self.place(name="b", x=x + gap + radius, y=y, radius=radius, height=1.7, remove=False)
+            time.sleep(0.35)
+            with self.lock:
+                last = self.states[-1][1]
+            if last.collision:
+                tripped = gap
+                break
+            gap -= 0.01
+        self.place(name="b", remove=True)
+        self.assertIsNotNone(tripped)
+        sys.stdout.write("\nBOUNDARY_MM %.0f\n" % (tripped * 1000))
+        with open("/tmp/rbd_lidar_boundary.txt", "w") as f:
+            f.write("%.0f\n" % (tripped * 1000))
+        self.assertLess(abs(tripped - 0.70), 0.08)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("rbd_lidar", "sim_lidar", SimLidarTest)
