@@ -84,7 +84,8 @@ def hex_rgb(colour):
 
 
 def test_connection_indicator_shows_connected(app):
-    assert pump(app["root"], lambda: "CONNECTED" in app["gui"].connection_label.cget("text"))
+    # "CONNECTED" is also a substring of "DISCONNECTED": wait for the connected text itself.
+    assert pump(app["root"], lambda: app["gui"].connection_label.cget("text").startswith("● CONNECTED"))
     assert app["gui"].connection_label.cget("fg_color") == "#2e7d32"
 
 
