@@ -4,7 +4,7 @@ import os
 import pytest
 import yaml
 
-from rbd_navigation.tricks import TrickError, expand, parse_step, parse_tricks, quaternion_from_rpy, yaw_from_quaternion
+from rbd_navigation.tricks import TrickError, expand, parse_step, parse_tricks
 
 CONFIG = os.path.join(os.path.dirname(__file__), "..", "config", "tricks.yaml")
 
@@ -96,9 +96,3 @@ def test_expand_rejects_nan_pose():
     with pytest.raises(TrickError):
         expand(steps, float("nan"), 0.0, 0.0)
 
-
-@pytest.mark.parametrize("rpy", [(0.0, 0.0, 0.0), (0.3, -0.2, 2.5), (0.0, 0.0, -3.0)])
-def test_quaternion_roundtrip_yaw(rpy):
-    q = quaternion_from_rpy(*rpy)
-    assert sum(c * c for c in q) == pytest.approx(1.0)
-    assert yaw_from_quaternion(*q) == pytest.approx(rpy[2])

@@ -8,7 +8,7 @@ human-readable ``name`` that the GUI shows in its "next five moves" list.
 """
 
 import math
-from typing import Any, Dict, List, Mapping, Tuple
+from typing import Any, Dict, List, Mapping
 
 STEP_KEYS = ("name", "x", "y", "yaw", "roll", "pitch", "body_height")
 #: Body limits of the A1 (rbd_msgs/SetBodyPose comments): roll/pitch [rad], height [m].
@@ -191,21 +191,3 @@ def expand(steps: List[Step], x: float, y: float, yaw: float) -> List[Goal]:
             )
         )
     return goals
-
-
-def quaternion_from_rpy(roll: float, pitch: float, yaw: float) -> Tuple[float, float, float, float]:
-    """Return the unit quaternion (x, y, z, w) of intrinsic Z-Y-X (yaw, pitch, roll) angles."""
-    cr, sr = math.cos(roll / 2.0), math.sin(roll / 2.0)
-    cp, sp = math.cos(pitch / 2.0), math.sin(pitch / 2.0)
-    cy, sy = math.cos(yaw / 2.0), math.sin(yaw / 2.0)
-    return (
-        sr * cp * cy - cr * sp * sy,
-        cr * sp * cy + sr * cp * sy,
-        cr * cp * sy - sr * sp * cy,
-        cr * cp * cy + sr * sp * sy,
-    )
-
-
-def yaw_from_quaternion(qx: float, qy: float, qz: float, qw: float) -> float:
-    """Return the heading (rotation about z) of a quaternion [rad]."""
-    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))

@@ -10,7 +10,7 @@ import rostest
 from geometry_msgs.msg import PoseStamped
 
 from rbd_msgs.srv import GeneratePath
-from rbd_navigation.tricks import quaternion_from_rpy, yaw_from_quaternion
+from rbd_pos_controller.geometry import quaternion_from_rpy, rpy_from_quaternion
 
 
 class TestNavigation(unittest.TestCase):
@@ -51,7 +51,7 @@ class TestNavigation(unittest.TestCase):
         self.assertAlmostEqual(first.position.x, 1.0, places=6)
         self.assertAlmostEqual(first.position.y, 2.6, places=6)
         o = first.orientation
-        self.assertAlmostEqual(yaw_from_quaternion(o.x, o.y, o.z, o.w), math.pi / 2, places=6)
+        self.assertAlmostEqual(rpy_from_quaternion(o.x, o.y, o.z, o.w)[2], math.pi / 2, places=6)
 
     def test_2_unknown_command(self):
         self.publish_pose(0.0, 0.0, 0.0)

@@ -30,6 +30,7 @@ import math
 import random
 
 from rbd_a1_driver import unitree_layout as ul
+from rbd_sim.transforms import rpy_to_quat
 
 
 class A1Config:
@@ -94,19 +95,6 @@ def _clamp(value: float, limit: float) -> float:
 def wrap_angle(a: float) -> float:
     """Wrap an angle to [-pi, pi)."""
     return (a + math.pi) % (2.0 * math.pi) - math.pi
-
-
-def quaternion_from_rpy(roll: float, pitch: float, yaw: float) -> tuple:
-    """Return (x, y, z, w) for the ZYX (yaw, pitch, roll) Euler angles."""
-    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
-    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
-    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-    return (
-        sr * cp * cy - cr * sp * sy,
-        cr * sp * cy + sr * cp * sy,
-        cr * cp * sy - sr * sp * cy,
-        cr * cp * cy + sr * sp * sy,
-    )
 
 
 class A1Model:
@@ -248,7 +236,7 @@ class A1Model:
         s.mode = self.mode
         s.gait_type = self.gait_type
         yaw_imu = wrap_angle(self.yaw() - self.config.yaw0)
-        qx, qy, qz, qw = quaternion_from_rpy(self.roll, self.pitch, yaw_imu)
+        qx, qy, qz, qw = rpy_to_quat(self.roll, self.pitch, yaw_imu)
         s.quaternion = (qw, qx, qy, qz)
         s.rpy = (self.roll, self.pitch, yaw_imu)
         tw = self.twist()
