@@ -57,26 +57,8 @@ MAX_SPEED_LEVEL = 2
 
 NOMINAL_BODY_HEIGHT = 0.28  # [m], SDK default standing height
 
-# HighCmd: levelFlag commVersion robotID SN bandWidth | mode gaitType speedLevel |
-# footRaiseHeight bodyHeight | postion[2] | euler[3] | velocity[2] | yawSpeed | LED[4] (3 B each) |
-# wirelessRemote[40] | reserve | crc
-HIGH_CMD_FORMAT = "<BHHIB" + "BBB" + "ff" + "2f" + "3f" + "2f" + "f" + "12s" + "40s" + "II"
 HIGH_CMD_SIZE = 113
-
-# HighState: levelFlag commVersion robotID SN bandWidth | mode progress |
-# IMU{quaternion[4] (w,x,y,z), gyroscope[3], accelerometer[3], rpy[3], temperature int8} |
-# gaitType footRaiseHeight | position[3] | bodyHeight | velocity[3] | yawSpeed |
-# footPosition2Body[4] (xyz) | footSpeed2Body[4] (xyz) | footForce[4] int16 | footForceEst[4] int16 |
-# wirelessRemote[40] | reserve | crc
-HIGH_STATE_FORMAT = (
-    "<BHHIB" + "Bf" + "4f3f3f3fb" + "Bf" + "3f" + "f" + "3f" + "f" + "12f" + "12f" + "4h" + "4h" + "40s" + "II"
-)
 HIGH_STATE_SIZE = 265
-
-_HIGH_CMD = struct.Struct(HIGH_CMD_FORMAT)
-_HIGH_STATE = struct.Struct(HIGH_STATE_FORMAT)
-assert _HIGH_CMD.size == HIGH_CMD_SIZE, _HIGH_CMD.size
-assert _HIGH_STATE.size == HIGH_STATE_SIZE, _HIGH_STATE.size
 
 CHANNEL_HIGH_CMD = "LCM_High_Cmd"
 CHANNEL_HIGH_STATE = "LCM_High_State"
@@ -87,49 +69,132 @@ class LayoutError(ValueError):
     """A packet that is not a valid high-level struct (wrong size, bad header, bad values)."""
 
 
-class HighCmd:
-    """The fields of the SDK v3.3 HighCmd that the A1 uses, with SDK defaults."""
+# A struct as a table: (attribute, struct codes, default). A field with one code is a scalar,
+# with several a tuple; "12s"/"40s" are byte strings. The formats below are built from these
+# tables, so the order of the attributes is the byte order of the SDK struct.
+_HEADER_FIELDS = (
+    ("level_flag", "B", HIGHLEVEL),
+    ("comm_version", "H", 0),
+    ("robot_id", "H", 0),
+    ("sn", "I", 0),
+    ("band_width", "B", 0),
+    ("mode", "B", MODE_IDLE),
+)
+_TRAILER_FIELDS = (
+    ("wireless_remote", "40s", b"\x00" * 40),
+    ("reserve", "I", 0),
+    ("crc", "I", 0),
+)
 
-    __slots__ = (
-        "level_flag",
-        "comm_version",
-        "robot_id",
-        "sn",
-        "band_width",
-        "mode",
-        "gait_type",
-        "speed_level",
-        "foot_raise_height",
-        "body_height",
-        "position",
-        "euler",
-        "velocity",
-        "yaw_speed",
-        "led",
-        "wireless_remote",
-        "reserve",
-        "crc",
+_HIGH_CMD_FIELDS = (
+    _HEADER_FIELDS
+    + (
+        ("gait_type", "B", GAIT_IDLE),
+        ("speed_level", "B", 0),
+        ("foot_raise_height", "f", 0.0),  # change from the default 0.08 m [m]
+        ("body_height", "f", 0.0),  # change from NOMINAL_BODY_HEIGHT [m]
+        ("position", "2f", (0.0, 0.0)),  # mode 3 target [m]
+        ("euler", "3f", (0.0, 0.0, 0.0)),  # roll, pitch, yaw in force stand [rad]
+        ("velocity", "2f", (0.0, 0.0)),  # forward, side in the body frame [m/s]
+        ("yaw_speed", "f", 0.0),  # [rad/s]
+        ("led", "12s", b"\x00" * 12),  # 4 LEDs x (r, g, b)
     )
+    + _TRAILER_FIELDS
+)
+
+_HIGH_STATE_FIELDS = (
+    _HEADER_FIELDS
+    + (
+        ("progress", "f", 0.0),
+        ("quaternion", "4f", (1.0, 0.0, 0.0, 0.0)),  # w, x, y, z
+        ("gyroscope", "3f", (0.0, 0.0, 0.0)),  # body rates [rad/s]
+        ("accelerometer", "3f", (0.0, 0.0, 9.81)),  # specific force in the body frame [m/s^2]
+        ("rpy", "3f", (0.0, 0.0, 0.0)),  # [rad]
+        ("temperature", "b", 30),
+        ("gait_type", "B", GAIT_IDLE),
+        ("foot_raise_height", "f", 0.08),
+        ("position", "3f", (0.0, 0.0, 0.0)),  # own odometry [m]
+        ("body_height", "f", NOMINAL_BODY_HEIGHT),  # absolute [m]
+        ("velocity", "3f", (0.0, 0.0, 0.0)),  # body frame [m/s]
+        ("yaw_speed", "f", 0.0),  # [rad/s]
+        ("foot_position", "12f", (0.0,) * 12),  # 4 x (x, y, z) relative to the body [m]
+        ("foot_speed", "12f", (0.0,) * 12),
+        ("foot_force", "4h", (0, 0, 0, 0)),
+        ("foot_force_est", "4h", (0, 0, 0, 0)),
+    )
+    + _TRAILER_FIELDS
+)
+
+
+def _count(code: str) -> int:
+    """Number of values a struct code yields: "3f" -> 3, "f" -> 1, "40s" -> 1."""
+    if code.endswith("s") or len(code) == 1:
+        return 1
+    return int(code[:-1])
+
+
+def _format(fields: tuple) -> str:
+    return "<" + "".join(code for _, code, _ in fields)
+
+
+_INTEGER_CODES = ("b", "B", "h", "H", "I")
+
+# HighCmd: levelFlag commVersion robotID SN bandWidth | mode gaitType speedLevel |
+# footRaiseHeight bodyHeight | position[2] | euler[3] | velocity[2] | yawSpeed | LED[4] (3 B each) |
+# wirelessRemote[40] | reserve | crc
+HIGH_CMD_FORMAT = _format(_HIGH_CMD_FIELDS)
+# HighState: levelFlag commVersion robotID SN bandWidth | mode progress |
+# IMU{quaternion[4] (w,x,y,z), gyroscope[3], accelerometer[3], rpy[3], temperature int8} |
+# gaitType footRaiseHeight | position[3] | bodyHeight | velocity[3] | yawSpeed |
+# footPosition2Body[4] (xyz) | footSpeed2Body[4] (xyz) | footForce[4] int16 | footForceEst[4] int16 |
+# wirelessRemote[40] | reserve | crc
+HIGH_STATE_FORMAT = _format(_HIGH_STATE_FIELDS)
+
+
+class _Packed:
+    """A packed little-endian struct described by a field table (see ``_HIGH_CMD_FIELDS``)."""
+
+    __slots__ = ()
+    _FIELDS = ()  # type: tuple
+    _STRUCT = struct.Struct("<")
+    _NAME = ""
 
     def __init__(self) -> None:
-        self.level_flag = HIGHLEVEL
-        self.comm_version = 0
-        self.robot_id = 0
-        self.sn = 0
-        self.band_width = 0
-        self.mode = MODE_IDLE
-        self.gait_type = GAIT_IDLE
-        self.speed_level = 0
-        self.foot_raise_height = 0.0  # change from the default 0.08 m [m]
-        self.body_height = 0.0  # change from NOMINAL_BODY_HEIGHT [m]
-        self.position = (0.0, 0.0)  # mode 3 target [m]
-        self.euler = (0.0, 0.0, 0.0)  # roll, pitch, yaw in force stand [rad]
-        self.velocity = (0.0, 0.0)  # forward, side in the body frame [m/s]
-        self.yaw_speed = 0.0  # [rad/s]
-        self.led = b"\x00" * 12
-        self.wireless_remote = b"\x00" * 40
-        self.reserve = 0
-        self.crc = 0
+        for name, _, default in self._FIELDS:
+            setattr(self, name, default)
+
+    def pack(self) -> bytes:
+        """Return the packed bytes exactly as the SDK's struct."""
+        values = []  # type: list
+        for name, code, _ in self._FIELDS:
+            value = getattr(self, name)
+            if _count(code) == 1:
+                values.append(int(value) if code in _INTEGER_CODES else value)
+            else:
+                values.extend(value)
+        return self._STRUCT.pack(*values)
+
+    @classmethod
+    def _decode(cls, data: bytes) -> "_Packed":
+        if len(data) != cls._STRUCT.size:
+            raise LayoutError("%s must be %d bytes, got %d" % (cls._NAME, cls._STRUCT.size, len(data)))
+        values = cls._STRUCT.unpack(data)
+        obj = cls()
+        i = 0
+        for name, code, _ in cls._FIELDS:
+            n = _count(code)
+            setattr(obj, name, values[i] if n == 1 else tuple(values[i : i + n]))
+            i += n
+        return obj
+
+
+class HighCmd(_Packed):
+    """The SDK v3.3 HighCmd (all fields; attribute names are the SDK's in snake_case)."""
+
+    __slots__ = tuple(name for name, _, _ in _HIGH_CMD_FIELDS)
+    _FIELDS = _HIGH_CMD_FIELDS
+    _STRUCT = struct.Struct(_format(_HIGH_CMD_FIELDS))
+    _NAME = "HighCmd"
 
     def floats(self) -> tuple:
         """All float fields, for finiteness checks."""
@@ -140,49 +205,10 @@ class HighCmd:
             + tuple(self.velocity)
         )
 
-    def pack(self) -> bytes:
-        """Return the 113 packed bytes exactly as the SDK's ``HighCmd``."""
-        return _HIGH_CMD.pack(
-            self.level_flag,
-            self.comm_version,
-            self.robot_id,
-            self.sn,
-            self.band_width,
-            self.mode,
-            self.gait_type,
-            self.speed_level,
-            self.foot_raise_height,
-            self.body_height,
-            self.position[0],
-            self.position[1],
-            self.euler[0],
-            self.euler[1],
-            self.euler[2],
-            self.velocity[0],
-            self.velocity[1],
-            self.yaw_speed,
-            self.led,
-            self.wireless_remote,
-            self.reserve,
-            self.crc,
-        )
-
     @classmethod
     def unpack(cls, data: bytes) -> "HighCmd":
         """Decode raw bytes; raise LayoutError on a wrong size (values are not checked here)."""
-        if len(data) != HIGH_CMD_SIZE:
-            raise LayoutError("HighCmd must be %d bytes, got %d" % (HIGH_CMD_SIZE, len(data)))
-        v = _HIGH_CMD.unpack(data)
-        cmd = cls()
-        (cmd.level_flag, cmd.comm_version, cmd.robot_id, cmd.sn, cmd.band_width) = v[0:5]
-        (cmd.mode, cmd.gait_type, cmd.speed_level) = v[5:8]
-        (cmd.foot_raise_height, cmd.body_height) = v[8:10]
-        cmd.position = tuple(v[10:12])
-        cmd.euler = tuple(v[12:15])
-        cmd.velocity = tuple(v[15:17])
-        cmd.yaw_speed = v[17]
-        (cmd.led, cmd.wireless_remote, cmd.reserve, cmd.crc) = v[18:22]
-        return cmd
+        return cls._decode(data)  # type: ignore[return-value]
 
 
 def check_high_cmd(cmd: HighCmd) -> str:
@@ -215,116 +241,24 @@ def decode_high_cmd(data: bytes) -> HighCmd:
     return cmd
 
 
-class HighState:
-    """The SDK v3.3 HighState (all fields)."""
+class HighState(_Packed):
+    """The SDK v3.3 HighState (all fields; attribute names are the SDK's in snake_case)."""
 
-    __slots__ = (
-        "level_flag",
-        "comm_version",
-        "robot_id",
-        "sn",
-        "band_width",
-        "mode",
-        "progress",
-        "quaternion",
-        "gyroscope",
-        "accelerometer",
-        "rpy",
-        "temperature",
-        "gait_type",
-        "foot_raise_height",
-        "position",
-        "body_height",
-        "velocity",
-        "yaw_speed",
-        "foot_position",
-        "foot_speed",
-        "foot_force",
-        "foot_force_est",
-        "wireless_remote",
-        "reserve",
-        "crc",
-    )
-
-    def __init__(self) -> None:
-        self.level_flag = HIGHLEVEL
-        self.comm_version = 0
-        self.robot_id = 0
-        self.sn = 0
-        self.band_width = 0
-        self.mode = MODE_IDLE
-        self.progress = 0.0
-        self.quaternion = (1.0, 0.0, 0.0, 0.0)  # w, x, y, z
-        self.gyroscope = (0.0, 0.0, 0.0)  # body rates [rad/s]
-        self.accelerometer = (0.0, 0.0, 9.81)  # specific force in the body frame [m/s^2]
-        self.rpy = (0.0, 0.0, 0.0)  # [rad]
-        self.temperature = 30
-        self.gait_type = GAIT_IDLE
-        self.foot_raise_height = 0.08
-        self.position = (0.0, 0.0, 0.0)  # own odometry [m]
-        self.body_height = NOMINAL_BODY_HEIGHT  # absolute [m]
-        self.velocity = (0.0, 0.0, 0.0)  # body frame [m/s]
-        self.yaw_speed = 0.0  # [rad/s]
-        self.foot_position = (0.0,) * 12  # 4 x (x, y, z) relative to the body [m]
-        self.foot_speed = (0.0,) * 12
-        self.foot_force = (0, 0, 0, 0)
-        self.foot_force_est = (0, 0, 0, 0)
-        self.wireless_remote = b"\x00" * 40
-        self.reserve = 0
-        self.crc = 0
-
-    def pack(self) -> bytes:
-        """Return the 265 packed bytes exactly as the SDK's ``HighState``."""
-        return _HIGH_STATE.pack(
-            self.level_flag,
-            self.comm_version,
-            self.robot_id,
-            self.sn,
-            self.band_width,
-            self.mode,
-            self.progress,
-            *(
-                tuple(self.quaternion)
-                + tuple(self.gyroscope)
-                + tuple(self.accelerometer)
-                + tuple(self.rpy)
-                + (int(self.temperature), self.gait_type, self.foot_raise_height)
-                + tuple(self.position)
-                + (self.body_height,)
-                + tuple(self.velocity)
-                + (self.yaw_speed,)
-                + tuple(self.foot_position)
-                + tuple(self.foot_speed)
-                + tuple(self.foot_force)
-                + tuple(self.foot_force_est)
-                + (self.wireless_remote, self.reserve, self.crc)
-            ),
-        )
+    __slots__ = tuple(name for name, _, _ in _HIGH_STATE_FIELDS)
+    _FIELDS = _HIGH_STATE_FIELDS
+    _STRUCT = struct.Struct(_format(_HIGH_STATE_FIELDS))
+    _NAME = "HighState"
 
     @classmethod
     def unpack(cls, data: bytes) -> "HighState":
         """Decode raw bytes; raise LayoutError on a wrong size or a non-finite pose/velocity value."""
-        if len(data) != HIGH_STATE_SIZE:
-            raise LayoutError("HighState must be %d bytes, got %d" % (HIGH_STATE_SIZE, len(data)))
-        v = _HIGH_STATE.unpack(data)
-        s = cls()
-        (s.level_flag, s.comm_version, s.robot_id, s.sn, s.band_width, s.mode, s.progress) = v[0:7]
-        s.quaternion = tuple(v[7:11])
-        s.gyroscope = tuple(v[11:14])
-        s.accelerometer = tuple(v[14:17])
-        s.rpy = tuple(v[17:20])
-        (s.temperature, s.gait_type, s.foot_raise_height) = v[20:23]
-        s.position = tuple(v[23:26])
-        s.body_height = v[26]
-        s.velocity = tuple(v[27:30])
-        s.yaw_speed = v[30]
-        s.foot_position = tuple(v[31:43])
-        s.foot_speed = tuple(v[43:55])
-        s.foot_force = tuple(v[55:59])
-        s.foot_force_est = tuple(v[59:63])
-        (s.wireless_remote, s.reserve, s.crc) = v[63:66]
+        s = cls._decode(data)
         used = s.quaternion + s.gyroscope + s.accelerometer + s.rpy + s.position + s.velocity
         for value in used + (s.body_height, s.yaw_speed):
             if not math.isfinite(value):
                 raise LayoutError("HighState has a non-finite value %r" % value)
-        return s
+        return s  # type: ignore[return-value]
+
+
+assert HighCmd._STRUCT.size == HIGH_CMD_SIZE, HighCmd._STRUCT.size
+assert HighState._STRUCT.size == HIGH_STATE_SIZE, HighState._STRUCT.size
