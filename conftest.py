@@ -76,6 +76,13 @@ class RosEnv:
         self.procs.append(proc)
         return proc
 
+    def run_to_exit(self, cmd, timeout=60.0):
+        """Run cmd (e.g. a node with bad parameters) until it exits; return (exit code, its output)."""
+        proc = self.start(cmd)
+        proc.wait(timeout=timeout)
+        with open(os.path.join(self.home, "proc-%d.log" % self.procs.index(proc))) as f:
+            return proc.returncode, f.read()
+
     def use_in_this_process(self):
         """Point this process's rospy/rosgraph at the private master."""
         for key in ("ROS_MASTER_URI", "ROS_HOME", "ROS_LOG_DIR", "ROS_IP"):

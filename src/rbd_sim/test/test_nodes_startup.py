@@ -1,16 +1,12 @@
 """Node wiring that is quickest to check with a private master: bad worlds stop the nodes at startup."""
 
-import os
 import subprocess
 
 import pytest
 
 
 def run_node(ros_env, node, world, timeout=40):
-    proc = ros_env.start(["rosrun", "rbd_sim", node, "_world:=%s" % world])
-    proc.wait(timeout=timeout)
-    log = open(os.path.join(ros_env.home, "proc-%d.log" % (len(ros_env.procs) - 1))).read()
-    return proc.returncode, log
+    return ros_env.run_to_exit(["rosrun", "rbd_sim", node, "_world:=%s" % world], timeout=timeout)
 
 
 @pytest.mark.parametrize("node", ["world", "os1_sim"])
