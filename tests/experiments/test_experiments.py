@@ -122,12 +122,23 @@ def test_readme_markers_are_replaced_not_duplicated():
 
 
 def test_root_readme_table_is_the_generated_one():
-    """The README section is run_all's output: markers present, table header from render_table."""
-    with open(os.path.join(os.path.dirname(os.path.dirname(HERE)), "README.md")) as fh:
+    """The README section is run_all's output: the rendering of docs/experiments/results.json."""
+    root = os.path.dirname(os.path.dirname(HERE))
+    with open(os.path.join(root, "README.md")) as fh:
         text = fh.read()
     assert thesis.MARK_BEGIN in text and thesis.MARK_END in text
     section = text.split(thesis.MARK_BEGIN)[1].split(thesis.MARK_END)[0]
-    assert thesis.render_table([]).splitlines()[0] in section
+    with open(os.path.join(root, "docs", "experiments", "results.json")) as fh:
+        committed = json.load(fh)
+    assert thesis.render_table(committed["rows"]) in section
+    assert not committed["results"].get("short"), "the README shows the full runs"
+    for name in ("step", "rotation", "path", "zone", "boundary", "reaction"):
+        assert "error" not in committed["results"][name], name
+        assert not committed["results"][name]["short"], name
+    for line in section.splitlines():
+        if line.startswith("!["):
+            png = os.path.join(root, line.split("(")[1].rstrip(")"))
+            assert 5000 < os.path.getsize(png) < 150000, png
 
 
 # ---------------------------------------------------------------------------------------------
