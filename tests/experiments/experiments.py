@@ -517,8 +517,21 @@ def exp_reaction(ctx):
             onsets = list(monitor.onsets)
     finally:
         monitor.close()
+    # Whole reaction incl. the simulated mechanics (the thesis' stopwatch figure): scan stamp ->
+    # ground-truth body speed below 1 cm/s, for every onset while the robot was walking.
+    stops = []
+    for onset in onsets:
+        truth = ctx.truth.between(onset - 0.05, onset + 3.0)
+        if not truth or math.hypot(truth[0][4], truth[0][5]) < 0.05:
+            continue
+        still = next((s[0] for s in truth if s[0] > onset and math.hypot(s[4], s[5]) < 0.01), None)
+        if still is not None:
+            stops.append(still - onset)
     result = {"trials": trials, "stopped": done, "times_s": times, "scan_period_s": zone.scan_period,
-              "p50_s": percentile(times, 50), "p99_s": percentile(times, 99), "max_s": max(times) if times else None}
+              "p50_s": percentile(times, 50), "p99_s": percentile(times, 99), "max_s": max(times) if times else None,
+              "truth_stop_s": stops, "truth_stop_p50_s": percentile(stops, 50),
+              "truth_stop_max_s": max(stops) if stops else None}
+    log("ground truth standing still after %s s" % ", ".join("%.3f" % t for t in stops))
     log("reaction: %d/%d stopped, times %s" % (done, trials, ", ".join("%.3f" % t for t in times)))
     fig, (ax, axh) = plt.subplots(1, 2, figsize=(8, 2.8))
     if onsets:

@@ -223,6 +223,9 @@ def test_reaction_time_every_intrusion_stops_within_a_scan(short_run):
     assert r["stopped"] == r["trials"] >= 2
     assert len(r["times_s"]) >= r["trials"] - 1  # an onset may fall while already standing
     assert r["p99_s"] <= r["scan_period_s"] + thesis.REACTION_EXTRA_S + thesis.LOAD_MARGIN_S
+    # Measured on ground truth: the body stands still within the thesis' maximum allowed reaction.
+    assert r["truth_stop_s"], "no ground-truth stop measured"
+    assert r["truth_stop_max_s"] <= thesis.THESIS_REACTION_MAX_S + thesis.LOAD_MARGIN_S
 
 
 def test_table_written_and_every_bounded_row_passes(short_run):
