@@ -422,10 +422,11 @@ def exp_zone(ctx):
 
 
 def exp_boundary(ctx):
-    """Fig. 23: a wide target (r = 1 m cylinder, nearly flat) approaches front, back, left; boundary vs set."""
+    """Fig. 23: a wide target (r = 1 m cylinder, nearly flat) approaches each side; boundary vs set distance."""
     zone = ctx.zone()
     radius = 1.0
-    sides = [("front", 0.0, zone.zone[0]), ("back", math.pi, zone.zone[1]), ("left", math.pi / 2, zone.zone[2])]
+    sides = [("front", 0.0, zone.zone[0]), ("back", math.pi, zone.zone[1]), ("left", math.pi / 2, zone.zone[2]),
+             ("right", -math.pi / 2, zone.zone[3])]
     out = []
     for side, angle, target in sides:
         flip = flip_distance(zone, "fig23", angle, radius, target + radius, 0.005)
