@@ -28,6 +28,7 @@ sys.path.insert(0, HERE)
 
 import analysis  # noqa: E402
 import matplotlib  # noqa: E402
+import thesis  # noqa: E402
 from stack import Stack, free_port  # noqa: E402
 
 matplotlib.use("Agg")
@@ -628,6 +629,8 @@ def main():
             with open(os.path.join(args.out, name + ".json"), "w") as fh:
                 json.dump(result, fh, indent=2, sort_keys=True)
             log("%s done in %.1f s" % (name, result["seconds"]))
+            if "error" not in result:  # the result next to the thesis value
+                print(thesis.render_table(thesis.rows({name: result})), flush=True)
     finally:
         stack.close()
     return 1 if failed else 0

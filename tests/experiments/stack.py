@@ -58,8 +58,29 @@ class Stack:
                 os.killpg(proc.pid, signal.SIGINT)
         for proc in reversed(self.procs):
             try:
-                proc.wait(15)
+                proc.wait(25)  # roslaunch itself escalates SIGINT -> SIGTERM after 15 s
             except subprocess.TimeoutExpired:
                 os.killpg(proc.pid, signal.SIGKILL)
                 proc.wait()
+        # roslaunch starts every node in its own session: SIGKILL any node left with our ROS_HOME.
+        for pid in self._leftovers():
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except OSError:
+                pass
         shutil.rmtree(self.home, ignore_errors=True)
+
+    def _leftovers(self):
+        """PIDs of processes whose environment has this stack's (unique) ROS_HOME."""
+        mark = ("ROS_HOME=%s" % self.home).encode()
+        out = []
+        for entry in os.listdir("/proc"):
+            if not entry.isdigit() or int(entry) == os.getpid():
+                continue
+            try:
+                with open("/proc/%s/environ" % entry, "rb") as fh:
+                    if mark in fh.read().split(b"\0"):
+                        out.append(int(entry))
+            except OSError:
+                continue
+        return out
