@@ -354,6 +354,20 @@ class Zone:
             raise RuntimeError("place_obstacle refused")
         return self.tripped(rospy.get_time())
 
+    def state_flips(self, name, dist, angle, radius):
+        """Whether the published collision state itself goes true with the cylinder at dist."""
+        import rospy
+
+        x, y = self.world(dist, angle)
+        self.place(name=name, x=x, y=y, radius=radius, height=1.7, remove=False)
+        since = rospy.get_time()
+
+        def collided():
+            with self.lock:
+                return any(s.collision for s in self.states if s.header.stamp.to_sec() > since)
+
+        return wait_for(collided, 4 * self.scan_period + 0.5)
+
     def remove(self, name):
         """Take the cylinder away."""
         self.place(name=name, remove=True)
@@ -384,8 +398,9 @@ def exp_zone(ctx):
         a = math.radians(deg)
         expected = analysis.expected_trigger_distance(a, radius, zone.zone)
         measured = flip_distance(zone, "fig22", a, radius, expected, 0.02 if ctx.short else 0.01)
+        confirmed = measured is not None and zone.state_flips("fig22", measured - 0.02, a, radius)
         points.append({"angle_deg": deg, "expected_centre_m": expected, "measured_centre_m": measured,
-                       "error_m": None if measured is None else measured - expected})
+                       "error_m": None if measured is None else measured - expected, "state_confirmed": confirmed})
         log("zone %3d deg: trips at centre %.3f m, expected %.3f m" % (deg, measured or float("nan"), expected))
     zone.remove("fig22")
     errors = [abs(p["error_m"]) for p in points if p["error_m"] is not None]

@@ -208,6 +208,8 @@ def test_fig22_zone_shape_matches_the_configured_cuboid(short_run):
     for p in zone["points"]:
         assert p["measured_centre_m"] is not None, p
         assert abs(p["error_m"]) <= thesis.THESIS_BOUNDARY_TOL_M, p
+        # The published collision state (not only the per-scan count) goes true just inside.
+        assert p["state_confirmed"], p
 
 
 def test_fig23_boundary_within_80_mm(short_run):
