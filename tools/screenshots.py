@@ -1,12 +1,17 @@
 #!/usr/bin/env python3
 """Screenshots for the README, taken for real under Xvfb.
 
-RViz's audience view on the running simulated system, with a visitor standing in the collision
-zone (intruding points in red).
+- `rviz_audience.png`: RViz's audience view on the running simulated system, with a visitor
+  standing in the collision zone (intruding points in red);
+- `gui_sim.png`: the laptop app's operator window (rbd_local's `rbd-gui`) connected through the
+  bridge to the running simulated system while the robot executes the `walk` trick (state
+  colour, controller state, next moves).
 
-Usage: tools/screenshots.py [OUT_DIR] (default docs/). Needs Xvfb and ImageMagick's `import`.
+Usage: tools/screenshots.py [OUT_DIR] [--only rviz|gui] (default docs/, both). Needs Xvfb and
+ImageMagick's `import`.
 """
 
+import argparse
 import os
 import signal
 import socket
@@ -33,10 +38,8 @@ def free_display():
     raise RuntimeError("no free X display")
 
 
-def main():
+def shoot_rviz(out):
     """Start Xvfb, the simulated system with RViz, place a visitor, capture the screen."""
-    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "docs")
-    os.makedirs(out, exist_ok=True)
     disp = free_display()
     home = tempfile.mkdtemp(prefix="rbd-shot-home.")
     port = free_port()
@@ -66,6 +69,90 @@ def main():
                     p.wait(20)
                 except subprocess.TimeoutExpired:
                     os.killpg(p.pid, signal.SIGKILL)
+
+
+def stop_all(procs):
+    """SIGINT each process group (newest first), SIGKILL what does not stop."""
+    for p in reversed(procs):
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGINT)
+            try:
+                p.wait(20)
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
+
+
+def shoot_gui(out, delay=2.0):
+    """The operator GUI on the running simulated system while the robot walks (under Xvfb)."""
+    disp = free_display()
+    home = tempfile.mkdtemp(prefix="rbd-shot-home.")
+    port, bridge_port = free_port(), free_port()
+    env = dict(os.environ, DISPLAY=":%d" % disp, ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOME=home,
+               ROS_IP="127.0.0.1", XDG_RUNTIME_DIR=home)
+    env["PYTHONPATH"] = os.path.join(ROOT, "rbd_local", "src") + os.pathsep + env.get("PYTHONPATH", "")
+    png = os.path.join(out, "gui_sim.png")
+    procs = [subprocess.Popen(["Xvfb", ":%d" % disp, "-screen", "0", "1280x800x24", "-nolisten", "tcp"],
+                              start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        time.sleep(1.5)
+        log = open(os.path.join(home, "launch.log"), "w")
+        procs.append(subprocess.Popen(
+            ["roslaunch", "-p", str(port), "rbd_bringup", "sim.launch", "lidar_columns:=512",
+             "bridge_port:=%d" % bridge_port], env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True))
+        os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"], ROS_HOME=home, ROS_IP="127.0.0.1")
+        import rospy
+        from std_msgs.msg import String
+        from std_srvs.srv import SetBool
+
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                socket.create_connection(("127.0.0.1", port), 0.5).close()
+                break
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.2)
+        rospy.init_node("screenshot_operator", disable_signals=True)
+        state = {"v": ""}
+        rospy.Subscriber("/rbd_controller/state", String, lambda m: state.update(v=m.data), queue_size=10)
+        gesture = rospy.Publisher("/rbd_gestrec/gesture", String, queue_size=1, latch=False)
+        rospy.wait_for_service("/rbd_controller/em_stop", 60.0)
+        time.sleep(3.0)
+        rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)(False)
+        end = time.monotonic() + 15.0
+        while state["v"] != "WAITING_FOR_GESTURE" and time.monotonic() < end:
+            time.sleep(0.1)
+        # A gesture arriving in WAITING_FOR_GESTURE is taken from the second one on: repeat it.
+        end = time.monotonic() + 15.0
+        while state["v"] not in ("GENERATING_PATH", "EXECUTING") and time.monotonic() < end:
+            gesture.publish(String(data="walk"))
+            time.sleep(0.5)
+        print("robot state %s; operator window shoots in %.1f s" % (state["v"], delay))
+        # The operator window connects to the bridge (latched state and path queue arrive at
+        # once) and shoots itself after `delay` s, while the first moves are still queued.
+        gui = subprocess.Popen([sys.executable, "-m", "rbd_local.gui_app", "--port", str(bridge_port), "--screenshot",
+                                png, "--screenshot-delay", str(delay)], env=env, start_new_session=True)
+        procs.append(gui)
+        gui.wait(delay + 60)
+        if gui.returncode != 0 or not os.path.exists(png):
+            raise RuntimeError("rbd-gui did not write %s" % png)
+        print("written", png)
+    finally:
+        stop_all(procs)
+
+
+def main():
+    """Take the screenshots asked for."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("out", nargs="?", default=os.path.join(ROOT, "docs"))
+    ap.add_argument("--only", choices=["rviz", "gui"])
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    if args.only in (None, "rviz"):
+        shoot_rviz(args.out)
+    if args.only in (None, "gui"):
+        shoot_gui(args.out)
 
 
 if __name__ == "__main__":
