@@ -6,7 +6,7 @@ and CBOR. Properties: nothing raises out of ``Session.receive``; the session sta
 usable; a denied topic/service never reaches the backend; conversion errors are only
 ``ConversionError``; every produced message serializes.
 
-The number of examples per property is ``RBD_FUZZ_EXAMPLES`` (default 150, about 10 s
+The number of examples per property is ``RBD_FUZZ_EXAMPLES`` (default 100, about 10 s
 for the whole module); e.g. ``RBD_FUZZ_EXAMPLES=20000`` for a long run.
 """
 
@@ -25,7 +25,7 @@ from rbd_bridge.msgconv import ConversionError, dict_to_msg, get_message_class, 
 from rbd_bridge.protocol import OutQueue, Session
 from rbd_bridge.security import Policy
 
-EXAMPLES = int(os.environ.get("RBD_FUZZ_EXAMPLES", "150"))
+EXAMPLES = int(os.environ.get("RBD_FUZZ_EXAMPLES", "100"))
 FUZZ = settings(
     max_examples=EXAMPLES,
     deadline=None,
