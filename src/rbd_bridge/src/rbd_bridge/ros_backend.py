@@ -40,6 +40,7 @@ _log = logging.getLogger("rbd_bridge")
 # Messages of one topic closer together than this [s] are a burst: they go through the
 # event loop, which writes a whole burst per wake-up; isolated ones are sent directly.
 _BURST_GAP = 0.0002
+_RECV_SIZE = 65536  # rospy recv() size per read of a subscribed topic [bytes]
 
 
 class _Pub:
@@ -428,8 +429,10 @@ class RosBackend(Backend):
         self.subs[topic] = sub
         # queue_size=None: rospy hands over everything one socket read holds (bounded by
         # buff_size); a slow WebSocket client is bounded later, in its own OutQueue.
+        # buff_size is rospy's recv() size: each recv allocates that much, and 1 MiB cost
+        # ~0.1 ms per message (mmap/munmap) here, so small reads; big messages take several.
         sub.subscriber = rospy.Subscriber(
-            topic, cls, self._on_message, callback_args=sub, queue_size=None, buff_size=1 << 20, tcp_nodelay=True
+            topic, cls, self._on_message, callback_args=sub, queue_size=None, buff_size=_RECV_SIZE, tcp_nodelay=True
         )
         return type_name
 
