@@ -34,15 +34,24 @@ def test_direct_and_loop_writes_interleave_as_whole_frames_in_order(server):  # 
     assert session.direct is not None and session.direct_compression("/loop") == "none"
     n = 400
     taken = []
+    lock = threading.Lock()
+    pending = [0]  # as ros_backend: no direct write while older frames wait for the loop
+
+    def deliver(message):
+        session.deliver("/loop", message)
+        with lock:
+            pending[0] -= 1
 
     def ros_thread():
         for i in range(n):
             text = "d%d-" % i + "x" * (i % 7 * 3000)  # some frames bigger than a socket write
             message = TopicMessage("/loop", lambda binary, text=text: {"data": text})
-            if not session.direct(message, "none"):
-                srv.loop.call_soon_threadsafe(session.deliver, "/loop", message)
-            else:
-                taken.append(i)
+            with lock:
+                if pending[0] == 0 and session.direct(message, "none"):
+                    taken.append(i)
+                    continue
+                pending[0] += 1
+            srv.loop.call_soon_threadsafe(deliver, message)
 
     thread = threading.Thread(target=ros_thread)
     thread.start()
