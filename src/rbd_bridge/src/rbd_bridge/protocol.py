@@ -93,7 +93,7 @@ class TopicMessage:
         raw: Callable returning (serialized bytes, secs, nsecs) for ``cbor-raw``.
     """
 
-    __slots__ = ("topic", "_to_dict", "_raw", "_frames", "latched")
+    __slots__ = ("topic", "_to_dict", "_raw", "_frames", "latched", "wire")
 
     def __init__(
         self, topic: str, to_dict: Callable[..., Any], raw: Callable[..., Any] = None, latched: Any = False
@@ -104,6 +104,7 @@ class TopicMessage:
         self._raw = raw
         self._frames = {}
         self.latched = latched
+        self.wire = {}  # the transport's ready-to-send bytes per compression (its cache)
 
     def frame(self, compression: str) -> Any:
         """Return the whole ``publish`` frame (str for none/png, bytes for cbor*)."""
@@ -335,6 +336,9 @@ class Session:
         self.received = 0
         self.errors = 0
         self.max_message_size = None
+        # set by a transport that can send a frame at once from another thread:
+        # direct(message, compression) -> True if it took the frame (see direct_compression)
+        self.direct = None
         self._rejected = 0
         self._rejected_logged = -1e18
         self._handlers = {
@@ -487,6 +491,21 @@ class Session:
             sub.pending.popleft()
         if sub.timer is None:
             sub.timer = self.call_later(max(0.0, sub.last + sub.throttle - now), lambda: self._flush(topic))
+
+    def direct_compression(self, topic: str) -> Optional[str]:
+        """Compression of topic if a message may bypass :meth:`deliver`, else None.
+
+        True for a subscription without throttle, fragmentation or PNG: then the frame
+        :meth:`deliver` would queue is ``message.frame(compression)`` unchanged, and a
+        transport whose queue is empty may send it at once (:attr:`direct`). Safe to call
+        from another thread (reads only).
+        """
+        if self.direct is None or self.closed:
+            return None
+        sub = self.subs.get(topic)
+        if sub is None or sub.throttle > 0 or sub.fragment_size or sub.compression == "png":
+            return None
+        return sub.compression
 
     def _flush(self, topic: str) -> None:
         sub = self.subs.get(topic)

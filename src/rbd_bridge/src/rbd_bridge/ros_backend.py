@@ -12,11 +12,15 @@ import itertools
 import logging
 import socket
 import threading
+import time
+import warnings
 from typing import Any, Callable, Optional
 
 import rosgraph
 import rospy
 import rosservice
+from rospy.exceptions import TransportTerminated
+from rospy.topics import _PublisherImpl
 
 from rbd_bridge.msgconv import (
     ConversionError,
@@ -33,6 +37,11 @@ __all__ = ["RosBackend"]
 
 _log = logging.getLogger("rbd_bridge")
 
+# Messages of one topic closer together than this [s] are a burst: they go through the
+# event loop, which writes a whole burst per wake-up; isolated ones are sent directly.
+_BURST_GAP = 0.0002
+_RECV_SIZE = 65536  # rospy recv() size per read of a subscribed topic [bytes]
+
 
 class _Pub:
     __slots__ = ("topic", "type", "cls", "publisher", "clients")
@@ -45,8 +54,127 @@ class _Pub:
         self.clients = set()
 
 
+class _DirectConnection:
+    """A rospy publisher connection that writes at once when it can, never blocking the caller.
+
+    rospy's own queued connection hands every message to a writer thread and yields the GIL
+    (``time.sleep(0)``) on each publish; that thread hop dominated the bridge's publish path.
+    Here the publishing thread (the event loop) tries a non-blocking ``send`` first; only
+    what the kernel does not take at once (a slow or stuck ROS subscriber) goes to a bounded
+    backlog that this connection's writer thread sends with blocking writes, in order. So a
+    stuck subscriber never blocks the event loop, costs at most ``queue_size`` messages, and
+    never delays other subscribers (each connection has its own backlog and thread).
+    """
+
+    def __init__(self, connection: Any, queue_size: int) -> None:
+        self._connection = connection
+        self._queue_size = max(1, queue_size)
+        self._lock = threading.RLock()  # conn.close() calls _closed with it held
+        self._wake = threading.Condition(self._lock)
+        self._backlog = collections.deque()
+        self._busy = False
+        self._error = None
+        self._thread = None
+        self.dropped = 0
+        connection.set_cleanup_callback(self._closed)
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(self._connection, name)
+
+    def _closed(self, _connection: Any) -> None:
+        with self._lock:
+            self._wake.notify()
+
+    def write_data(self, data: bytes) -> bool:
+        """Send data now if the socket takes it; else queue it for the writer thread."""
+        conn = self._connection
+        with self._lock:
+            if self._error is not None:
+                error, self._error = self._error, None
+                raise error
+            if conn.done:
+                raise TransportTerminated("connection closed")
+            if not self._busy:
+                sock = conn.socket
+                if sock is None:
+                    raise TransportTerminated("connection not initialised")
+                try:
+                    sent = sock.send(data, socket.MSG_DONTWAIT)
+                except (BlockingIOError, InterruptedError):
+                    sent = 0
+                except OSError as exc:
+                    conn.close()
+                    raise TransportTerminated(str(exc)) from None
+                if sent == len(data):
+                    conn.stat_bytes += sent
+                    conn.stat_num_msg += 1
+                    return True
+                # the head of the backlog is the unsent rest of a message: never dropped
+                self._backlog.append(memoryview(data)[sent:])
+                self._busy = True
+                if self._thread is None:
+                    self._thread = threading.Thread(target=self._run, name="rbd_bridge_pub", daemon=True)
+                    self._thread.start()
+                else:
+                    self._wake.notify()
+                return True
+            if len(self._backlog) > self._queue_size:
+                # drop the oldest whole message (never the partly sent head)
+                head = self._backlog.popleft()
+                self._backlog.popleft()
+                self._backlog.appendleft(head)
+                self.dropped += 1
+            self._backlog.append(data)
+            self._wake.notify()
+        return True
+
+    def _run(self) -> None:
+        conn = self._connection
+        while True:
+            with self._lock:
+                while not self._backlog and not conn.done:
+                    self._busy = False
+                    self._wake.wait()
+                if conn.done:
+                    self._backlog.clear()
+                    return
+                self._busy = True
+                data = self._backlog.popleft()
+            try:
+                conn.socket.sendall(data)
+                conn.stat_bytes += len(data)
+                conn.stat_num_msg += 1
+            except Exception as exc:
+                with self._lock:
+                    self._error = TransportTerminated(str(exc))
+                    self._backlog.clear()
+                try:
+                    conn.close()
+                except Exception:
+                    pass
+                return
+
+
+def _direct_publisher(topic: str, cls: Any, queue_size: int, latch: bool) -> Any:
+    """A rospy.Publisher whose connections are :class:`_DirectConnection` s."""
+    with warnings.catch_warnings():  # queue_size=None is deliberate: the queue is ours
+        warnings.simplefilter("ignore")
+        publisher = rospy.Publisher(topic, cls, queue_size=None, latch=latch)
+    impl = publisher.impl
+    if not getattr(impl, "_rbd_direct", False):
+        # one impl per topic in this process; wrap each connection rospy hands to it
+        def add_connection(connection: Any) -> Any:
+            return _PublisherImpl.add_connection(impl, _DirectConnection(connection, queue_size))
+
+        impl.add_connection = add_connection
+        impl._rbd_direct = True
+    return publisher
+
+
 class _Sub:
-    __slots__ = ("topic", "type", "cls", "subscriber", "sessions", "latched")
+    __slots__ = ("topic", "type", "cls", "subscriber", "sessions", "latched", "last_rx")
 
     def __init__(self, topic: str, type_name: str, cls: Any) -> None:
         self.topic = topic
@@ -55,6 +183,7 @@ class _Sub:
         self.subscriber = None
         self.sessions = set()
         self.latched = {}
+        self.last_rx = -1.0
 
 
 class _Hosted:
@@ -197,6 +326,7 @@ class RosBackend(Backend):
         self._srv_types = {}
         self._inbox = collections.deque()
         self._inbox_lock = threading.Lock()
+        self._draining = False
         self.rosapi = RosApi(policy, self.master, _RosParams(), self._now, self._lookup_service_type)
 
     # ------------------------------------------------------------ helpers
@@ -236,7 +366,7 @@ class RosBackend(Backend):
         existing = self._master_type(topic)
         if existing and existing != type_name and existing != "*":
             raise BridgeError("advertise: %s already exists with type %s" % (topic, existing))
-        publisher = rospy.Publisher(topic, cls, queue_size=queue_size, latch=latch)
+        publisher = _direct_publisher(topic, cls, queue_size, latch)
         pub = _Pub(topic, type_name, cls, publisher)
         pub.clients.add(session.client_id)
         self.pubs[topic] = pub
@@ -299,8 +429,10 @@ class RosBackend(Backend):
         self.subs[topic] = sub
         # queue_size=None: rospy hands over everything one socket read holds (bounded by
         # buff_size); a slow WebSocket client is bounded later, in its own OutQueue.
+        # buff_size is rospy's recv() size: each recv allocates that much, and 1 MiB cost
+        # ~0.1 ms per message (mmap/munmap) here, so small reads; big messages take several.
         sub.subscriber = rospy.Subscriber(
-            topic, cls, self._on_message, callback_args=sub, queue_size=None, buff_size=1 << 20, tcp_nodelay=True
+            topic, cls, self._on_message, callback_args=sub, queue_size=None, buff_size=_RECV_SIZE, tcp_nodelay=True
         )
         return type_name
 
@@ -326,8 +458,9 @@ class RosBackend(Backend):
             return buff.getvalue(), stamp.secs, stamp.nsecs
 
         message = TopicMessage(sub.topic, lambda binary: msg_to_dict(msg, binary), raw, latched)
+        sessions = list(sub.sessions)
         wanted = set()
-        for session in list(sub.sessions):
+        for session in sessions:
             state = session.subs.get(sub.topic)
             if state is not None:
                 wanted.add("none" if state.compression == "png" else state.compression)
@@ -339,28 +472,54 @@ class RosBackend(Backend):
             return
         if latched:
             sub.latched[header.get("callerid", "")] = message
+        now = time.monotonic()
+        burst = now - sub.last_rx < _BURST_GAP
+        sub.last_rx = now
+        rest = None
         with self._inbox_lock:
+            if not burst and not self._inbox and not self._draining and not latched:
+                # nothing older is on its way: send straight to clients whose queue is
+                # empty (no hop to the event loop); the others get it through the loop
+                rest = []
+                for session in sessions:
+                    compression = session.direct_compression(sub.topic)
+                    if compression is None or not self._send_direct(session, message, compression):
+                        rest.append(session)
+                if not rest:
+                    return
             wake = not self._inbox
-            self._inbox.append((sub, message))
+            self._inbox.append((sub, message, rest))
         if wake:  # one loop wake-up per burst, not per message
             try:
                 self.loop.call_soon_threadsafe(self._drain_inbox)
             except RuntimeError:  # loop closed: shutting down
                 pass
 
+    @staticmethod
+    def _send_direct(session: Any, message: Any, compression: str) -> bool:
+        try:
+            return session.direct(message, compression)
+        except Exception:
+            _log.exception("direct send to client %s failed", session.client_id)
+            return False
+
     def _drain_inbox(self) -> None:
         while True:
             with self._inbox_lock:
                 if not self._inbox:
+                    self._draining = False
                     return
                 items = list(self._inbox)
                 self._inbox.clear()
-            for sub, message in items:
-                self._fan_out(sub, message)
+                self._draining = True  # no direct sends may overtake these
+            for sub, message, only in items:
+                self._fan_out(sub, message, only)
 
     @staticmethod
-    def _fan_out(sub: Any, message: Any) -> None:
-        for session in list(sub.sessions):
+    def _fan_out(sub: Any, message: Any, only: Any = None) -> None:
+        for session in list(sub.sessions) if only is None else only:
+            if session not in sub.sessions:
+                continue
             try:
                 session.deliver(sub.topic, message)
             except Exception:
