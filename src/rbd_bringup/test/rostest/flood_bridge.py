@@ -12,8 +12,19 @@ import signal
 import sys
 import time
 
-from websockets.exceptions import WebSocketException
-from websockets.sync.client import connect
+STATE = {"running": True}
+
+
+def _stop(_sig, _frame):
+    STATE["running"] = False
+
+
+# before the (slow) websockets import: a stop request during start-up still ends cleanly
+signal.signal(signal.SIGINT, _stop)
+signal.signal(signal.SIGTERM, _stop)
+
+from websockets.exceptions import WebSocketException  # noqa: E402
+from websockets.sync.client import connect  # noqa: E402
 
 GARBAGE = "{" + "x" * 200000  # a 200 kB frame that is not JSON
 
@@ -36,14 +47,8 @@ def frames(n):
 def main():
     """Flood until told to stop; print the counts."""
     url, n = sys.argv[1], int(sys.argv[2])
-    state = {"running": True}
+    state = STATE
     counts = {"frames": 0, "garbage": 0, "reconnects": 0, "error": None}
-
-    def stop(_sig, _frame):
-        state["running"] = False
-
-    signal.signal(signal.SIGINT, stop)
-    signal.signal(signal.SIGTERM, stop)
     while state["running"]:
         try:
             with connect(url, compression=None, max_size=None, open_timeout=15) as ws:

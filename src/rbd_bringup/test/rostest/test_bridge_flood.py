@@ -126,7 +126,11 @@ class BridgeFlood(Faults):
         counts = []
         for f in flooders:
             out, _ = f.communicate(timeout=20.0)
-            counts.append(json.loads(out.decode().strip().splitlines()[-1]))
+            lines = out.decode().strip().splitlines()
+            try:
+                counts.append(json.loads(lines[-1]))
+            except (IndexError, ValueError):  # stopped before it could report: counts nothing
+                counts.append({"frames": 0, "garbage": 0, "reconnects": 0})
         return tuple(sum(c[k] for c in counts) for k in ("frames", "garbage", "reconnects"))
 
     def bridge_em_stop(self, ws, engaged, call_id):
