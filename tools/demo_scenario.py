@@ -55,6 +55,7 @@ class Monitor:
         from std_msgs.msg import String
         from visualization_msgs.msg import MarkerArray
 
+        from rbd_bringup.a1_monitor import HighCmdMonitor
         from rbd_bringup.metrics import ContactMonitor
         from rbd_msgs.msg import CollisionState
 
@@ -74,32 +75,13 @@ class Monitor:
         rospy.Subscriber("/rbd_sim/obstacles", MarkerArray, self.on_people, queue_size=5)
         rospy.Subscriber("/rbd_controller/state", String, self.on_state, queue_size=20)
         rospy.Subscriber("/rbd_lidar/state", CollisionState, self.on_zone, queue_size=50)
-        self._lcm_stop = threading.Event()
-        self._lcm = threading.Thread(target=self.lcm_loop, args=(lcm_url,), daemon=True)
-        self._lcm.start()
+        # every HighCmd the A1 receives (wall time, commanded speed)
+        self.a1 = HighCmdMonitor(lcm_url, record=self.on_command, clock=time.time)
 
-    def lcm_loop(self, url):
-        """Record every HighCmd the A1 receives (time, commanded speed)."""
-        import lcm
-
-        from rbd_a1_driver import unitree_layout as ul
-
-        lc = lcm.LCM(url)
-
-        def on_cmd(_channel, data):
-            try:
-                cmd = ul.decode_high_cmd(data)
-            except ValueError:
-                return
-            speed = max(math.hypot(cmd.velocity[0], cmd.velocity[1]), abs(cmd.yaw_speed))
-            if cmd.mode != ul.MODE_VELOCITY_WALK:
-                speed = 0.0
-            with self.lock:
-                self.commands.append((time.time(), speed))
-
-        lc.subscribe(ul.CHANNEL_HIGH_CMD, on_cmd)
-        while not self._lcm_stop.is_set():
-            lc.handle_timeout(100)
+    def on_command(self, t, speed):
+        """One HighCmd seen on LCM."""
+        with self.lock:
+            self.commands.append((t, speed))
 
     def on_truth(self, msg):
         """Ground-truth pose: path, contacts with people."""
@@ -153,8 +135,7 @@ class Monitor:
 
     def close(self):
         """Stop the LCM listener."""
-        self._lcm_stop.set()
-        self._lcm.join(2.0)
+        self.a1.close()
 
 
 class Audience:

@@ -127,3 +127,97 @@ def test_config_validation():
         GateConfig(cmd_timeout=0.0)
     with pytest.raises(ValueError):
         GateConfig(min_body_height=0.1)
+
+
+def periodic_estop(g, value, t0, t1, period=0.1):
+    """Feed e-stop messages every period from t0 to t1 (inclusive); returns the last time."""
+    t = t0
+    while t <= t1 + 1e-9:
+        g.set_estop(value, t)
+        g.note_state(t)
+        last = t
+        t += period
+    return last
+
+
+def test_estop_signal_lost_engages_after_timeout():
+    g = gate(estop_timeout=0.5)
+    last = periodic_estop(g, False, 0.0, 1.0)
+    assert g.estop_armed and not g.estop
+    g.set_velocity(0.3, 0.0, 0.0, last)
+    g.note_state(last + 0.45)
+    g.set_velocity(0.3, 0.0, 0.0, last + 0.45)
+    assert moving(g.command(last + 0.49))  # within the timeout: still walking
+    out = g.command(last + 0.51)
+    assert not moving(out) and "signal lost" in out.reason
+    assert g.estop and g.estop_lost
+    # cmd_vel keeps coming: ignored; body poses too
+    assert "e-stop" in g.set_velocity(0.3, 0.0, 0.0, last + 0.6)
+    assert "e-stop" in g.set_body_pose(0.0, 0.0, 0.0, 0.0)
+    g.note_state(last + 0.7)
+    assert not moving(g.command(last + 0.7))
+
+
+def test_estop_signal_lost_detected_by_set_velocity_alone():
+    g = gate(estop_timeout=0.5)
+    last = periodic_estop(g, False, 0.0, 0.3)
+    g.note_state(last + 0.6)
+    assert "e-stop" in g.set_velocity(0.3, 0.0, 0.0, last + 0.6)
+    assert not moving(g.command(last + 0.6))
+
+
+def test_estop_signal_lost_released_only_by_fresh_false():
+    g = gate(estop_timeout=0.5)
+    last = periodic_estop(g, False, 0.0, 0.5)
+    assert not moving(g.command(last + 0.6)) and g.estop_lost
+    g.set_estop(True, last + 0.7)  # the respawned controller: EMERGENCY_STOP
+    assert g.estop and not g.estop_lost
+    periodic_estop(g, True, last + 0.8, last + 1.5)
+    g.set_velocity(0.3, 0.0, 0.0, last + 1.5)
+    assert not moving(g.command(last + 1.5))
+    g.set_estop(False, last + 1.6)  # release
+    assert not g.estop
+    assert not moving(g.command(last + 1.61))  # the old command is forgotten
+    g.set_velocity(0.3, 0.0, 0.0, last + 1.62)
+    assert moving(g.command(last + 1.63))
+
+
+def test_estop_true_signal_lost_stays_engaged():
+    g = gate(estop_timeout=0.5)
+    last = periodic_estop(g, True, 0.0, 0.5)
+    g.command(last + 2.0)
+    assert g.estop and g.estop_lost
+    assert "e-stop" in g.set_velocity(0.3, 0.0, 0.0, last + 2.1)
+
+
+def test_one_shot_estop_publisher_never_arms_the_watchdog():
+    """A latched one-shot publisher (isolated tests, rostopic pub -1) keeps the old contract."""
+    g = gate(estop_timeout=0.5)
+    g.set_estop(True, 0.0)
+    g.set_estop(False, 1.0)  # 1 s apart: not periodic
+    assert not g.estop_armed
+    g.note_state(5.0)
+    g.set_velocity(0.3, 0.0, 0.0, 5.0)
+    assert moving(g.command(5.0))
+
+
+def test_estop_never_received_is_no_gate_even_with_timeout():
+    g = gate(estop_timeout=0.5)
+    g.note_state(10.0)
+    g.set_velocity(0.3, 0.0, 0.0, 10.0)
+    assert moving(g.command(10.0)) and not g.estop_armed
+
+
+def test_estop_timeout_zero_disables_the_watchdog():
+    g = gate(estop_timeout=0.0)
+    last = periodic_estop(g, False, 0.0, 1.0)
+    assert not g.estop_armed
+    g.note_state(last + 5.0)
+    g.set_velocity(0.3, 0.0, 0.0, last + 5.0)
+    assert moving(g.command(last + 5.0))
+
+
+@pytest.mark.parametrize("bad", [-0.1, float("nan"), "x"])
+def test_bad_estop_timeout_rejected(bad):
+    with pytest.raises(ValueError):
+        GateConfig(estop_timeout=bad)

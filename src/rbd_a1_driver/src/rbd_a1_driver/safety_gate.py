@@ -8,6 +8,11 @@ Rules (DESIGN.md §5.2/§5.3, CONTRACT.md):
 * E-stop engaged (``/rbd_controller/estop`` true) => zero velocity; velocity commands are ignored
   until it is released; the last command is forgotten, so motion only resumes on a new command.
   Never received => no gate.
+* E-stop signal lost: the e-stop source (rbd_controller) republishes its flag periodically (10 Hz).
+  The watchdog arms when two e-stop messages arrive less than ``estop_timeout`` (0.5 s) apart (a
+  periodic source; a one-shot latched publisher never arms it). Once armed, no e-stop message for
+  ``estop_timeout`` => treated as engaged (zero velocity, last command forgotten) until a fresh
+  ``false`` arrives. ``estop_timeout`` 0 = off.
 * No HighState for ``state_timeout`` (0.5 s), or none yet => zero velocity (the link is suspect).
 * Modes: a fresh non-zero velocity => mode 2 (velocity walking, trot). After the velocity has been
   zero for ``stand_delay`` the A1 is put in mode 1 (force stand) with the requested body pose
@@ -38,6 +43,7 @@ class GateConfig:
         max_yaw: float = 0.6,
         min_body_height: float = -0.16,
         max_body_height: float = 0.06,
+        estop_timeout: float = 0.5,
     ) -> None:
         values = dict(locals())
         values.pop("self")
@@ -47,8 +53,8 @@ class GateConfig:
         for name in ("max_vx", "max_vy", "max_wz", "cmd_timeout", "state_timeout", "max_roll", "max_pitch"):
             if values[name] <= 0.0:
                 raise ValueError("%s must be > 0, got %r" % (name, values[name]))
-        if stand_delay < 0.0 or max_yaw < 0.0:
-            raise ValueError("stand_delay and max_yaw must be >= 0")
+        if stand_delay < 0.0 or max_yaw < 0.0 or estop_timeout < 0.0:
+            raise ValueError("stand_delay, max_yaw and estop_timeout must be >= 0")
         if not min_body_height <= 0.0 <= max_body_height:
             raise ValueError("body height range must contain 0")
         self.max_vx = float(max_vx)
@@ -62,6 +68,7 @@ class GateConfig:
         self.max_yaw = float(max_yaw)
         self.min_body_height = float(min_body_height)
         self.max_body_height = float(max_body_height)
+        self.estop_timeout = float(estop_timeout)
 
 
 def _clamp(value: float, limit: float) -> float:
@@ -104,6 +111,9 @@ class SafetyGate:
         self._vel_time = None
         self._last_motion_time = None  # last time a non-zero velocity was being sent
         self._estop = None  # None = never received
+        self._estop_time = None  # arrival of the last e-stop message
+        self._estop_armed = False  # the e-stop source has shown it is periodic
+        self._estop_lost = False  # engaged because the e-stop messages stopped
         self._state_time = None
         self._euler = (0.0, 0.0, 0.0)
         self._body_height = 0.0
@@ -122,6 +132,7 @@ class SafetyGate:
             self._vel_time = now
             self.rejected += 1
             return "non-finite velocity %r rejected: zero velocity sent" % (values,)
+        self._check_estop_signal(now)
         if self._estop:
             return "e-stop engaged: velocity command ignored"
         c = self.config
@@ -132,11 +143,31 @@ class SafetyGate:
         return ""
 
     def set_estop(self, engaged: bool, now: float) -> None:
-        """Latch the e-stop state; engaging it forgets the last velocity command."""
-        self._estop = bool(engaged)
-        if self._estop:
+        """Latch the e-stop state; engaging it forgets the last velocity command.
+
+        Every call is one received e-stop message: it feeds the e-stop signal watchdog, and a
+        fresh ``false`` releases an engagement caused by a lost signal.
+        """
+        timeout = self.config.estop_timeout
+        if self._estop_time is not None and timeout > 0.0 and now - self._estop_time < timeout:
+            self._estop_armed = True
+        self._estop_time = now
+        self._estop_lost = False
+        self._engage(bool(engaged))
+
+    def _engage(self, engaged: bool) -> None:
+        self._estop = engaged
+        if engaged:
             self._vel = (0.0, 0.0, 0.0)
             self._vel_time = None
+
+    def _check_estop_signal(self, now: float) -> None:
+        """Engage the gate when an armed e-stop signal has been silent for estop_timeout."""
+        if self._estop_lost or not self._estop_armed or self.config.estop_timeout <= 0.0:
+            return
+        if now - self._estop_time > self.config.estop_timeout:
+            self._estop_lost = True
+            self._engage(True)
 
     def set_body_pose(self, roll: float, pitch: float, yaw: float, body_height: float) -> str:
         """Request a standing body pose. Returns "" if accepted, else the reason it was rejected."""
@@ -162,8 +193,18 @@ class SafetyGate:
     # ---- queries --------------------------------------------------------------------------------
     @property
     def estop(self) -> bool:
-        """True while the e-stop is engaged."""
+        """True while the e-stop is engaged (by a message or by a lost e-stop signal)."""
         return bool(self._estop)
+
+    @property
+    def estop_armed(self) -> bool:
+        """True once the e-stop source has shown it is periodic (the signal watchdog runs)."""
+        return self._estop_armed
+
+    @property
+    def estop_lost(self) -> bool:
+        """True while the gate is engaged because the e-stop messages stopped."""
+        return self._estop_lost
 
     def state_fresh(self, now: float) -> bool:
         """True if a HighState arrived within state_timeout."""
@@ -172,8 +213,11 @@ class SafetyGate:
     def command(self, now: float) -> GateOutput:
         """Decide the command for this send cycle."""
         reason = ""
+        self._check_estop_signal(now)
         vel = self._vel
-        if self._estop:
+        if self._estop_lost:
+            reason = "e-stop signal lost (no /rbd_controller/estop for > %.2f s)" % self.config.estop_timeout
+        elif self._estop:
             reason = "e-stop"
         elif self._vel_time is None:
             reason = "no velocity command yet"

@@ -141,6 +141,7 @@ class DriverWire(unittest.TestCase):
         self.assertTrue(all(c.velocity == (0.0, 0.0) for c in late))
 
     def test_5_estop(self):
+        released = False
         try:
             self.send(twist(0.3), 0.3)
             self.estop.publish(Bool(True))
@@ -148,11 +149,14 @@ class DriverWire(unittest.TestCase):
             self.send(twist(0.3), 0.5)
             late = [c for t, c in self.since(t0 + 0.1)]
             self.assertTrue(all(c.velocity == (0.0, 0.0) for c in late))
+            time.sleep(0.3)  # one-shot messages > estop_timeout apart: the signal watchdog stays unarmed
             self.estop.publish(Bool(False))
+            released = True
             self.send(twist(0.3), 0.3)
             self.assertAlmostEqual(self.last().velocity[0], 0.3, places=5)
         finally:
-            self.estop.publish(Bool(False))
+            if not released:
+                self.estop.publish(Bool(False))
 
     def test_6_stale_high_state_gives_zero_and_error(self):
         try:
@@ -212,6 +216,35 @@ class DriverWire(unittest.TestCase):
         self.assertAlmostEqual(imu.angular_velocity.z, 0.3, places=5)
         self.assertAlmostEqual(imu.linear_acceleration.z, 9.8, places=5)
         self.assertAlmostEqual(imu.orientation.z, math.sin(0.25), places=5)
+
+    def test_9_estop_signal_lost_engages_until_fresh_false(self):
+        """A periodic e-stop source that goes silent (controller killed) engages the gate."""
+        period = 0.1
+        t_last = time.monotonic()
+        try:
+            for _ in range(15):  # 1.5 s: periodic false (armed) while walking
+                self.estop.publish(Bool(False))
+                t_last = self.send(twist(0.3), period)
+            self.assertAlmostEqual(self.last().velocity[0], 0.3, places=5, msg="not walking while armed")
+            self.send(twist(0.3), 1.5)  # e-stop messages stop; cmd_vel keeps coming
+            late = [c for t, c in self.since(t_last + 0.5 + 0.3)]
+            self.assertTrue(late)
+            self.assertTrue(all(c.velocity == (0.0, 0.0) for c in late), "still walking without e-stop signal")
+            moving = [t for t, c in self.since(t_last) if c.velocity != (0.0, 0.0)]
+            self.assertTrue(moving and moving[-1] - t_last > 0.3, "engaged before the timeout")
+            deadline = time.monotonic() + 2.5
+            while time.monotonic() < deadline and not any(
+                s.level == DiagnosticStatus.ERROR and "e-stop" in s.message for s in self.diag[-1].status
+            ):
+                self.pub.publish(twist(0.3))
+                time.sleep(0.05)
+            self.assertIn("e-stop signal lost", self.diag[-1].status[0].message)
+            self.assertEqual(self.last().velocity, (0.0, 0.0))
+            self.estop.publish(Bool(False))  # a fresh false releases
+            self.send(twist(0.3), 0.3)
+            self.assertAlmostEqual(self.last().velocity[0], 0.3, places=5, msg="no motion after a fresh false")
+        finally:
+            self.estop.publish(Bool(False))
 
 
 if __name__ == "__main__":

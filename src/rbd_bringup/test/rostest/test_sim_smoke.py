@@ -14,23 +14,17 @@ from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
 
+from rbd_bringup import a1_monitor
+from rbd_bringup.a1_monitor import yaw_of
+
 EXPECTED_NODES = [
     "/mock_a1", "/rbd_a1_driver", "/os1_sim", "/zed2_sim", "/world", "/robot_state_publisher",
     "/rbd_controller", "/rbd_pos_controller", "/rbd_navigation", "/rbd_gestrec", "/rbd_bridge", "/rbd_lidar",
 ]
 
 
-def yaw_of(q):
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
 def wait_for(predicate, timeout, step=0.05):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline and not rospy.is_shutdown():
-        if predicate():
-            return True
-        time.sleep(step)
-    return predicate()
+    return a1_monitor.wait_for(predicate, timeout, step, abort=rospy.is_shutdown)
 
 
 class SimSmoke(unittest.TestCase):

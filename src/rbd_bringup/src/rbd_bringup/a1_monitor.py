@@ -1,0 +1,146 @@
+"""What the (mock) A1 is told to do: the Unitree HighCmd stream on LCM, as seen by the robot.
+
+Safety tests and the demo measure "zero velocity at the A1" on the commands the A1 actually
+receives (``LCM_High_Cmd`` on the mock A1's LCM URL), not on what a node believes it sent.
+This module is ROS-free; the clock and the sink for the samples are the caller's.
+
+Also holds the small polling helpers the rbd_bringup rostests share (``wait_for``, ``yaw_of``).
+"""
+
+import math
+import threading
+import time
+from typing import Callable, List, Optional, Tuple
+
+from rbd_a1_driver import unitree_layout as ul
+
+Sample = Tuple[float, float]  # (time, commanded speed)
+
+
+def command_speed(cmd: ul.HighCmd) -> float:
+    """Commanded speed of a HighCmd: max(|v_xy| [m/s], |yaw speed| [rad/s]); 0 unless walking.
+
+    Args:
+        cmd: a decoded HighCmd.
+
+    Returns:
+        The speed; 0.0 for any mode other than velocity walking (force stand does not move).
+    """
+    if cmd.mode != ul.MODE_VELOCITY_WALK:
+        return 0.0
+    return max(math.hypot(cmd.velocity[0], cmd.velocity[1]), abs(cmd.yaw_speed))
+
+
+class HighCmdMonitor:
+    """Records every HighCmd the A1 receives on an LCM URL, in a background thread.
+
+    Each valid packet becomes one sample ``(clock(), command_speed(cmd))`` passed to ``record``
+    (default: appended to :attr:`samples`). Packets that do not decode are counted in
+    :attr:`bad` and otherwise ignored.
+
+    Args:
+        url: LCM URL, e.g. ``udpm://239.255.76.67:7667?ttl=0`` (the mock A1's ``/rbd_sim/lcm_url``).
+        record: called with (time, speed) for every valid command; runs in the LCM thread.
+        clock: time source for the samples (``time.monotonic`` or ``time.time``).
+        channel: LCM channel of the commands.
+    """
+
+    def __init__(
+        self,
+        url: str,
+        record: Optional[Callable[[float, float], None]] = None,
+        clock: Callable[[], float] = time.monotonic,
+        channel: str = ul.CHANNEL_HIGH_CMD,
+    ) -> None:
+        import lcm  # here, so that importing the module needs no LCM
+
+        self.url = url
+        self.clock = clock
+        self.lock = threading.Lock()
+        self.samples = []  # type: List[Sample]
+        self.bad = 0
+        self._record = record if record is not None else self._append
+        self._lc = lcm.LCM(url)
+        self._lc.subscribe(channel, self._on_packet)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._loop, name="a1_monitor", daemon=True)
+        self._thread.start()
+
+    def _append(self, t: float, speed: float) -> None:
+        with self.lock:
+            self.samples.append((t, speed))
+
+    def _on_packet(self, _channel: str, data: bytes) -> None:
+        try:
+            cmd = ul.decode_high_cmd(data)
+        except ValueError:  # LayoutError is a ValueError
+            self.bad += 1
+            return
+        self._record(self.clock(), command_speed(cmd))
+
+    def _loop(self) -> None:
+        while not self._stop.is_set():
+            self._lc.handle_timeout(100)
+
+    def snapshot(self) -> List[Sample]:
+        """A copy of the samples recorded so far (default sink only)."""
+        with self.lock:
+            return list(self.samples)
+
+    def close(self) -> None:
+        """Stop the receive thread (within ~0.1 s)."""
+        self._stop.set()
+        self._thread.join(2.0)
+
+
+def stop_delay(samples: List[Sample], t0: float, t1: float, still: float) -> Optional[float]:
+    """Delay after t0 from which every sample up to t1 is below ``still``.
+
+    Args:
+        samples: (time, value) pairs in time order.
+        t0: start of the window (the fault / the stop request).
+        t1: end of the window.
+        still: values below this count as stopped.
+
+    Returns:
+        Seconds from t0 to the first sample of the final all-still run (0.0 if already still at
+        t0); None if there are no samples in the window or the last one is not still.
+    """
+    window = [(t, v) for t, v in samples if t0 <= t <= t1]
+    if not window:
+        return None
+    stop = t0  # type: Optional[float]
+    for t, v in window:
+        if v >= still:
+            stop = None
+        elif stop is None:
+            stop = t
+    if stop is None:
+        return None
+    return max(0.0, stop - t0)
+
+
+def wait_for(predicate: Callable[[], object], timeout: float, step: float = 0.05,
+             abort: Optional[Callable[[], bool]] = None) -> bool:
+    """Poll ``predicate`` until it is true or ``timeout`` seconds pass.
+
+    Args:
+        predicate: condition to wait for.
+        timeout: seconds.
+        step: polling period [s].
+        abort: stop waiting early when this returns true (e.g. ``rospy.is_shutdown``).
+
+    Returns:
+        The truth of the predicate at the end.
+    """
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and not (abort is not None and abort()):
+        if predicate():
+            return True
+        time.sleep(step)
+    return bool(predicate())
+
+
+def yaw_of(q: object) -> float:
+    """Yaw [rad] of a quaternion with x, y, z, w attributes (geometry_msgs/Quaternion)."""
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))

@@ -1,0 +1,94 @@
+"""rbd_bringup.a1_monitor: HighCmd packets over real LCM (UDP multicast, ttl=0) become speed samples."""
+
+import socket
+import time
+
+import lcm
+import pytest
+
+from rbd_a1_driver import unitree_layout as ul
+from rbd_bringup.a1_monitor import HighCmdMonitor, command_speed, stop_delay, wait_for, yaw_of
+
+
+def free_udp_port():
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def high_cmd(mode, vx=0.0, vy=0.0, wz=0.0):
+    cmd = ul.HighCmd()
+    cmd.mode = mode
+    cmd.gait_type = ul.GAIT_TROT
+    cmd.velocity = (vx, vy)
+    cmd.yaw_speed = wz
+    return cmd
+
+
+@pytest.fixture
+def url():
+    return "udpm://239.255.76.67:%d?ttl=0" % free_udp_port()
+
+
+def test_command_speed_only_counts_walking():
+    assert command_speed(high_cmd(ul.MODE_VELOCITY_WALK, 0.3, 0.4)) == pytest.approx(0.5)
+    assert command_speed(high_cmd(ul.MODE_VELOCITY_WALK, 0.0, 0.0, -0.7)) == pytest.approx(0.7)
+    assert command_speed(high_cmd(ul.MODE_FORCE_STAND, 0.3, 0.0, 0.5)) == 0.0
+
+
+def test_monitor_records_packets_over_lcm(url):
+    mon = HighCmdMonitor(url)
+    pub = lcm.LCM(url)
+    try:
+        walk, stand = ul.MODE_VELOCITY_WALK, ul.MODE_FORCE_STAND
+        sent = [high_cmd(walk, 0.3), high_cmd(walk), high_cmd(stand, 0.3)]
+
+        def delivered():
+            for cmd in sent:
+                pub.publish(ul.CHANNEL_HIGH_CMD, cmd.pack())
+            pub.publish(ul.CHANNEL_HIGH_CMD, b"\x00" * 7)  # garbage: counted, ignored
+            pub.publish("OTHER_CHANNEL", sent[0].pack())  # other channels are not commands
+            time.sleep(0.05)
+            return len(mon.snapshot()) >= 3 and mon.bad >= 1
+
+        assert wait_for(delivered, 5.0)
+        speeds = [v for _t, v in mon.snapshot()[:3]]
+        assert speeds == pytest.approx([0.3, 0.0, 0.0])
+        assert all(v in (0.0, pytest.approx(0.3)) for _t, v in mon.snapshot())
+    finally:
+        mon.close()
+    assert not mon._thread.is_alive()
+
+
+def test_monitor_custom_sink_and_clock(url):
+    got = []
+    mon = HighCmdMonitor(url, record=lambda t, v: got.append((t, v)), clock=lambda: 42.0)
+    pub = lcm.LCM(url)
+    try:
+        assert wait_for(lambda: pub.publish(ul.CHANNEL_HIGH_CMD, high_cmd(2, 0.1).pack()) or got, 5.0)
+    finally:
+        mon.close()
+    assert got[0] == (42.0, pytest.approx(0.1)) and mon.snapshot() == []
+
+
+def test_stop_delay():
+    s = [(0.0, 0.3), (0.1, 0.3), (0.2, 0.0), (0.3, 0.0), (0.4, 0.0)]
+    assert stop_delay(s, 0.0, 1.0, 1e-6) == pytest.approx(0.2)
+    assert stop_delay(s, 0.25, 1.0, 1e-6) == 0.0  # already still at t0
+    assert stop_delay(s + [(0.5, 0.2)], 0.0, 1.0, 1e-6) is None  # moving again: not stopped
+    assert stop_delay(s, 2.0, 3.0, 1e-6) is None  # no samples
+    assert stop_delay([(0.0, 0.3), (0.1, 0.0), (0.2, 0.3), (0.3, 0.0)], 0.0, 1.0, 1e-6) == pytest.approx(0.3)
+
+
+def test_wait_for_and_yaw():
+    t0 = time.monotonic()
+    assert not wait_for(lambda: False, 0.1, step=0.01)
+    assert time.monotonic() - t0 >= 0.1
+    assert wait_for(lambda: True, 5.0)
+    assert not wait_for(lambda: False, 5.0, abort=lambda: True)
+
+    class Q:
+        x = y = 0.0
+        z, w = 0.7071067811865476, 0.7071067811865476
+
+    assert yaw_of(Q) == pytest.approx(1.5707963, abs=1e-6)
