@@ -149,7 +149,7 @@ def render_text(report: Dict[str, object]) -> str:
         "  tricks completed: %d %s (longest gap between completions %.0f s)"
         % (report["tricks_completed"], report["tricks_by_name"], report["longest_gap_between_tricks_s"]),
         "  gestures sent over the bridge: %d (heartbeat %.1f Hz)" % (report["gestures_sent"], report["heartbeat_hz"]),
-        "  collision stops / resumes: %d / %d (LiDAR stale-cloud stops logged: %d)"
+        "  collision stops / resumes: %d / %d (rbd_lidar stale-cloud error lines: %d)"
         % (report["collision_stops"], report["collision_resumes"], report.get("lidar_stale_events", 0)),
         "  contacts footprint-person: %d" % len(report["contacts"]),
         "  min clearance footprint-person: %s" % ("n/a" if min_c is None else "%.2f m" % min_c),
