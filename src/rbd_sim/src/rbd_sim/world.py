@@ -10,6 +10,8 @@ ROS-free. A world file is YAML (see ``worlds/lab.yaml``)::
     tables:  [{name: t1, center: [x, y], size: [lx, ly], height: 0.75, yaw: 0.0}]
     cylinders: [{name: pillar, center: [x, y], radius: 0.2, height: 2.5}]
     people:  [{name: p1, path: [[x, y], ...], speed: 0.8, mode: loop, radius: 0.25, height: 1.75}]
+    crowd:   {count: 12, seed: 1, center: [0, 0], inner_radius: 1.5, outer_radius: 4.5,
+              min_speed: 0.5, max_speed: 1.5, waypoints: 4}   # optional, see below
 
 Every entry may carry ``reflectivity`` (0..255, the OS1's calibrated reflectivity). Unknown
 keys anywhere, missing required keys and bad values raise :class:`WorldError` naming the file
@@ -19,10 +21,18 @@ People move along their polyline at constant speed; ``mode`` is ``loop`` (closed
 ``pingpong`` (there and back) or ``stand`` (stays at the first point). ``phase`` [s] shifts a
 person along the path. Positions are a pure function of time, so every node that loads the
 same file computes the same people at the same time.
+
+``crowd`` adds ``count`` randomized people (named ``crowd0``, ``crowd1``, ...) drawn from
+``seed``: each walks a loop or a there-and-back path of ``waypoints`` random points in the ring
+between ``inner_radius`` and ``outer_radius`` around ``center`` at a speed drawn from
+[``min_speed``, ``max_speed``] (at most 1.5 m/s) with a random phase. Every point *and every
+segment* of a path keeps ``inner_radius`` from the centre, so the crowd walks around the robot's
+trick area but never through it. The same seed gives the same crowd (see :func:`crowd_people`).
 """
 
 import math
 import os
+import random
 
 import yaml
 
@@ -35,7 +45,13 @@ _KEYS = {
     "cylinder": ({"center", "radius", "height"}, {"name", "z", "reflectivity"}),
     "person": ({"name", "path"}, {"speed", "mode", "radius", "height", "phase", "reflectivity"}),
 }
-_TOP_KEYS = {"name", "description", "floor", "ceiling", "walls", "boxes", "tables", "cylinders", "people"}
+_TOP_KEYS = {"name", "description", "floor", "ceiling", "walls", "boxes", "tables", "cylinders", "people", "crowd"}
+_CROWD_KEYS = {
+    "count", "seed", "center", "inner_radius", "outer_radius", "min_speed", "max_speed", "waypoints",
+    "min_radius", "max_radius", "height",
+}
+#: Fastest walker a crowd may have [m/s] (issue 10: people walk at up to 1.5 m/s).
+CROWD_MAX_SPEED = 1.5
 _SECTION_KIND = {"walls": "wall", "boxes": "box", "tables": "table", "cylinders": "cylinder", "people": "person"}
 PERSON_MODES = ("loop", "pingpong", "stand")
 
@@ -325,7 +341,138 @@ def world_from_dict(data: dict, where: str = "world") -> World:
                 names.add(name)
             refl = _num(e.get("reflectivity", DEFAULT_REFLECTIVITY[kind]), ctx + ".reflectivity", lo=0, hi=255)
             _ADD[kind](world, e, ctx, world.floor_z + 0.0, name, refl)
+    if data.get("crowd") is not None:
+        _add_crowd(world, data["crowd"], where + ": crowd", names)
     return world
+
+
+def segment_distance(a: tuple, b: tuple, p: tuple) -> float:
+    """Distance [m] from point p to the segment a-b (all (x, y))."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    ll = dx * dx + dy * dy
+    f = 0.0 if ll <= 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / ll))
+    return math.hypot(a[0] + f * dx - p[0], a[1] + f * dy - p[1])
+
+
+def crowd_people(
+    count: int,
+    seed: int,
+    center: tuple = (0.0, 0.0),
+    inner_radius: float = 1.5,
+    outer_radius: float = 4.5,
+    min_speed: float = 0.5,
+    max_speed: float = CROWD_MAX_SPEED,
+    waypoints: int = 4,
+    min_radius: float = 0.18,
+    max_radius: float = 0.27,
+    height: float = 1.75,
+) -> list:
+    """Draw a reproducible crowd walking around ``center`` (see the module docstring).
+
+    Args:
+        count: Number of people (0..200).
+        seed: Random seed; the same arguments give the same crowd.
+        center: Centre of the area the crowd keeps out of [m].
+        inner_radius: No path point or segment comes closer to the centre than this [m].
+        outer_radius: No path point is farther than this [m].
+        min_speed: Slowest walking speed [m/s].
+        max_speed: Fastest walking speed [m/s], <= 1.5.
+        waypoints: Points per path (>= 2).
+        min_radius: Smallest body radius [m].
+        max_radius: Largest body radius [m].
+        height: Body height [m] (each person varies by +-0.2 m).
+
+    Returns:
+        The people, named crowd0 .. crowd<count-1>.
+
+    Raises:
+        WorldError: inconsistent arguments.
+    """
+    if not 0 <= count <= 200:
+        raise WorldError("crowd: count must be in 0..200, got %r" % count)
+    if not 0.0 < inner_radius < outer_radius:
+        raise WorldError("crowd: need 0 < inner_radius < outer_radius (got %g, %g)" % (inner_radius, outer_radius))
+    if outer_radius < 1.2 * inner_radius:
+        raise WorldError("crowd: the ring is too narrow to walk in (outer_radius >= 1.2 * inner_radius)")
+    if not 0.0 < min_speed <= max_speed <= CROWD_MAX_SPEED:
+        raise WorldError(
+            "crowd: need 0 < min_speed <= max_speed <= %g m/s (got %g, %g)" % (CROWD_MAX_SPEED, min_speed, max_speed)
+        )
+    if waypoints < 2 or waypoints > 20:
+        raise WorldError("crowd: waypoints must be in 2..20, got %r" % waypoints)
+    if not 0.05 <= min_radius <= max_radius <= 1.0:
+        raise WorldError("crowd: need 0.05 <= min_radius <= max_radius <= 1.0 m")
+    rng = random.Random(seed)
+    cx, cy = float(center[0]), float(center[1])
+
+    def point() -> tuple:
+        # Uniform over the ring's area.
+        r = math.sqrt(rng.uniform(inner_radius ** 2, outer_radius ** 2))
+        a = rng.uniform(-math.pi, math.pi)
+        return (cx + r * math.cos(a), cy + r * math.sin(a))
+
+    def clear(a: tuple, b: tuple) -> bool:
+        return segment_distance(a, b, (cx, cy)) >= inner_radius
+
+    people = []
+    for i in range(count):
+        pts = [point()]
+        while len(pts) < waypoints:
+            for _ in range(500):
+                p = point()
+                if clear(pts[-1], p) and math.hypot(p[0] - pts[-1][0], p[1] - pts[-1][1]) > 0.5:
+                    pts.append(p)
+                    break
+            else:
+                break  # cannot extend (very narrow ring): walk what we have
+        if len(pts) < 2:
+            raise WorldError("crowd: could not draw a path for crowd%d; widen the ring" % i)
+        mode = "loop" if len(pts) > 2 and clear(pts[-1], pts[0]) and rng.random() < 0.5 else "pingpong"
+        speed = rng.uniform(min_speed, max_speed)
+        person = Person(
+            "crowd%d" % i,
+            pts,
+            speed,
+            mode,
+            rng.uniform(min_radius, max_radius),
+            height + rng.uniform(-0.2, 0.2),
+            0.0,
+            DEFAULT_REFLECTIVITY["person"],
+        )
+        person.phase = rng.uniform(0.0, person.length / speed)
+        people.append(person)
+    return people
+
+
+def _add_crowd(world: World, e: object, ctx: str, names: set) -> None:
+    if not isinstance(e, dict):
+        raise WorldError("%s: must be a mapping like {count: 12, seed: 1}" % ctx)
+    bad = set(e) - _CROWD_KEYS
+    if bad:
+        raise WorldError("%s: unknown key(s) %s (allowed: %s)" % (ctx, sorted(bad), ", ".join(sorted(_CROWD_KEYS))))
+    if "count" not in e:
+        raise WorldError("%s: missing required key(s) ['count']" % ctx)
+    count, seed, waypoints = e["count"], e.get("seed", 0), e.get("waypoints", 4)
+    for label, v in (("count", count), ("seed", seed), ("waypoints", waypoints)):
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise WorldError("%s.%s: expected an integer, got %r" % (ctx, label, v))
+    people = crowd_people(
+        count,
+        seed,
+        _xy(e.get("center", [0.0, 0.0]), ctx + ".center"),
+        _num(e.get("inner_radius", 1.5), ctx + ".inner_radius"),
+        _num(e.get("outer_radius", 4.5), ctx + ".outer_radius"),
+        _num(e.get("min_speed", 0.5), ctx + ".min_speed"),
+        _num(e.get("max_speed", CROWD_MAX_SPEED), ctx + ".max_speed"),
+        waypoints,
+        _num(e.get("min_radius", 0.18), ctx + ".min_radius"),
+        _num(e.get("max_radius", 0.27), ctx + ".max_radius"),
+        _num(e.get("height", 1.75), ctx + ".height", lo=0.5, hi=2.5),
+    )
+    clash = names & {p.name for p in people}
+    if clash:
+        raise WorldError("%s: name(s) %s already used by other entries" % (ctx, sorted(clash)))
+    world.people.extend(people)
 
 
 def _add_wall(world: World, e: dict, ctx: str, floor: float, name: str, refl: float) -> None:
