@@ -27,6 +27,10 @@ class MapCorrection {
     double max_jump_rotation = 0.35;            ///< [rad]
     double max_correction_speed = 0.5;          ///< [m/s] how fast the corrected pose may move
     double max_correction_angular_speed = 0.5;  ///< [rad/s]
+    /// Largest correction applied from one scan [m] / [rad], however long matches were refused
+    /// before (the pose consumers then never see a jump, only a bounded step per scan).
+    double max_correction_step = 0.02;
+    double max_correction_step_rotation = 0.02;
     OccupancyMap::Params map;
     ScanMatcher::Params matcher;
   };
