@@ -58,6 +58,7 @@ MapCorrection::Update MapCorrection::processScan(double time, const Points2d& po
       map_.updateDistanceField();
       last_accept_time_ = time;
       last_map_update_time_ = time;
+      last_map_update_pose_ = prior;
     }
     return u;
   }
@@ -97,7 +98,11 @@ MapCorrection::Update MapCorrection::processScan(double time, const Points2d& po
   u.map_from_odom = map_from_odom_;
 
   // Slow refinement from the matched pose (people walking through get cleared again by misses).
-  if (time - last_map_update_time_ >= params_.map_update_interval) {
+  const Eigen::Isometry2d moved = last_map_update_pose_.inverse() * m.pose;
+  if (time - last_map_update_time_ >= params_.map_update_interval &&
+      (moved.translation().norm() >= params_.map_update_min_translation ||
+       std::fabs(yawOf(moved)) >= params_.map_update_min_rotation)) {
+    last_map_update_pose_ = m.pose;
     map_.insertScan(m.pose, points, params_.map_update_weight);
     map_.updateDistanceField();
     last_map_update_time_ = time;
