@@ -2,6 +2,7 @@
 
 #include <XmlRpcValue.h>
 
+#include <cmath>
 #include <limits>
 #include <sstream>
 
@@ -167,6 +168,23 @@ bool loadFilterParams(const ros::NodeHandle& pnh, FilterParams* p, std::string* 
       pnh.param(s.name + "_queue_size", s.queue_size, 1);
       if (s.queue_size < 1) s.queue_size = 1;
       pnh.param(s.name + "_frame_is_world", s.frame_is_world, false);
+      if (readDoubleList(pnh, s.name + "_differential_noise", &list, error)) {
+        if (list.size() != 6) {
+          *error = s.name + "_differential_noise needs 6 numbers (x y z roll pitch yaw), got " +
+                   std::to_string(list.size());
+          return false;
+        }
+        for (size_t i = 0; i < 6; ++i) {
+          if (!std::isfinite(list[i]) || list[i] < 0.0) {
+            *error = s.name + "_differential_noise must be finite and >= 0";
+            return false;
+          }
+          s.differential_noise[i] = list[i];
+        }
+        s.has_differential_noise = true;
+      } else if (!error->empty()) {
+        return false;
+      }
       switch (s.type) {
         case SensorType::kImu:
           s.pose_rejection_threshold = threshold(pnh, s.name + "_pose_rejection_threshold");

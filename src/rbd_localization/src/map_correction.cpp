@@ -58,6 +58,7 @@ MapCorrection::Update MapCorrection::processScan(double time, const Points2d& po
       map_.updateDistanceField();
       last_accept_time_ = time;
       last_map_update_time_ = time;
+      last_map_update_pose_ = prior;
     }
     return u;
   }
@@ -82,9 +83,12 @@ MapCorrection::Update MapCorrection::processScan(double time, const Points2d& po
   // Rate limit: move the corrected robot pose towards the match by at most speed * elapsed.
   const double elapsed = std::max(0.02, std::min(1.0, time - last_accept_time_));
   Eigen::Vector2d step = dt_vec;
-  const double max_step = params_.max_correction_speed * elapsed;
+  // Bounded per scan as well: after a long run of refused scans (body tilted, crowd) elapsed is
+  // large, and the whole accumulated drift must not be applied at once.
+  const double max_step = std::min(params_.max_correction_speed * elapsed, params_.max_correction_step);
   if (step.norm() > max_step) step *= max_step / step.norm();
-  const double max_rot = params_.max_correction_angular_speed * elapsed;
+  const double max_rot =
+      std::min(params_.max_correction_angular_speed * elapsed, params_.max_correction_step_rotation);
   const double rot = std::max(-max_rot, std::min(max_rot, dth));
   const Eigen::Isometry2d corrected =
       pose2d(prior.translation().x() + step.x(), prior.translation().y() + step.y(), yawOf(prior) + rot);
@@ -94,7 +98,11 @@ MapCorrection::Update MapCorrection::processScan(double time, const Points2d& po
   u.map_from_odom = map_from_odom_;
 
   // Slow refinement from the matched pose (people walking through get cleared again by misses).
-  if (time - last_map_update_time_ >= params_.map_update_interval) {
+  const Eigen::Isometry2d moved = last_map_update_pose_.inverse() * m.pose;
+  if (time - last_map_update_time_ >= params_.map_update_interval &&
+      (moved.translation().norm() >= params_.map_update_min_translation ||
+       std::fabs(yawOf(moved)) >= params_.map_update_min_rotation)) {
+    last_map_update_pose_ = m.pose;
     map_.insertScan(m.pose, points, params_.map_update_weight);
     map_.updateDistanceField();
     last_map_update_time_ = time;

@@ -83,6 +83,10 @@ bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams
   pnh.param("max_jump_rotation", c->max_jump_rotation, c->max_jump_rotation);
   pnh.param("max_correction_speed", c->max_correction_speed, c->max_correction_speed);
   pnh.param("max_correction_angular_speed", c->max_correction_angular_speed, c->max_correction_angular_speed);
+  pnh.param("max_correction_step", c->max_correction_step, c->max_correction_step);
+  pnh.param("map_update_min_translation", c->map_update_min_translation, c->map_update_min_translation);
+  pnh.param("map_update_min_rotation", c->map_update_min_rotation, c->map_update_min_rotation);
+  pnh.param("max_correction_step_rotation", c->max_correction_step_rotation, c->max_correction_step_rotation);
   pnh.param("resolution", c->map.resolution, c->map.resolution);
   pnh.param("map_size", c->map.size, c->map.size);
   pnh.param("max_iterations", c->matcher.max_iterations, c->matcher.max_iterations);

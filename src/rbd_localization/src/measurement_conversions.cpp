@@ -1,5 +1,6 @@
 #include "rbd_localization/measurement_conversions.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "rbd_localization/geometry.h"
@@ -78,10 +79,22 @@ bool differentialMeasurement(const PoseWithCov& previous, const PoseWithCov& cur
   m.mahalanobis_threshold = cfg.pose_rejection_threshold;
   m.values.segment<3>(POSITION_V_OFFSET) = delta.translation() / dt;
   m.values.segment<3>(ORIENTATION_V_OFFSET) = rpyFromRotation(delta.linear()) / dt;
-  // Both poses' uncertainty, expressed in the previous body frame, over dt^2.
-  const Matrix6d cov =
-      rotateCovariance(previous.covariance + current.covariance, previous.pose.linear().transpose()) /
-      (dt * dt);
+  Matrix6d world_cov;
+  if (cfg.has_differential_noise) {
+    // RoboDog: the increment's own uncertainty, i.e. twice the per-sample white noise plus what
+    // the reported covariance grew by (the drift added between the samples); a relocalisation
+    // shrinks the covariance and adds nothing.
+    world_cov.setZero();
+    for (int i = 0; i < 6; ++i) {
+      const double n = cfg.differential_noise[static_cast<size_t>(i)];
+      world_cov(i, i) = 2.0 * n * n + std::max(0.0, current.covariance(i, i) - previous.covariance(i, i));
+    }
+  } else {
+    // r_l: both poses' uncertainty.
+    world_cov = previous.covariance + current.covariance;
+  }
+  // Expressed in the previous body frame, over dt^2.
+  const Matrix6d cov = rotateCovariance(world_cov, previous.pose.linear().transpose()) / (dt * dt);
   m.covariance.block<6, 6>(POSITION_V_OFFSET, POSITION_V_OFFSET) = cov;
   for (int i = 0; i < 6; ++i) m.update_vector[POSITION_V_OFFSET + i] = cfg.update_vector[i];
   *out = m;

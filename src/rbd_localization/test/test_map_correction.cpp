@@ -146,18 +146,28 @@ TEST(MapCorrection, GatesBadFitsAndLimitsJumpRate) {
   auto u = mc.processScan(t, castScan(pose2d(0, 0, 0), other, {}, 1024, 0.01, &rng), pose2d(0, 0, 0));
   EXPECT_EQ(u.status, MapCorrection::Status::kRejectedFit) << u.reason;
   EXPECT_TRUE(mc.mapFromOdom().isApprox(Eigen::Isometry2d::Identity()));
-  // Odometry 0.3 m off: matched, but the correction is applied at <= 0.5 m/s.
-  t += 0.1;
+  // Odometry 0.3 m off after 2 s of refused scans: matched, but the corrected pose moves by at
+  // most max_correction_step per scan (the speed limit alone would allow 0.5 m/s * 1 s).
+  t += 2.0;
   u = mc.processScan(t, castScan(pose2d(0, 0, 0), walls, {}, 1024, 0.01, &rng), pose2d(0.3, 0, 0));
   ASSERT_EQ(u.status, MapCorrection::Status::kAccepted) << u.reason;
-  const double first_step = (mc.mapFromOdom() * pose2d(0.3, 0, 0)).translation().x();
-  // 0.2 s since the last accepted scan (the rejected one does not count): at most 0.1 m.
-  EXPECT_NEAR(first_step, 0.3 - 0.5 * 0.2, 0.01);
-  for (int i = 0; i < 10; ++i) {
+  double previous = (mc.mapFromOdom() * pose2d(0.3, 0, 0)).translation().x();
+  EXPECT_NEAR(previous, 0.3 - p.max_correction_step, 1e-6);
+  for (int i = 0; i < 20; ++i) {
     t += 0.1;
     mc.processScan(t, castScan(pose2d(0, 0, 0), walls, {}, 1024, 0.01, &rng), pose2d(0.3, 0, 0));
+    const double x = (mc.mapFromOdom() * pose2d(0.3, 0, 0)).translation().x();
+    EXPECT_LE(std::fabs(x - previous), p.max_correction_step + 1e-9) << "scan " << i;
+    previous = x;
   }
-  EXPECT_NEAR((mc.mapFromOdom() * pose2d(0.3, 0, 0)).translation().x(), 0.0, 0.02);
+  EXPECT_NEAR(previous, 0.0, 0.02);
+  // Scans 0.02 s apart: the speed limit (0.5 m/s) is the tighter bound, 0.01 m per scan.
+  t += 0.1;
+  mc.processScan(t, castScan(pose2d(0, 0, 0), walls, {}, 1024, 0.01, &rng), pose2d(0.4, 0, 0));
+  previous = (mc.mapFromOdom() * pose2d(0.4, 0, 0)).translation().x();
+  t += 0.02;
+  mc.processScan(t, castScan(pose2d(0, 0, 0), walls, {}, 1024, 0.01, &rng), pose2d(0.4, 0, 0));
+  EXPECT_NEAR(previous - (mc.mapFromOdom() * pose2d(0.4, 0, 0)).translation().x(), 0.5 * 0.02, 1e-4);
   // A 2 m jump of the prior is refused outright.
   t += 0.1;
   u = mc.processScan(t, castScan(pose2d(0, 0, 0), walls, {}, 1024, 0.01, &rng),

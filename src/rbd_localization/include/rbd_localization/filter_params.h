@@ -33,6 +33,13 @@ struct SensorConfig {
   /// RoboDog extension (`<name>_frame_is_world`): treat the message frame as world_frame
   /// instead of transforming through TF (for a camera whose own "map" drifts like odometry).
   bool frame_is_world = false;
+  /// RoboDog extension (`<name>_differential_noise`, 6 standard deviations x y z roll pitch yaw):
+  /// with `_differential`, the velocity covariance is built from the sensor's per-sample white
+  /// noise plus the growth of its reported covariance between the two poses, instead of r_l's
+  /// sum of both covariances (which, for a tracker reporting its accumulated drift, makes the
+  /// velocities uselessly uncertain and lets jumps through the gate).
+  bool has_differential_noise = false;
+  std::array<double, 6> differential_noise{};
 };
 
 /// Everything the node reads at startup.

@@ -15,9 +15,14 @@ namespace rbd_localization {
 class MapCorrection {
  public:
   struct Params {
-    double initial_mapping_duration = 2.0;      ///< [s] scans inserted without matching
-    int initial_mapping_min_scans = 5;          ///< ... and at least this many
-    double map_update_interval = 1.0;           ///< [s] between refinements from matched scans
+    double initial_mapping_duration = 2.0;  ///< [s] scans inserted without matching
+    int initial_mapping_min_scans = 5;      ///< ... and at least this many
+    double map_update_interval = 1.0;       ///< [s] between refinements from matched scans
+    /// Refine only after the robot moved this far [m] / turned this much [rad] since the last
+    /// refinement: a standing robot would otherwise burn people standing in view, and its own
+    /// small match errors, into the map again and again (the map, and the pose, creep).
+    double map_update_min_translation = 0.1;
+    double map_update_min_rotation = 0.1;
     double map_update_weight = 0.3;             ///< scales hit/miss log-odds during refinement
     double min_inlier_ratio = 0.5;              ///< fit gate: share of points near structure
     double max_rms = 0.06;                      ///< fit gate: inliers' RMS distance [m]
@@ -27,6 +32,10 @@ class MapCorrection {
     double max_jump_rotation = 0.35;            ///< [rad]
     double max_correction_speed = 0.5;          ///< [m/s] how fast the corrected pose may move
     double max_correction_angular_speed = 0.5;  ///< [rad/s]
+    /// Largest correction applied from one scan [m] / [rad], however long matches were refused
+    /// before (the pose consumers then never see a jump, only a bounded step per scan).
+    double max_correction_step = 0.02;
+    double max_correction_step_rotation = 0.02;
     OccupancyMap::Params map;
     ScanMatcher::Params matcher;
   };
@@ -66,6 +75,7 @@ class MapCorrection {
   double start_time_ = 0.0;
   double last_accept_time_ = 0.0;
   double last_map_update_time_ = 0.0;
+  Eigen::Isometry2d last_map_update_pose_ = Eigen::Isometry2d::Identity();
 };
 
 }  // namespace rbd_localization

@@ -1,0 +1,220 @@
+#!/usr/bin/env python3
+"""rostest fault "ZED2 jumping 1 m" (issue 10, DESIGN §5): the controllers follow the localization.
+
+The EKF reads the ZED2 pose through this test's relay (``zed2_pose:=/reliability/zed2_pose``).
+While the robot walks the ``walk`` trick, the relay shifts the ZED2 pose by ``~jump`` metres
+sideways (a lasting shift, like a real ZED relocalising into a wrong place) and removes it again
+``~jump_duration`` seconds later. Measured on the simulator's ground truth:
+
+- the robot does not lunge: its path stays within ``~max_path_deviation`` of the planned path
+  (/rbd_controller/path) and its speed within ``~max_speed``;
+- the jump is rejected: ``/rbd_localization/pose`` stays within ``~max_pose_error`` of ground
+  truth the whole time, and the EKF reports rejected ZED2 samples on /diagnostics;
+- the trick still completes and ends at its goal.
+
+One ``FAULT_RESULT {json}`` line is printed (and appended to $RBD_FAULT_LOG if set).
+"""
+
+import bisect
+import json
+import math
+import os
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
+from nav_msgs.msg import Odometry, Path
+from std_msgs.msg import String
+from std_srvs.srv import SetBool
+
+
+def shifted(msg, dx, dy):
+    """Copy of a PoseWithCovarianceStamped moved by (dx, dy) metres in its frame."""
+    out = PoseWithCovarianceStamped()
+    out.header = msg.header
+    out.pose.covariance = msg.pose.covariance
+    out.pose.pose.orientation = msg.pose.pose.orientation
+    out.pose.pose.position.x = msg.pose.pose.position.x + dx
+    out.pose.pose.position.y = msg.pose.pose.position.y + dy
+    out.pose.pose.position.z = msg.pose.pose.position.z
+    return out
+
+
+def distance_to_polyline(px, py, points):
+    """Shortest distance [m] from (px, py) to the polyline through points [(x, y), ...]."""
+    if len(points) == 1:
+        return math.hypot(px - points[0][0], py - points[0][1])
+    best = float("inf")
+    for (ax, ay), (bx, by) in zip(points[:-1], points[1:]):
+        dx, dy = bx - ax, by - ay
+        n = dx * dx + dy * dy
+        s = 0.0 if n < 1e-12 else max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / n))
+        best = min(best, math.hypot(px - ax - s * dx, py - ay - s * dy))
+    return best
+
+
+class Zed2Jump(unittest.TestCase):
+    """The whole fault in one test case."""
+
+    def setUp(self):
+        self.lock = threading.Lock()
+        self.offset = (0.0, 0.0)
+        self.truth_t, self.truth = [], []  # stamp [s], (x, y, speed)
+        self.pose_errors = []  # (stamp, |pose - truth|)
+        self.path = []  # (x, y) of the planned path
+        self.state = None
+        self.rejected = 0
+        self.relayed = 0
+        self.zed_pub = rospy.Publisher("/reliability/zed2_pose", PoseWithCovarianceStamped, queue_size=10)
+        self.gesture = rospy.Publisher("/rbd_gestrec/gesture", String, queue_size=10)
+        rospy.Subscriber("/zed2/zed_node/pose_with_covariance", PoseWithCovarianceStamped, self.on_zed, queue_size=10)
+        rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_truth, queue_size=100)
+        rospy.Subscriber("/rbd_localization/pose", PoseStamped, self.on_pose, queue_size=50)
+        rospy.Subscriber("/rbd_controller/path", Path, self.on_path, queue_size=5)
+        rospy.Subscriber("/rbd_controller/state", String, self.on_state, queue_size=20)
+        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=20)
+
+    # ------------------------------------------------------------ callbacks
+    def on_zed(self, msg):
+        with self.lock:
+            dx, dy = self.offset
+        self.zed_pub.publish(shifted(msg, dx, dy))
+        self.relayed += 1
+
+    def on_truth(self, msg):
+        p, v = msg.pose.pose.position, msg.twist.twist.linear
+        with self.lock:
+            self.truth_t.append(msg.header.stamp.to_sec())
+            self.truth.append((p.x, p.y, math.hypot(v.x, v.y)))
+
+    def on_pose(self, msg):
+        t = msg.header.stamp.to_sec()
+        with self.lock:
+            i = bisect.bisect_left(self.truth_t, t)
+            if not self.truth_t or i >= len(self.truth_t) or (i == 0 and self.truth_t[0] - t > 0.02):
+                return
+            if i > 0 and t - self.truth_t[i - 1] < self.truth_t[i] - t:
+                i -= 1
+            x, y, _ = self.truth[i]
+            self.pose_errors.append((t, math.hypot(msg.pose.position.x - x, msg.pose.position.y - y)))
+
+    def on_path(self, msg):
+        # The controller may publish the path goal by goal: keep every new point, in order.
+        with self.lock:
+            for p in msg.poses:
+                pt = (p.pose.position.x, p.pose.position.y)
+                if not self.path or math.hypot(pt[0] - self.path[-1][0], pt[1] - self.path[-1][1]) > 1e-3:
+                    self.path.append(pt)
+
+    def on_state(self, msg):
+        self.state = msg.data
+
+    def on_diagnostics(self, msg):
+        for status in msg.status:
+            if "pose0" in status.name:
+                for kv in status.values:
+                    if kv.key == "rejected":
+                        self.rejected = max(self.rejected, int(kv.value))
+
+    # ------------------------------------------------------------ helpers
+    def wait_for(self, predicate, timeout):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and not rospy.is_shutdown():
+            if predicate():
+                return True
+            time.sleep(0.05)
+        return predicate()
+
+    def speed(self):
+        with self.lock:
+            return self.truth[-1][2] if self.truth else 0.0
+
+    def record(self, **result):
+        result["fault"] = "zed2_jump"
+        line = json.dumps(result, sort_keys=True)
+        print("FAULT_RESULT " + line, flush=True)
+        path = os.environ.get("RBD_FAULT_LOG")
+        if path:
+            with open(path, "a") as fh:
+                fh.write(line + "\n")
+
+    # ------------------------------------------------------------ the fault
+    def test_zed2_jump(self):
+        g = rospy.get_param
+        jump = float(g("~jump", 1.0))
+        jump_delay = float(g("~jump_delay", 1.0))
+        jump_duration = float(g("~jump_duration", 8.0))
+        max_pose_error = float(g("~max_pose_error", 0.08))
+        max_path_deviation = float(g("~max_path_deviation", 0.25))
+        max_speed = float(g("~max_speed", 0.45))
+        goal_tolerance = float(g("~goal_tolerance", 0.1))
+
+        self.assertTrue(self.wait_for(lambda: self.state and self.truth and self.relayed > 10, 90.0), "system not up")
+        self.assertTrue(
+            self.wait_for(lambda: len(self.pose_errors) > 20, 30.0), "no /rbd_localization/pose from the relayed ZED2"
+        )
+        # Release the e-stop and show "walk" until the robot walks.
+        rospy.wait_for_service("/rbd_controller/em_stop", 30.0)
+        em_stop = rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)
+        deadline = time.monotonic() + 45.0
+        last_gesture = 0.0
+        while not (self.state == "EXECUTING" and self.speed() > 0.08):
+            self.assertLess(time.monotonic(), deadline, "robot never walked (state %r)" % self.state)
+            if self.state == "EMERGENCY_STOP":
+                em_stop(False)
+            if self.state == "WAITING_FOR_GESTURE" and time.monotonic() - last_gesture > 0.4:
+                self.gesture.publish(String("walk"))
+                last_gesture = time.monotonic()
+            time.sleep(0.05)
+        t_start = rospy.get_time()
+        rejected_before = self.rejected
+        time.sleep(jump_delay)
+        # Sideways to the walk (+y): a controller following the jumped pose would lunge off the path.
+        with self.lock:
+            self.offset = (0.0, jump)
+        t_jump = rospy.get_time()
+        time.sleep(jump_duration)
+        with self.lock:
+            self.offset = (0.0, 0.0)
+        t_clear = rospy.get_time()
+        finished = self.wait_for(lambda: self.state == "WAITING_FOR_GESTURE", 60.0)
+        time.sleep(1.0)  # diagnostics (1 Hz) catch up
+        t_end = rospy.get_time()
+
+        with self.lock:
+            start = self.truth[bisect.bisect_left(self.truth_t, t_start) - 1]
+            path = [(start[0], start[1])] + list(self.path)  # from where the trick started
+            truth = [(t, s) for t, s in zip(self.truth_t, self.truth) if t_start <= t <= t_end]
+            errors = [e for t, e in self.pose_errors if t_start <= t <= t_end]
+        self.assertTrue(len(path) > 1, "no planned path on /rbd_controller/path")
+        self.assertTrue(truth and errors, "no ground truth / localization pose recorded")
+        deviation = max(distance_to_polyline(s[0], s[1], path) for _t, s in truth)
+        top_speed = max(s[2] for _t, s in truth)
+        pose_error = max(errors)
+        final = truth[-1][1]
+        goal_error = math.hypot(final[0] - path[-1][0], final[1] - path[-1][1])
+        self.record(
+            jump_m=jump,
+            jump_s=round(t_clear - t_jump, 2),
+            max_pose_error_m=round(pose_error, 3),
+            max_path_deviation_m=round(deviation, 3),
+            max_speed_mps=round(top_speed, 3),
+            zed_rejected=self.rejected - rejected_before,
+            finished=finished,
+            goal_error_m=round(goal_error, 3),
+        )
+        self.assertGreater(self.rejected, rejected_before, "the EKF never reported a rejected ZED2 sample")
+        self.assertLessEqual(pose_error, max_pose_error, "localization followed the ZED2 jump")
+        self.assertLessEqual(deviation, max_path_deviation, "the robot left the planned path (lunge)")
+        self.assertLessEqual(top_speed, max_speed, "the robot moved faster than the limits")
+        self.assertTrue(finished, "the trick did not complete after the jump (state %r)" % self.state)
+        self.assertLessEqual(goal_error, goal_tolerance, "the trick ended away from its goal")
+
+
+if __name__ == "__main__":
+    rospy.init_node("test_fault_zed2_jump")
+    rostest.rosrun("rbd_bringup", "test_fault_zed2_jump", Zed2Jump)
