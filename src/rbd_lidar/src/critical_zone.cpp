@@ -400,8 +400,7 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
       ++counts[side];
       crit[n_crit] = static_cast<uint32_t>(u * cols + c);
       crit_side[n_crit] = static_cast<uint8_t>(side);
-      ++n_crit;
-      lam[n_lam++] = 0.0f;
+      ++n_crit;  // lambda 0: counted by n_crit, not stored
     } else {
       double lambda = 0.0;
       for (int s = 0; s < 4; ++s) {
@@ -419,10 +418,15 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
     res.min_distance[s] = min_dist[s];
   }
   // Speed scale: the point_threshold-th smallest lambda, so that single noisy returns do not brake.
+  // Stop-zone points have lambda 0 and are only counted (n_crit); the slowdown-band lambdas are
+  // stored.
   const size_t k = std::max<size_t>(1, z.point_threshold);
-  if (lambdas.size() >= k) {
-    std::nth_element(lambdas.begin(), lambdas.begin() + (k - 1), lambdas.end());
-    res.speed_scale = lambdas[k - 1];
+  if (n_crit >= k) {
+    res.speed_scale = 0.0f;
+  } else if (n_crit + lambdas.size() >= k) {
+    const size_t j = k - 1 - n_crit;
+    std::nth_element(lambdas.begin(), lambdas.begin() + j, lambdas.end());
+    res.speed_scale = lambdas[j];
   }
 }
 

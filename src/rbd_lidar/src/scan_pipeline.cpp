@@ -31,16 +31,20 @@ void addField(sensor_msgs::PointCloud2* msg, const char* name, uint32_t offset) 
 }
 
 // An unorganised float cloud with fields x y z intensity at offsets 0 4 8 `intensity_offset`.
+// The field list is rebuilt only when it differs (the output messages are reused every scan).
 void initCloud(const std_msgs::Header& header, uint32_t point_step, uint32_t intensity_offset,
                sensor_msgs::PointCloud2* msg) {
   msg->header = header;
   msg->height = 1;
   msg->width = 0;
-  msg->fields.clear();
-  addField(msg, "x", 0);
-  addField(msg, "y", 4);
-  addField(msg, "z", 8);
-  addField(msg, "intensity", intensity_offset);
+  if (msg->fields.size() != 4 || msg->fields[3].offset != intensity_offset || msg->fields[0].name != "x" ||
+      msg->fields[3].name != "intensity") {
+    msg->fields.clear();
+    addField(msg, "x", 0);
+    addField(msg, "y", 4);
+    addField(msg, "z", 8);
+    addField(msg, "intensity", intensity_offset);
+  }
   msg->is_bigendian = false;
   msg->point_step = point_step;
   msg->row_step = 0;
@@ -373,26 +377,44 @@ void ScanPipeline::buildOutputs(const sensor_msgs::PointCloud2& cloud, Outputs* 
   initCloud(cloud.header, 32, 16, &crit);
   crit.width = static_cast<uint32_t>(z.critical.size());
   crit.row_step = crit.width * crit.point_step;
-  crit.data.assign(crit.row_step, 0);
-  for (size_t k = 0; k < z.critical.size(); ++k) {
-    const uint32_t idx = z.critical[k];
-    const uint8_t* src = &cloud.data[(idx / width) * cloud.row_step + (idx % width) * cloud.point_step];
-    float xyz[3] = {readFloat(src + x_off_), readFloat(src + y_off_), readFloat(src + z_off_)};
-    if (!std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2])) {
+  crit.data.resize(crit.row_step);  // capacity reused across scans; every byte is written below
+  // Critical indices ascend (row-major pass), so the row follows by stepping, not by division.
+  const uint8_t* base = cloud.data.data();
+  const uint32_t* idx_ptr = z.critical.data();
+  const uint8_t* side_ptr = z.critical_side.data();
+  uint8_t* dst = crit.data.data();
+  uint32_t crow = 0, row_begin = 0;
+  for (size_t k = 0; k < z.critical.size(); ++k, dst += 32) {
+    const uint32_t idx = idx_ptr[k];
+    if (idx < row_begin) {  // not ascending (never from evaluateStrided): fall back to division
+      crow = static_cast<uint32_t>(idx / width);
+      row_begin = static_cast<uint32_t>(crow * width);
+    }
+    while (idx - row_begin >= width) {
+      ++crow;
+      row_begin += static_cast<uint32_t>(width);
+    }
+    const uint8_t* src = base + static_cast<size_t>(crow) * cloud.row_step +
+                         static_cast<size_t>(idx - row_begin) * cloud.point_step;
+    // pcl::PointXYZI: x y z 1 | intensity 0 0 0.
+    float v[8] = {readFloat(src + x_off_),
+                  readFloat(src + y_off_),
+                  readFloat(src + z_off_),
+                  1.0f,
+                  1.0f + side_ptr[k],
+                  0.0f,
+                  0.0f,
+                  0.0f};
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) {
       // ouster-ros >= 0.13 may publish NaN xyz below its min_range: use the beam model.
       uint32_t r;
       std::memcpy(&r, src + range_off_, 4);
       const Eigen::Vector3d p = zone_.sensorPoint(idx, r);
-      xyz[0] = static_cast<float>(p.x());
-      xyz[1] = static_cast<float>(p.y());
-      xyz[2] = static_cast<float>(p.z());
+      v[0] = static_cast<float>(p.x());
+      v[1] = static_cast<float>(p.y());
+      v[2] = static_cast<float>(p.z());
     }
-    uint8_t* dst = &crit.data[k * 32];
-    std::memcpy(dst, xyz, 12);
-    const float one = 1.0f;
-    std::memcpy(dst + 12, &one, 4);
-    const float intensity = 1.0f + z.critical_side[k];
-    std::memcpy(dst + 16, &intensity, 4);
+    std::memcpy(dst, v, 32);
   }
 
   // Slice ring: cloud of its valid points and the LaserScan.
@@ -430,7 +452,7 @@ void ScanPipeline::buildOutputs(const sensor_msgs::PointCloud2& cloud, Outputs* 
     const float values[4] = {x, y, zz, range_mm * 1e-3f};
     std::memcpy(&slice.data[count * 16], values, 16);
     ++count;
-    const float planar = std::hypot(x, y);
+    const float planar = std::sqrt(x * x + y * y);
     if (planar < scan.range_min || planar > scan.range_max) continue;
     long bin = (first_bin + model_.direction * static_cast<long>(c)) % w;
     if (bin < 0) bin += w;

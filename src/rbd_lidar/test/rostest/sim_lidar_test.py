@@ -141,6 +141,33 @@ class SimLidarTest(unittest.TestCase):
             f.write("%.0f\n" % (tripped * 1000))
         self.assertLess(abs(tripped - 0.70), 0.08)
 
+    def test_4_low_obstacle(self) -> None:
+        """A low cylinder (0.2 m high) just ahead trips the zone; the floor alone never does.
+
+        The floor fit must not absorb real low obstacles into the floor plane. The OS1-32's lowest
+        beam (about -21 deg) first reaches 0.2 m above the floor about 0.5 m ahead of the sensor,
+        so the cylinder's near face sits 0.6 m ahead (inside the 0.7 m front zone, in view).
+        """
+        self._wait_clear()
+        x = self.gt.pose.pose.position.x
+        y = self.gt.pose.pose.position.y
+        t_floor = rospy.get_time()
+        time.sleep(1.0)
+        with self.lock:
+            floor_only = [s for t, s in self.states if t > t_floor]
+        self.assertGreater(len(floor_only), 5)
+        self.assertEqual([list(s.points) for s in floor_only if s.collision], [], "floor alone tripped the zone")
+        t0 = rospy.get_time()
+        self.assertTrue(self.place(name="low", x=x + 0.75, y=y, radius=0.15, height=0.2, remove=False).success)
+        time.sleep(1.0)
+        with self.lock:
+            late = [s for t, s in self.states if t > t0 + 0.25]
+        self.assertTrue(self.place(name="low", remove=True).success)
+        self.assertTrue(late)
+        self.assertTrue(all(s.collision for s in late), [list(s.points) for s in late])
+        self.assertGreater(late[-1].points[0], 0)
+        self._wait_clear()
+
 
 if __name__ == "__main__":
     rostest.rosrun("rbd_lidar", "sim_lidar", SimLidarTest)
