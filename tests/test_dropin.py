@@ -25,6 +25,10 @@ FULL = os.environ.get("RBD_DROPIN_FULL") == "1"
 LIGHT = [p for p in PACKAGES if p not in HEAVY]
 CMAKE_ARGS = ["-DPYTHON_EXECUTABLE=/usr/bin/python3", "-DCATKIN_ENABLE_TESTING=OFF", "-DCMAKE_BUILD_TYPE=",
               "-DCMAKE_CXX_FLAGS=-O0"]
+if shutil.which("ccache"):
+    # Rebuilds of unchanged sources come from the cache: CCACHE_BASEDIR (set per workspace in run())
+    # makes the paths relative, so a fresh workspace at another tmp path still hits.
+    CMAKE_ARGS += ["-DCMAKE_CXX_COMPILER_LAUNCHER=ccache", "-DCMAKE_C_COMPILER_LAUNCHER=ccache"]
 
 
 def clean_env():
@@ -41,6 +45,7 @@ def clean_env():
 def run(cmd, cwd):
     env = clean_env()
     env["PWD"] = cwd  # catkin_make takes its base path from PWD
+    env["CCACHE_BASEDIR"] = cwd
     proc = subprocess.run(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                           universal_newlines=True)
     assert proc.returncode == 0, "%s failed:\n%s" % (" ".join(cmd), proc.stdout[-6000:])
