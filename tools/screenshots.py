@@ -62,13 +62,7 @@ def shoot_rviz(out):
         subprocess.run(["import", "-display", ":%d" % disp, "-window", "root", png], env=env, check=True, timeout=60)
         print("written", png)
     finally:
-        for p in reversed(procs):
-            if p.poll() is None:
-                os.killpg(p.pid, signal.SIGINT)
-                try:
-                    p.wait(20)
-                except subprocess.TimeoutExpired:
-                    os.killpg(p.pid, signal.SIGKILL)
+        stop_all(procs)
 
 
 def stop_all(procs):

@@ -4,13 +4,16 @@ Safety tests and the demo measure "zero velocity at the A1" on the commands the 
 receives (``LCM_High_Cmd`` on the mock A1's LCM URL), not on what a node believes it sent.
 This module is ROS-free; the clock and the sink for the samples are the caller's.
 
-Also holds the small polling helpers the rbd_bringup rostests share (``wait_for``, ``yaw_of``).
+Also holds the small helpers the rbd_bringup rostests share (``wait_for``, ``yaw_of``,
+``report_fault_result``).
 """
 
+import json
 import math
+import os
 import threading
 import time
-from typing import Callable, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Tuple
 
 from rbd_a1_driver import unitree_layout as ul
 
@@ -144,3 +147,21 @@ def wait_for(predicate: Callable[[], object], timeout: float, step: float = 0.05
 def yaw_of(q: object) -> float:
     """Yaw [rad] of a quaternion with x, y, z, w attributes (geometry_msgs/Quaternion)."""
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def report_fault_result(result: Dict[str, object]) -> str:
+    """Print one ``FAULT_RESULT {json}`` line and append it to ``$RBD_FAULT_LOG`` if that is set.
+
+    Args:
+        result: the measurement of one fault injection (JSON-serialisable values).
+
+    Returns:
+        The JSON text of the line, for the caller's own log.
+    """
+    line = json.dumps(result, sort_keys=True)
+    print("FAULT_RESULT " + line, flush=True)
+    path = os.environ.get("RBD_FAULT_LOG")
+    if path:
+        with open(path, "a") as fh:
+            fh.write(line + "\n")
+    return line

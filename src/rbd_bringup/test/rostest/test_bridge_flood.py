@@ -23,6 +23,8 @@ from std_srvs.srv import SetBool
 from test_faults import Faults, wait_for
 from websockets.sync.client import connect
 
+from rbd_bringup import a1_monitor
+
 FLOOD_CLIENTS = 3
 FLOODER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "flood_bridge.py")
 # Bounds (A1 command zero, ground truth at rest, service reply) [s]: over ROS the e-stop tests'
@@ -46,13 +48,7 @@ class BridgeFlood(Faults):
 
     def record(self, **result):
         result["fault"] = self.current
-        line = json.dumps(result, sort_keys=True)
-        print("FAULT_RESULT " + line, flush=True)
-        rospy.loginfo("FAULT_RESULT %s", line)
-        path = os.environ.get("RBD_FAULT_LOG")
-        if path:
-            with open(path, "a") as fh:
-                fh.write(line + "\n")
+        rospy.loginfo("FAULT_RESULT %s", a1_monitor.report_fault_result(result))
 
     def start_trick(self, gesture, timeout=45.0):
         """Release the e-stop if needed and show ``gesture`` until the robot moves in EXECUTING."""

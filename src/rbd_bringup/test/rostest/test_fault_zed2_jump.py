@@ -16,9 +16,7 @@ One ``FAULT_RESULT {json}`` line is printed (and appended to $RBD_FAULT_LOG if s
 """
 
 import bisect
-import json
 import math
-import os
 import threading
 import time
 import unittest
@@ -30,6 +28,8 @@ from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry, Path
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
+
+from rbd_bringup import a1_monitor
 
 
 def shifted(msg, dx, dy):
@@ -135,12 +135,7 @@ class Zed2Jump(unittest.TestCase):
 
     def record(self, **result):
         result["fault"] = "zed2_jump"
-        line = json.dumps(result, sort_keys=True)
-        print("FAULT_RESULT " + line, flush=True)
-        path = os.environ.get("RBD_FAULT_LOG")
-        if path:
-            with open(path, "a") as fh:
-                fh.write(line + "\n")
+        a1_monitor.report_fault_result(result)
 
     # ------------------------------------------------------------ the fault
     def test_zed2_jump(self):

@@ -8,7 +8,6 @@ as one ``FAULT_RESULT {json}`` line (and appended to $RBD_FAULT_LOG if set) for 
 """
 
 import copy
-import json
 import math
 import os
 import signal
@@ -180,13 +179,7 @@ class Faults(unittest.TestCase):
     # ------------------------------------------------------------ helpers
     def record(self, **result):
         result["fault"] = rospy.get_param("~fault")
-        line = json.dumps(result, sort_keys=True)
-        print("FAULT_RESULT " + line, flush=True)
-        rospy.loginfo("FAULT_RESULT %s", line)
-        path = os.environ.get("RBD_FAULT_LOG")
-        if path:
-            with open(path, "a") as fh:
-                fh.write(line + "\n")
+        rospy.loginfo("FAULT_RESULT %s", a1_monitor.report_fault_result(result))
 
     def em_stop(self, engaged):
         rospy.wait_for_service("/rbd_controller/em_stop", 30.0)
