@@ -10,6 +10,9 @@ namespace rbd_lidar {
 
 namespace {
 
+// Four uint32 lanes (GCC/Clang vector extension).
+typedef uint32_t V4u __attribute__((vector_size(16)));
+
 constexpr double kTwoPi = 2.0 * M_PI;
 // Margins of the candidate table: it covers the exact zone enlarged by kPad, and stays valid while
 // the attitude moves less than kMaxTilt (kPad absorbs the resulting shift within a few metres).
@@ -293,6 +296,19 @@ void CriticalZone::evaluate(const uint32_t* range_mm, ZoneResult* out) const {
   evaluateStrided(reinterpret_cast<const uint8_t*>(range_mm), sizeof(uint32_t), out);
 }
 
+void CriticalZone::Scratch::reserve(size_t pixels, size_t rows) {
+  if (index.size() < pixels) {
+    index.resize(pixels);
+    range.resize(pixels);
+    cos_col.resize(pixels);
+    sin_col.resize(pixels);
+    x.resize(pixels);
+    y.resize(pixels);
+    h.resize(pixels);
+  }
+  if (row_first.size() < rows) row_first.resize(rows);
+}
+
 void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, ZoneResult* out) const {
   ZoneResult& res = *out;
   res.counts = {{0, 0, 0, 0}};
@@ -304,57 +320,157 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
   res.valid_returns = 0;
   if (!table_valid_) return;
 
-  // Pass 1: candidates from the table (one subtract-and-compare per pixel), valid-return count.
-  // Branch-free append: the slot is always written, the count advances only for a candidate.
+  // Scratch buffers live per thread; take plain references once (a thread_local in a shared
+  // library costs a TLS lookup per access). Sized for the worst case (every pixel a candidate).
   const size_t rows = beams_.rows(), cols = static_cast<size_t>(beams_.columns);
+  thread_local Scratch scratch_buffer;
+  Scratch& sb = scratch_buffer;
+  sb.reserve(rows * cols + 8, rows + 1);
+  uint32_t* cand = sb.index.data();
+  uint32_t* cand_r = sb.range.data();
+  float* cand_cc = sb.cos_col.data();
+  float* cand_sc = sb.sin_col.data();
+  size_t* row_first = sb.row_first.data();
+  const double *cos_col = cos_col_.data(), *sin_col = sin_col_.data();
+
+  // Pass 1: candidates from the table (one subtract-and-compare per pixel), valid-return count.
   const Interval* table = table_.data();
-  thread_local std::vector<uint32_t> candidates;
-  thread_local std::vector<uint32_t> candidate_range;
-  if (candidates.size() < rows * cols + 1) {
-    candidates.resize(rows * cols + 1);
-    candidate_range.resize(rows * cols + 1);
-  }
-  uint32_t* cand = candidates.data();
-  uint32_t* cand_r = candidate_range.data();
   size_t found = 0;
   uint32_t valid = 0;
+  V4u valid_lanes = {0, 0, 0, 0};
   const uint8_t* src = range_bytes;
   for (size_t u = 0; u < rows; ++u) {
+    row_first[u] = found;
     const Interval* row_table = table + u * cols;
-    // Candidates are stored as (row << 16 | column): no division later.
-    const uint32_t key = static_cast<uint32_t>(u) << 16;
-    for (size_t c = 0; c < cols; ++c, src += stride) {
+    const uint32_t first = static_cast<uint32_t>(u * cols);
+    // Blocks of 8 pixels: the interval test makes a bit mask, and only blocks with a candidate
+    // (a few percent, clustered) store anything.
+    size_t c = 0;
+    static_assert(sizeof(Interval) == sizeof(uint32_t), "one table entry is one uint32");
+    if (stride == sizeof(uint32_t)) {
+      // Contiguous range image: the interval test of 8 pixels in two 4-lane vectors (GCC/Clang
+      // vector extensions: SSE2 on x86, NEON on the Jetson). A table entry read as one uint32 holds
+      // lo in its low and span in its high half (little-endian, as both targets are).
+      for (; c + 8 <= cols; c += 8, src += 8 * sizeof(uint32_t)) {
+        V4u r0, r1, t0, t1;
+        std::memcpy(&r0, src, 16);
+        std::memcpy(&r1, src + 16, 16);
+        std::memcpy(&t0, row_table + c, 16);
+        std::memcpy(&t1, row_table + c + 4, 16);
+        const V4u low = {0xFFFFu, 0xFFFFu, 0xFFFFu, 0xFFFFu};
+        const V4u hit0 = reinterpret_cast<V4u>((r0 - (t0 & low)) < (t0 >> 16));
+        const V4u hit1 = reinterpret_cast<V4u>((r1 - (t1 & low)) < (t1 >> 16));
+        valid_lanes -= reinterpret_cast<V4u>(r0 != 0) + reinterpret_cast<V4u>(r1 != 0);
+        const V4u any = hit0 | hit1;
+        uint64_t any_lo, any_hi;
+        std::memcpy(&any_lo, &any, 8);
+        std::memcpy(&any_hi, reinterpret_cast<const uint8_t*>(&any) + 8, 8);
+        if ((any_lo | any_hi) == 0) continue;
+        for (unsigned j = 0; j < 8; ++j) {
+          uint32_t r;
+          std::memcpy(&r, src + j * sizeof(uint32_t), sizeof(r));
+          if (static_cast<uint32_t>(r - row_table[c + j].lo) < row_table[c + j].span) {
+            cand[found] = first + static_cast<uint32_t>(c + j);
+            cand_r[found] = r;
+            cand_cc[found] = static_cast<float>(cos_col[c + j]);
+            cand_sc[found] = static_cast<float>(sin_col[c + j]);
+            ++found;
+          }
+        }
+      }
+    }
+    for (; c + 8 <= cols; c += 8, src += 8 * stride) {
+      uint32_t r8[8];
+      unsigned mask = 0;
+      for (unsigned j = 0; j < 8; ++j) {
+        std::memcpy(&r8[j], src + j * stride, sizeof(uint32_t));
+        valid += r8[j] != 0;
+        mask |=
+            static_cast<unsigned>(static_cast<uint32_t>(r8[j] - row_table[c + j].lo) < row_table[c + j].span)
+            << j;
+      }
+      while (mask != 0) {
+        const unsigned j = static_cast<unsigned>(__builtin_ctz(mask));
+        mask &= mask - 1;
+        cand[found] = first + static_cast<uint32_t>(c + j);
+        cand_r[found] = r8[j];
+        cand_cc[found] = static_cast<float>(cos_col[c + j]);
+        cand_sc[found] = static_cast<float>(sin_col[c + j]);
+        ++found;
+      }
+    }
+    for (; c < cols; ++c, src += stride) {
       uint32_t r;
       std::memcpy(&r, src, sizeof(r));
       valid += r != 0;
-      cand[found] = key | static_cast<uint32_t>(c);
-      cand_r[found] = r;
-      found += static_cast<uint32_t>(r - row_table[c].lo) < row_table[c].span;
+      if (static_cast<uint32_t>(r - row_table[c].lo) < row_table[c].span) {
+        cand[found] = first + static_cast<uint32_t>(c);
+        cand_r[found] = r;
+        cand_cc[found] = static_cast<float>(cos_col[c]);
+        cand_sc[found] = static_cast<float>(sin_col[c]);
+        ++found;
+      }
     }
   }
-  res.valid_returns = valid;
+  row_first[rows] = found;
+  res.valid_returns = valid + valid_lanes[0] + valid_lanes[1] + valid_lanes[2] + valid_lanes[3];
 
-  // Pass 2: exact test of the candidates in the level frame.
+  // Pass 2a: level-frame points of the candidates, row by row (contiguous arrays and per-row
+  // constants: the compiler vectorises it). With cc, sc the column's cos/sin and the row's
+  // azimuth/altitude folded into the constants, x = hz (cc px + sc qx) + r02 sz (y, h alike),
+  // hz = rm cos(alt) + k1 and sz = rm sin(alt) + k2 (the BeamModel of sensorPoint, rotated).
+  const Eigen::Matrix3d& R = pose_.level_from_sensor;
+  const float r02 = static_cast<float>(R(0, 2)), r12 = static_cast<float>(R(1, 2)),
+              r22 = static_cast<float>(R(2, 2));
+  const double n = beams_.beam_origin, lz = beams_.lidar_z;
+  const float height = static_cast<float>(pose_.height);
+  float* __restrict xs = sb.x.data();
+  float* __restrict ys = sb.y.data();
+  float* __restrict hs = sb.h.data();
+  for (size_t u = 0; u < rows; ++u) {
+    const size_t k0 = row_first[u], k1 = row_first[u + 1];
+    if (k0 == k1) continue;
+    const double a = cos_az0_[u], b = sin_az0_[u];
+    const float cp = static_cast<float>(cos_alt_[u] * 1e-3), sp = static_cast<float>(sin_alt_[u] * 1e-3);
+    const float o1 = static_cast<float>(n * (1 - cos_alt_[u])), o2 = static_cast<float>(lz - n * sin_alt_[u]);
+    const float px = static_cast<float>(R(0, 0) * a + R(0, 1) * b),
+                qx = static_cast<float>(R(0, 1) * a - R(0, 0) * b);
+    const float py = static_cast<float>(R(1, 0) * a + R(1, 1) * b),
+                qy = static_cast<float>(R(1, 1) * a - R(1, 0) * b);
+    const float ph = static_cast<float>(R(2, 0) * a + R(2, 1) * b),
+                qh = static_cast<float>(R(2, 1) * a - R(2, 0) * b);
+    const uint32_t* __restrict rr = cand_r + k0;
+    const float* __restrict cc = cand_cc + k0;
+    const float* __restrict sc = cand_sc + k0;
+    float* __restrict x = xs + k0;
+    float* __restrict y = ys + k0;
+    float* __restrict h = hs + k0;
+    const size_t m = k1 - k0;
+    for (size_t k = 0; k < m; ++k) {
+      // Candidate ranges are below lo + span < 2^17 mm: the signed conversion (which vectorises,
+      // unlike the unsigned one) is exact.
+      const float rm = static_cast<float>(static_cast<int32_t>(rr[k] & 0x7FFFFFFFu));
+      const float hz = rm * cp + o1, sz = rm * sp + o2;
+      x[k] = hz * (cc[k] * px + sc[k] * qx) + r02 * sz;
+      y[k] = hz * (cc[k] * py + sc[k] * qy) + r12 * sz;
+      h[k] = hz * (cc[k] * ph + sc[k] * qh) + r22 * sz + height;
+    }
+  }
+
+  // Pass 2b: exact test of the candidates in the level frame.
   const ZoneParams& z = zone_;
   const uint32_t blind_mm = static_cast<uint32_t>(std::max(0.0, std::ceil(z.blind_zone * 1000.0 - 1e-9)));
-  const double lim[4] = {z.front, z.left, z.back, z.right};
-  const double inv_lim[4] = {1.0 / std::max(lim[0], 1e-9), 1.0 / std::max(lim[1], 1e-9),
-                             1.0 / std::max(lim[2], 1e-9), 1.0 / std::max(lim[3], 1e-9)};
-  const double outer[4] = {lim[0] + z.slowdown_front, lim[1] + z.slowdown_left, lim[2] + z.slowdown_back,
-                           lim[3] + z.slowdown_right};
-  const double inv_slow[4] = {
-      z.slowdown_front > 0 ? 1.0 / z.slowdown_front : 0.0, z.slowdown_left > 0 ? 1.0 / z.slowdown_left : 0.0,
-      z.slowdown_back > 0 ? 1.0 / z.slowdown_back : 0.0, z.slowdown_right > 0 ? 1.0 / z.slowdown_right : 0.0};
   // Everything the loop reads lives in locals: the byte-sized stores below may alias any member.
-  const Eigen::Matrix3d& R = pose_.level_from_sensor;
-  const double r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2),
-               r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
-  const double n = beams_.beam_origin, lz = beams_.lidar_z, height = pose_.height;
-  const double floor_clearance = z.floor_clearance, max_height = z.max_height;
-  const double *cos_alt = cos_alt_.data(), *sin_alt = sin_alt_.data(), *cos_az0 = cos_az0_.data(),
-               *sin_az0 = sin_az0_.data(), *cos_col = cos_col_.data(), *sin_col = sin_col_.data();
-  // Scratch buffers live per thread; take plain references once (a thread_local in a shared
-  // library costs a TLS lookup per access). Outputs are sized for the worst case, then trimmed.
+  const float lim0 = static_cast<float>(z.front), lim1 = static_cast<float>(z.left),
+              lim2 = static_cast<float>(z.back), lim3 = static_cast<float>(z.right);
+  const float inv0 = 1.0f / std::max(lim0, 1e-9f), inv1 = 1.0f / std::max(lim1, 1e-9f),
+              inv2 = 1.0f / std::max(lim2, 1e-9f), inv3 = 1.0f / std::max(lim3, 1e-9f);
+  const float out0 = static_cast<float>(z.front + z.slowdown_front),
+              out1 = static_cast<float>(z.left + z.slowdown_left),
+              out2 = static_cast<float>(z.back + z.slowdown_back),
+              out3 = static_cast<float>(z.right + z.slowdown_right);
+  const float floor_clearance = static_cast<float>(z.floor_clearance),
+              max_height = static_cast<float>(z.max_height);
   thread_local std::vector<float> lambda_buffer;
   std::vector<float>& lambdas = lambda_buffer;
   lambdas.resize(found);
@@ -364,55 +480,57 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
   uint32_t* crit = res.critical.data();
   uint8_t* crit_side = res.critical_side.data();
   size_t n_lam = 0, n_crit = 0;
-  uint32_t counts[4] = {0, 0, 0, 0};
-  float min_dist[4] = {res.min_distance[0], res.min_distance[1], res.min_distance[2], res.min_distance[3]};
+  uint32_t n0 = 0, n1 = 0, n2 = 0, n3 = 0;
+  float md0 = inf, md1 = inf, md2 = inf, md3 = inf;
   for (size_t k = 0; k < found; ++k) {
-    const uint32_t r = cand_r[k];
-    if (r < blind_mm) continue;
-    const size_t u = cand[k] >> 16, c = cand[k] & 0xFFFFu;
-    // Sensor-frame point (see BeamModel), then the level frame.
-    const double cp = cos_alt[u], sp = sin_alt[u];
-    const double ca = cos_az0[u] * cos_col[c] - sin_az0[u] * sin_col[c];
-    const double sa = sin_az0[u] * cos_col[c] + cos_az0[u] * sin_col[c];
-    const double rm = r * 1e-3, horiz = rm * cp + n * (1 - cp);
-    const double sx = ca * horiz, sy = sa * horiz, sz = rm * sp + lz - n * sp;
-    const double h = r20 * sx + r21 * sy + r22 * sz + height;
-    if (!(h > floor_clearance && h < max_height)) continue;
-    const double x = r00 * sx + r01 * sy + r02 * sz;
-    const double y = r10 * sx + r11 * sy + r12 * sz;
+    const float h = hs[k];
+    if (cand_r[k] < blind_mm || !(h > floor_clearance && h < max_height)) continue;
     // Signed perpendicular distance towards each side: front x, left y, back -x, right -y.
-    const double toward[4] = {x, y, -x, -y};
-    if (!(toward[0] < outer[0] && toward[1] < outer[1] && toward[2] < outer[2] && toward[3] < outer[3]))
-      continue;
+    const float t0 = xs[k], t1 = ys[k], t2 = -t0, t3 = -t1;
+    if (!(t0 < out0 && t1 < out1 && t2 < out2 && t3 < out3)) continue;
     // Section = the side whose limit the ray from the LiDAR meets first: largest toward / limit
-    // (the same split as the corner azimuths phi1..phi4).
-    int side = 0;
-    double best = toward[0] * inv_lim[0];
-    for (int s = 1; s < 4; ++s) {
-      const double q = toward[s] * inv_lim[s];
-      if (q > best) {
-        best = q;
-        side = s;
-      }
-    }
-    min_dist[side] = std::min(min_dist[side], static_cast<float>(toward[side]));
-    if (toward[0] < lim[0] && toward[1] < lim[1] && toward[2] < lim[2] && toward[3] < lim[3]) {
-      ++counts[side];
-      crit[n_crit] = static_cast<uint32_t>(u * cols + c);
+    // (the same split as the corner azimuths phi1..phi4). Branch-free; the per-side minima and
+    // counts stay in registers.
+    const float q1 = t1 * inv1, q2 = t2 * inv2, q3 = t3 * inv3;
+    float best = t0 * inv0, dist = t0;
+    unsigned side = 0;
+    side = q1 > best ? 1u : side;
+    dist = q1 > best ? t1 : dist;
+    best = std::max(best, q1);
+    side = q2 > best ? 2u : side;
+    dist = q2 > best ? t2 : dist;
+    best = std::max(best, q2);
+    side = q3 > best ? 3u : side;
+    dist = q3 > best ? t3 : dist;
+    md0 = side == 0 ? std::min(md0, dist) : md0;
+    md1 = side == 1 ? std::min(md1, dist) : md1;
+    md2 = side == 2 ? std::min(md2, dist) : md2;
+    md3 = side == 3 ? std::min(md3, dist) : md3;
+    if (t0 < lim0 && t1 < lim1 && t2 < lim2 && t3 < lim3) {
+      n0 += side == 0;
+      n1 += side == 1;
+      n2 += side == 2;
+      n3 += side == 3;
+      crit[n_crit] = cand[k];
       crit_side[n_crit] = static_cast<uint8_t>(side);
       ++n_crit;  // lambda 0: counted by n_crit, not stored
     } else {
-      double lambda = 0.0;
+      // Slowdown band: how far into the band, 0 at the stop zone, 1 at its outer edge.
+      float lambda = 0.0f;
+      const float excess[4] = {t0 - lim0, t1 - lim1, t2 - lim2, t3 - lim3};
+      const double slow[4] = {z.slowdown_front, z.slowdown_left, z.slowdown_back, z.slowdown_right};
       for (int s = 0; s < 4; ++s) {
-        const double excess = toward[s] - lim[s];
-        if (excess > 0.0) lambda = std::max(lambda, inv_slow[s] > 0.0 ? excess * inv_slow[s] : 1.0);
+        if (excess[s] > 0.0f)
+          lambda = std::max(lambda, slow[s] > 0 ? static_cast<float>(excess[s] / slow[s]) : 1.0f);
       }
-      lam[n_lam++] = static_cast<float>(std::min(1.0, lambda));
+      lam[n_lam++] = std::min(1.0f, lambda);
     }
   }
   res.critical.resize(n_crit);
   res.critical_side.resize(n_crit);
   lambdas.resize(n_lam);
+  const uint32_t counts[4] = {n0, n1, n2, n3};
+  const float min_dist[4] = {md0, md1, md2, md3};
   for (int s = 0; s < 4; ++s) {
     res.counts[s] = counts[s];
     res.min_distance[s] = min_dist[s];

@@ -371,6 +371,9 @@ void ScanPipeline::fail(bool stale, const std::string& error, rbd_msgs::Collisio
 void ScanPipeline::buildOutputs(const sensor_msgs::PointCloud2& cloud, Outputs* out) const {
   const ZoneResult& z = out->zone;
   const size_t width = cloud.width;
+  // Field offsets in locals: the byte stores below could alias the members, which made every
+  // point reload them.
+  const uint32_t x_off = x_off_, y_off = y_off_, z_off = z_off_, range_off = range_off_;
 
   // Critical points: pcl::PointXYZI layout (32 bytes: x y z pad intensity pad).
   sensor_msgs::PointCloud2& crit = out->critical;
@@ -396,25 +399,25 @@ void ScanPipeline::buildOutputs(const sensor_msgs::PointCloud2& cloud, Outputs* 
     }
     const uint8_t* src = base + static_cast<size_t>(crow) * cloud.row_step +
                          static_cast<size_t>(idx - row_begin) * cloud.point_step;
-    // pcl::PointXYZI: x y z 1 | intensity 0 0 0.
-    float v[8] = {readFloat(src + x_off_),
-                  readFloat(src + y_off_),
-                  readFloat(src + z_off_),
-                  1.0f,
-                  1.0f + side_ptr[k],
-                  0.0f,
-                  0.0f,
-                  0.0f};
-    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) {
+    // pcl::PointXYZI: x y z 1 | intensity 0 0 0. Written field by field: assembling the point in
+    // a local array and copying it as one block stalled every point on store forwarding.
+    float x = readFloat(src + x_off), y = readFloat(src + y_off), zz = readFloat(src + z_off);
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(zz)) {
       // ouster-ros >= 0.13 may publish NaN xyz below its min_range: use the beam model.
       uint32_t r;
-      std::memcpy(&r, src + range_off_, 4);
+      std::memcpy(&r, src + range_off, 4);
       const Eigen::Vector3d p = zone_.sensorPoint(idx, r);
-      v[0] = static_cast<float>(p.x());
-      v[1] = static_cast<float>(p.y());
-      v[2] = static_cast<float>(p.z());
+      x = static_cast<float>(p.x());
+      y = static_cast<float>(p.y());
+      zz = static_cast<float>(p.z());
     }
-    std::memcpy(dst, v, 32);
+    const float one = 1.0f, intensity = 1.0f + side_ptr[k];
+    std::memcpy(dst, &x, 4);
+    std::memcpy(dst + 4, &y, 4);
+    std::memcpy(dst + 8, &zz, 4);
+    std::memcpy(dst + 12, &one, 4);
+    std::memcpy(dst + 16, &intensity, 4);
+    std::memset(dst + 20, 0, 12);
   }
 
   // Slice ring: cloud of its valid points and the LaserScan.
@@ -445,12 +448,16 @@ void ScanPipeline::buildOutputs(const sensor_msgs::PointCloud2& cloud, Outputs* 
   for (size_t c = 0; c < width; ++c) {
     const uint8_t* src = row + c * cloud.point_step;
     uint32_t range_mm;
-    std::memcpy(&range_mm, src + range_off_, 4);
+    std::memcpy(&range_mm, src + range_off, 4);
     if (range_mm == 0) continue;
-    const float x = readFloat(src + x_off_), y = readFloat(src + y_off_), zz = readFloat(src + z_off_);
+    const float x = readFloat(src + x_off), y = readFloat(src + y_off), zz = readFloat(src + z_off);
     if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(zz)) continue;
-    const float values[4] = {x, y, zz, range_mm * 1e-3f};
-    std::memcpy(&slice.data[count * 16], values, 16);
+    const float range_m = range_mm * 1e-3f;
+    uint8_t* out_pt = &slice.data[count * 16];
+    std::memcpy(out_pt, &x, 4);
+    std::memcpy(out_pt + 4, &y, 4);
+    std::memcpy(out_pt + 8, &zz, 4);
+    std::memcpy(out_pt + 12, &range_m, 4);
     ++count;
     const float planar = std::sqrt(x * x + y * y);
     if (planar < scan.range_min || planar > scan.range_max) continue;

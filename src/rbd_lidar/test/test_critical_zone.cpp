@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <vector>
 
@@ -499,4 +500,67 @@ TEST(CollisionLatch, Hysteresis) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
+}
+
+// The fast path (interval table, then a float pass over the candidates) against a brute-force
+// double-precision classification of every pixel through levelPoint, on random range images,
+// attitudes, heights and asymmetric zones. Pixels within 0.2 mm of a boundary (where float and
+// double may round differently) are left out of the comparison.
+TEST(CriticalZone, FastPathEqualsBruteForce) {
+  const BeamModel m = os1(512);
+  std::srand(7);
+  auto uniform = [](double lo, double hi) { return lo + (hi - lo) * (std::rand() / (RAND_MAX + 1.0)); };
+  size_t compared_critical = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    ZoneParams z;
+    z.front = uniform(0.4, 1.2);
+    z.back = uniform(0.3, 0.9);
+    z.left = uniform(0.2, 0.6);
+    z.right = uniform(0.2, 0.6);
+    z.point_threshold = 1;
+    SensorPose pose = level(uniform(0.25, 0.5));
+    pose.level_from_sensor = (Eigen::AngleAxisd(uniform(-0.3, 0.3), Eigen::Vector3d::UnitZ()) *
+                              Eigen::AngleAxisd(uniform(-0.25, 0.25), Eigen::Vector3d::UnitY()) *
+                              Eigen::AngleAxisd(uniform(-0.15, 0.15), Eigen::Vector3d::UnitX()))
+                                 .toRotationMatrix();
+    CriticalZone zone;
+    ASSERT_TRUE(zone.configure(m, z, pose, nullptr));
+    std::vector<uint32_t> img(32 * 512);
+    for (auto& r : img) r = std::rand() % 8 == 0 ? 0u : static_cast<uint32_t>(uniform(0.0, 2500.0));
+    const ZoneResult fast = run(zone, img);
+    std::vector<int> fast_side(img.size(), -1);
+    for (size_t k = 0; k < fast.critical.size(); ++k) fast_side[fast.critical[k]] = fast.critical_side[k];
+    const double lim[4] = {z.front, z.left, z.back, z.right};
+    const double eps = 2e-4;
+    for (uint32_t i = 0; i < img.size(); ++i) {
+      const uint32_t r = img[i];
+      int side = -1;
+      bool ambiguous = false;
+      if (r >= 300) {
+        const Eigen::Vector3d p = zone.levelPoint(i, r);
+        const double toward[4] = {p.x(), p.y(), -p.x(), -p.y()};
+        ambiguous = std::fabs(p.z() - z.floor_clearance) < eps || std::fabs(p.z() - z.max_height) < eps;
+        bool inside = p.z() > z.floor_clearance && p.z() < z.max_height;
+        double best = -1e9, second = -1e9;
+        for (int s = 0; s < 4; ++s) {
+          ambiguous = ambiguous || std::fabs(toward[s] - lim[s]) < eps;
+          inside = inside && toward[s] < lim[s];
+          const double q = toward[s] / lim[s];
+          if (q > best) {
+            second = best;
+            best = q;
+            side = s;
+          } else if (q > second) {
+            second = q;
+          }
+        }
+        ambiguous = ambiguous || best - second < eps;
+        if (!inside) side = -1;
+      }
+      if (ambiguous) continue;
+      ASSERT_EQ(fast_side[i], side) << "trial " << trial << " pixel " << i << " range " << r;
+      compared_critical += side >= 0;
+    }
+  }
+  EXPECT_GT(compared_critical, 1000u);  // the comparison covered plenty of critical points
 }

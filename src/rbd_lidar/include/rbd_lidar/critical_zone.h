@@ -165,6 +165,14 @@ class CriticalZone {
     uint16_t span;  // candidate if (r - lo) < span (unsigned)
   };
   void buildTable();
+  // Per-thread scratch of evaluateStrided: candidates (pixel index, range, column cos/sin), the
+  // first candidate of each row, and the candidates' level-frame x, y and height.
+  struct Scratch {
+    std::vector<uint32_t> index, range;
+    std::vector<float> cos_col, sin_col, x, y, h;
+    std::vector<size_t> row_first;
+    void reserve(size_t pixels, size_t rows);
+  };
 
   BeamModel beams_;
   ZoneParams zone_;
