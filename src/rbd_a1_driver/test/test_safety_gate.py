@@ -221,3 +221,31 @@ def test_estop_timeout_zero_disables_the_watchdog():
 def test_bad_estop_timeout_rejected(bad):
     with pytest.raises(ValueError):
         GateConfig(estop_timeout=bad)
+
+
+def test_estop_required_holds_until_the_first_estop_message():
+    g = gate(estop_required=True)
+    assert g.estop_missing and not g.estop
+    assert "estop_required" in g.set_velocity(0.3, 0.0, 0.0, 0.0)
+    out = g.command(0.1)
+    assert not moving(out) and "estop_required" in out.reason
+    assert "estop_required" in g.set_body_pose(0.1, 0.0, 0.0, 0.0)
+    g.set_estop(False, 0.2)
+    assert not g.estop_missing
+    assert g.set_velocity(0.3, 0.0, 0.0, 0.2) == ""
+    assert moving(g.command(0.25))
+    assert g.set_body_pose(0.1, 0.0, 0.0, 0.0) == ""
+
+
+def test_estop_required_first_message_true_stays_engaged():
+    g = gate(estop_required=True)
+    g.set_estop(True, 0.0)
+    assert not g.estop_missing and g.estop
+    assert "e-stop engaged" in g.set_velocity(0.3, 0.0, 0.0, 0.1)
+    assert not moving(g.command(0.1))
+
+
+@pytest.mark.parametrize("bad", [1, "true", None])
+def test_estop_required_must_be_a_bool(bad):
+    with pytest.raises(ValueError):
+        GateConfig(estop_required=bad)

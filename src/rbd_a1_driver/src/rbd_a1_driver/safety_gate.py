@@ -13,6 +13,9 @@ Rules (DESIGN.md §5.2/§5.3, CONTRACT.md):
   periodic source; a one-shot latched publisher never arms it). Once armed, no e-stop message for
   ``estop_timeout`` => treated as engaged (zero velocity, last command forgotten) until a fresh
   ``false`` arrives. ``estop_timeout`` 0 = off.
+* ``estop_required`` (on the robot and in the simulated system): before the first e-stop message
+  the gate counts as engaged (zero velocity, commands and body poses ignored), so nothing moves
+  until the e-stop source is up. Off, "never received" means no gate (isolated tests).
 * No HighState for ``state_timeout`` (0.5 s), or none yet => zero velocity (the link is suspect).
 * Modes: a fresh non-zero velocity => mode 2 (velocity walking, trot). After the velocity has been
   zero for ``stand_delay`` the A1 is put in mode 1 (force stand) with the requested body pose
@@ -44,9 +47,13 @@ class GateConfig:
         min_body_height: float = -0.16,
         max_body_height: float = 0.06,
         estop_timeout: float = 0.5,
+        estop_required: bool = False,
     ) -> None:
+        if not isinstance(estop_required, bool):
+            raise ValueError("estop_required must be true or false, got %r" % (estop_required,))
         values = dict(locals())
         values.pop("self")
+        values.pop("estop_required")
         for name, value in values.items():
             if not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise ValueError("%s must be a finite number, got %r" % (name, value))
@@ -69,6 +76,7 @@ class GateConfig:
         self.min_body_height = float(min_body_height)
         self.max_body_height = float(max_body_height)
         self.estop_timeout = float(estop_timeout)
+        self.estop_required = estop_required
 
 
 def _clamp(value: float, limit: float) -> float:
@@ -135,6 +143,8 @@ class SafetyGate:
         self._check_estop_signal(now)
         if self._estop:
             return "e-stop engaged: velocity command ignored"
+        if self.estop_missing:
+            return "no e-stop signal yet (estop_required): velocity command ignored"
         c = self.config
         self._vel = (_clamp(float(vx), c.max_vx), _clamp(float(vy), c.max_vy), _clamp(float(wz), c.max_wz))
         self._vel_time = now
@@ -182,6 +192,8 @@ class SafetyGate:
             return "body_height %.3f m outside [%.3f, %.3f]" % (body_height, c.min_body_height, c.max_body_height)
         if self._estop:
             return "e-stop engaged: body pose ignored"
+        if self.estop_missing:
+            return "no e-stop signal yet (estop_required): body pose ignored"
         self._euler = (float(roll), float(pitch), float(yaw))
         self._body_height = float(body_height)
         return ""
@@ -195,6 +207,11 @@ class SafetyGate:
     def estop(self) -> bool:
         """True while the e-stop is engaged (by a message or by a lost e-stop signal)."""
         return bool(self._estop)
+
+    @property
+    def estop_missing(self) -> bool:
+        """True while estop_required holds the gate because no e-stop message has arrived yet."""
+        return self.config.estop_required and self._estop is None
 
     @property
     def estop_armed(self) -> bool:
@@ -219,6 +236,8 @@ class SafetyGate:
             reason = "e-stop signal lost (no /rbd_controller/estop for > %.2f s)" % self.config.estop_timeout
         elif self._estop:
             reason = "e-stop"
+        elif self.estop_missing:
+            reason = "no e-stop signal yet (estop_required)"
         elif self._vel_time is None:
             reason = "no velocity command yet"
         elif now - self._vel_time > self.config.cmd_timeout:

@@ -213,7 +213,28 @@ class MockA1Behaviour(unittest.TestCase):
 
 
 class TurnOnly(MockA1Behaviour):
-    """Only the 180 deg turn (for the drift-off configuration)."""
+    """Only the 180 deg turn (for the drift-off configuration, whose driver has estop_required)."""
+
+    def test_1_estop_required_holds_until_first_estop_message(self):
+        # Nothing has published /rbd_controller/estop yet: the driver must not walk.
+        self.settle()
+        start = self.gt.get()
+        self.send(twist(0.3), 1.5)
+        self.assertLess(dist(self.gt.get(), start), 0.005, "walked before any e-stop message")
+        reasons = []
+        deadline = time.monotonic() + 3.0  # diagnostics come at 1 Hz
+        while not any("estop_required" in r for r in reasons) and time.monotonic() < deadline:
+            time.sleep(0.1)
+            reasons = [kv.value for arr in list(self.diag) for st in arr.status for kv in st.values
+                       if st.name.startswith("rbd_a1_driver") and kv.key == "zero_velocity_reason"]
+        self.assertTrue(any("estop_required" in r for r in reasons), reasons[-5:])
+        # One released e-stop message (latched; a single message does not arm the signal watchdog).
+        self.estop.publish(Bool(False))
+        time.sleep(0.3)
+        start = self.gt.get()
+        self.send(twist(0.3), 1.0)
+        self.assertGreater(dist(self.gt.get(), start), 0.15, "no motion after the e-stop source came up")
+        self.send(twist(), 0.5)
 
     test_1_forward_03_for_3s = None
     test_2_no_cmd_vel_for_025s_stops = None
