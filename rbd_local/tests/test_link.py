@@ -161,3 +161,104 @@ def test_retrying_does_not_pile_up_twisted_log_observers():
         assert len(log.theLogPublisher.observers) <= before
     finally:
         link.stop()
+
+
+class SilentRelay:
+    """TCP relay between the link and the bridge that can go silent without closing (WLAN out of
+    range): while silent, bytes in both directions are swallowed."""
+
+    def __init__(self, target_port):
+        import socket
+        import threading
+
+        self.target_port = target_port
+        self.silent = threading.Event()
+        self.listener = socket.socket()
+        self.listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self.listener.bind(("127.0.0.1", 0))
+        self.listener.listen(8)
+        self.port = self.listener.getsockname()[1]
+        self.sockets = []
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self):
+        import socket
+        import threading
+
+        while True:
+            try:
+                client, _ = self.listener.accept()
+            except OSError:
+                return
+            upstream = socket.create_connection(("127.0.0.1", self.target_port))
+            self.sockets += [client, upstream]
+            for a, b in ((client, upstream), (upstream, client)):
+                threading.Thread(target=self._pipe, args=(a, b), daemon=True).start()
+
+    def _pipe(self, src, dst):
+        while True:
+            try:
+                data = src.recv(65536)
+            except OSError:
+                data = b""
+            if not data:
+                for s in (src, dst):
+                    try:
+                        s.close()
+                    except OSError:
+                        pass
+                return
+            if not self.silent.is_set():
+                try:
+                    dst.sendall(data)
+                except OSError:
+                    return
+
+    def close(self):
+        self.listener.close()
+        for s in self.sockets:
+            try:
+                s.close()
+            except OSError:
+                pass
+
+
+def test_silent_link_is_dropped_by_keepalive_and_stale_estop_never_arrives(fake_bridge):
+    relay = SilentRelay(fake_bridge.port)
+    got = {"conn": []}
+    link = RobotLink("127.0.0.1", relay.port, retry_s=0.2, connect_timeout_s=1.0, keepalive_s=3.0,
+                     on_connection=got["conn"].append).start()
+    try:
+        assert link.wait_connected(10)
+        time.sleep(4.0)  # answered pings keep a quiet but healthy link up
+        assert link.connected and got["conn"] == [True]
+        relay.silent.set()
+        t0 = time.monotonic()
+        ok, msg = link.em_stop(True, timeout=0.5)  # written into the silent connection
+        assert not ok
+        assert _wait(lambda: not link.connected, timeout=8.0), "silent link still reported connected"
+        detected = time.monotonic() - t0
+        assert detected < 5.0, "silence detected only after %.1f s" % detected
+        assert _wait(lambda: got["conn"][-1:] == [False], timeout=2.0)  # the app is told
+        relay.silent.clear()  # the WLAN is back: a fresh connection, the old request is gone
+        assert link.wait_connected(10)
+        time.sleep(1.0)
+        assert (EM_STOP_SERVICE, {"data": True}) not in fake_bridge.service_calls
+    finally:
+        link.stop()
+        relay.close()
+
+
+def test_keepalive_off_keeps_a_silent_link_open(fake_bridge):
+    # The behaviour the keepalive fixes (and the proof that the test above depends on it).
+    relay = SilentRelay(fake_bridge.port)
+    link = RobotLink("127.0.0.1", relay.port, retry_s=0.2, connect_timeout_s=1.0, keepalive_s=0.0).start()
+    try:
+        assert link.wait_connected(10)
+        relay.silent.set()
+        time.sleep(5.0)
+        assert link.connected
+    finally:
+        relay.silent.clear()
+        link.stop()
+        relay.close()

@@ -12,7 +12,8 @@ talks to ``rbd_bridge`` (rosbridge v2 protocol) from its own background thread:
 Callers never block on the network: :meth:`RobotLink.send_gesture` only queues. A lost link
 is re-established by the background thread (a fresh connection every ``retry_s``); gestures
 are never queued across a link loss (a stale "walk" must not move the robot later), they are
-dropped and counted instead.
+dropped and counted instead. A link that goes silent without closing (WLAN out of range) is
+found by WebSocket pings (``keepalive_s``) and dropped.
 """
 
 import logging
@@ -44,6 +45,7 @@ class RobotLink:
         retry_s: float = 1.0,
         connect_timeout_s: float = 2.0,
         gesture_max_age_s: float = 0.5,
+        keepalive_s: float = 5.0,
         on_status: Callable[[str], None] = None,
         on_state: Callable[[str], None] = None,
         on_path_queue: Callable[[list], None] = None,
@@ -58,6 +60,12 @@ class RobotLink:
             retry_s: pause between connection attempts [s].
             connect_timeout_s: time allowed for one connection attempt [s].
             gesture_max_age_s: queued gestures older than this are dropped, not sent [s].
+            keepalive_s: a link silent about this long is dropped and re-established [s]
+                (0 disables): a WebSocket ping every keepalive_s / 3, to be answered within
+                the remaining 2/3. autobahn's timers have whole-second resolution, so at least
+                1 s + 2 s are used. Over a WLAN that goes silent the TCP connection stays
+                "open"; without this, requests written into it (an e-stop) would be delivered
+                whenever it came back.
             on_status: called with each ``/rbd_pos_controller/status`` string.
             on_state: called with each ``/rbd_controller/state`` string.
             on_path_queue: called with the ``names`` list of each path-queue message.
@@ -70,14 +78,17 @@ class RobotLink:
             raise ValueError("host must be a non-empty string")
         if not isinstance(port, int) or not 0 < port < 65536:
             raise ValueError("port must be an integer in 1..65535, got %r" % (port,))
-        if heartbeat_hz < 0 or retry_s <= 0 or connect_timeout_s <= 0 or gesture_max_age_s <= 0:
-            raise ValueError("heartbeat_hz >= 0, retry_s > 0, connect_timeout_s > 0, gesture_max_age_s > 0 required")
+        if heartbeat_hz < 0 or retry_s <= 0 or connect_timeout_s <= 0 or gesture_max_age_s <= 0 or keepalive_s < 0:
+            raise ValueError(
+                "heartbeat_hz >= 0, retry_s > 0, connect_timeout_s > 0, gesture_max_age_s > 0, keepalive_s >= 0 required"
+            )
         self.host = host
         self.port = port
         self.heartbeat_hz = float(heartbeat_hz)
         self.retry_s = float(retry_s)
         self.connect_timeout_s = float(connect_timeout_s)
         self.gesture_max_age_s = float(gesture_max_age_s)
+        self.keepalive_s = float(keepalive_s)
         self._callbacks = {
             STATUS_TOPIC: on_status,
             STATE_TOPIC: on_state,
@@ -241,6 +252,13 @@ class RobotLink:
     def _connect(self) -> bool:
         ros = roslibpy.Ros(self.host, self.port)
         ros.factory.stopTrying()  # reconnection is ours: a fresh client per attempt
+        if self.keepalive_s > 0:
+            # autobahn aborts (TCP reset) a connection whose ping is not answered in time: the
+            # link is seen down, and whatever sat in the dead connection's buffers dies with it.
+            interval = max(1.0, round(self.keepalive_s / 3.0))
+            ros.factory.setProtocolOptions(
+                autoPingInterval=interval, autoPingTimeout=max(2.0, round(self.keepalive_s - interval))
+            )
         if RobotLink._shared_manager is not None and hasattr(ros.factory, "_manager"):
             ros.factory._manager = RobotLink._shared_manager
         else:
