@@ -80,7 +80,8 @@ class RobotLink:
             raise ValueError("port must be an integer in 1..65535, got %r" % (port,))
         if heartbeat_hz < 0 or retry_s <= 0 or connect_timeout_s <= 0 or gesture_max_age_s <= 0 or keepalive_s < 0:
             raise ValueError(
-                "heartbeat_hz >= 0, retry_s > 0, connect_timeout_s > 0, gesture_max_age_s > 0, keepalive_s >= 0 required"
+                "heartbeat_hz >= 0, retry_s > 0, connect_timeout_s > 0, gesture_max_age_s > 0 and "
+                "keepalive_s >= 0 required"
             )
         self.host = host
         self.port = port
