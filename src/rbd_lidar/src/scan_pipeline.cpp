@@ -1,7 +1,5 @@
 #include "rbd_lidar/scan_pipeline.h"
 
-#include <sensor_msgs/point_cloud2_iterator.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -288,9 +286,10 @@ CloudError ScanPipeline::process(const sensor_msgs::PointCloud2& cloud, Outputs*
   if (err == CloudError::NONE) {
     // The zone reads the `range` field in place (one strided pass, no range-image copy).
     const size_t n = static_cast<size_t>(cloud.width) * cloud.height;
-    sensor_msgs::PointCloud2ConstIterator<uint32_t> range_it(cloud, "range");
+    // Bytes, not a uint32 reference: the field may sit at any offset (UBSan flagged the iterator's
+    // misaligned reference on fuzzed layouts); every read is a memcpy.
     range_off_ = findField(cloud, "range")->offset;
-    const uint8_t* range_bytes = reinterpret_cast<const uint8_t*>(&*range_it);
+    const uint8_t* range_bytes = cloud.data.data() + range_off_;
     size_t stride = cloud.point_step;
     if (cloud.row_step != cloud.width * cloud.point_step) {  // padded rows: compact the range image
       range_.resize(n);
@@ -352,8 +351,13 @@ CloudError ScanPipeline::process(const sensor_msgs::PointCloud2& cloud, Outputs*
 
 void ScanPipeline::extractRange(const sensor_msgs::PointCloud2& cloud, std::vector<uint32_t>* range) {
   range->resize(static_cast<size_t>(cloud.width) * cloud.height);
-  sensor_msgs::PointCloud2ConstIterator<uint32_t> it(cloud, "range");
-  for (size_t i = 0; i < range->size(); ++i, ++it) (*range)[i] = *it;
+  const uint32_t off = findField(cloud, "range")->offset;
+  for (size_t u = 0; u < cloud.height; ++u) {
+    for (size_t c = 0; c < cloud.width; ++c) {
+      std::memcpy(&(*range)[u * cloud.width + c],
+                  &cloud.data[u * cloud.row_step + c * cloud.point_step + off], 4);
+    }
+  }
 }
 
 void ScanPipeline::fail(bool stale, const std::string& error, rbd_msgs::CollisionState* state) {

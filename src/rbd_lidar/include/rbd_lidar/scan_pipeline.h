@@ -1,5 +1,5 @@
 // Per-scan pipeline of rbd_lidar on ROS messages, without a node: layout validation, range
-// extraction (PointCloud2ConstIterator over `range`), beam geometry, critical zone, and the
+// extraction (the `range` field read in place), beam geometry, critical zone, and the
 // output messages (critical cloud, slice cloud, LaserScan, CollisionState). The node and the
 // benchmark both run exactly this.
 #ifndef RBD_LIDAR_SCAN_PIPELINE_H
