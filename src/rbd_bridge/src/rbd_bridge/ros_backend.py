@@ -2,11 +2,17 @@
 
 All :class:`rbd_bridge.protocol.Backend` methods run on the server's asyncio loop thread;
 rospy callbacks run on rospy's threads and hop to the loop with ``call_soon_threadsafe``.
+With ``direct_reads`` (the default) rospy still registers subscriptions and makes each
+TCPROS connection (handshake included), but then the connection's socket is read by the
+event loop itself (:class:`rbd_bridge.tcpros.LoopReader`): no receive thread, no hop, and
+a message is deserialized only when a client needs it as JSON or CBOR. If taking over a
+connection fails, rospy's own receive loop serves it as before.
 Blocking ROS calls (services, master look-ups for rosapi, parameters) run in a thread pool.
 """
 
 import collections
 import concurrent.futures
+import functools
 import io
 import itertools
 import logging
@@ -20,6 +26,7 @@ import rosgraph
 import rospy
 import rosservice
 from rospy.exceptions import TransportTerminated
+from rospy.impl.tcpros_base import TCPROSTransport
 from rospy.topics import _PublisherImpl
 
 from rbd_bridge.msgconv import (
@@ -32,6 +39,7 @@ from rbd_bridge.msgconv import (
 )
 from rbd_bridge.protocol import Backend, BridgeError, TopicMessage
 from rbd_bridge.rosapi import RosApi, RosApiError
+from rbd_bridge.tcpros import LoopReader
 
 __all__ = ["RosBackend"]
 
@@ -41,6 +49,7 @@ _log = logging.getLogger("rbd_bridge")
 # event loop, which writes a whole burst per wake-up; isolated ones are sent directly.
 _BURST_GAP = 0.0002
 _RECV_SIZE = 65536  # rospy recv() size per read of a subscribed topic [bytes]
+_ADOPT_TIMEOUT = 5.0  # a ROS thread waits this long for the loop to take a connection [s]
 
 
 class _Pub:
@@ -173,6 +182,25 @@ def _direct_publisher(topic: str, cls: Any, queue_size: int, latch: bool) -> Any
     return publisher
 
 
+class _LazyMessage:
+    """A received message kept serialized until a client needs it as a dict."""
+
+    __slots__ = ("cls", "payload", "msg")
+
+    def __init__(self, cls: Any, payload: bytes) -> None:
+        self.cls = cls
+        self.payload = payload
+        self.msg = None
+
+    def to_dict(self, binary: bool) -> Any:
+        msg = self.msg
+        if msg is None:
+            msg = self.cls()
+            msg.deserialize(self.payload)
+            self.msg = msg
+        return msg_to_dict(msg, binary)
+
+
 class _Sub:
     __slots__ = ("topic", "type", "cls", "subscriber", "sessions", "latched", "last_rx")
 
@@ -300,6 +328,9 @@ class RosBackend(Backend):
         service_timeout: Seconds a ROS caller waits for a client-hosted service.
         call_timeout: Default seconds for ``call_service`` without ``timeout`` (0 = none).
         workers: Threads for blocking calls.
+        direct_reads: Read subscribed TCPROS connections in the event loop (module doc).
+        fail_direct_reads: Test hook: every take-over fails, so rospy's receive threads
+            serve all connections (the fallback path).
     """
 
     def __init__(
@@ -309,9 +340,21 @@ class RosBackend(Backend):
         service_timeout: float = 10.0,
         call_timeout: float = 30.0,
         workers: int = 8,
+        direct_reads: bool = True,
+        fail_direct_reads: bool = False,
     ) -> None:
         """Create the backend (rospy.init_node must have been called)."""
         self.loop = loop
+        self.direct_reads = direct_reads
+        self.fail_direct_reads = fail_direct_reads
+        self._readers = {}  # rospy connection -> LoopReader (loop thread only)
+        # counters for the ~stats service; rospy-thread ones are approximate under races
+        self.counters = {
+            "direct_read_connections": 0,
+            "direct_read_messages": 0,
+            "direct_read_fallbacks": 0,
+            "rospy_read_messages": 0,
+        }
         self.policy = policy
         self.service_timeout = service_timeout
         self.call_timeout = call_timeout
@@ -434,6 +477,8 @@ class RosBackend(Backend):
         sub.subscriber = rospy.Subscriber(
             topic, cls, self._on_message, callback_args=sub, queue_size=None, buff_size=_RECV_SIZE, tcp_nodelay=True
         )
+        if self.direct_reads:
+            self._hook_connections(sub.subscriber.impl, topic)
         return type_name
 
     def unsubscribe(self, session: Any, topic: str) -> None:
@@ -446,8 +491,154 @@ class RosBackend(Backend):
             del self.subs[topic]
             sub.subscriber.unregister()
 
+    def stats(self) -> dict:
+        """Counters of the receive paths (for the node's ``~stats`` service)."""
+        stats = dict(self.counters)
+        stats["direct_reads"] = self.direct_reads
+        stats["direct_read_open"] = len(self._readers)
+        return stats
+
+    # ------------------------------------------------------------ direct reads (event loop)
+
+    def _hook_connections(self, impl: Any, topic: str) -> None:
+        """Make each new TCPROS connection of impl offer itself to the loop after its handshake.
+
+        rospy calls ``add_connection`` before the connection's thread starts; that thread
+        does the handshake and then calls ``conn.receive_loop``, which is replaced here.
+        """
+        if getattr(impl, "_rbd_direct_reads", False):
+            return
+        original = impl.add_connection
+
+        def add_connection(conn: Any) -> Any:
+            try:
+                conn.receive_loop = functools.partial(self._receive_loop, conn, topic)
+            except Exception:  # not a TCPROSTransport: rospy's path
+                pass
+            return original(conn)
+
+        impl.add_connection = add_connection
+        impl._rbd_direct_reads = True
+
+    def _receive_loop(self, conn: Any, topic: str, msgs_callback: Any) -> None:
+        """Rospy thread, after the handshake: hand the socket to the loop, else read as rospy."""
+        if self._offer(conn, topic):
+            return  # the loop reads it now; this thread ends
+        self.counters["direct_read_fallbacks"] += 1
+        _log.warning("topic %s: reading the connection from %s with rospy's thread", topic, conn.endpoint_id)
+        TCPROSTransport.receive_loop(conn, msgs_callback)
+
+    def _offer(self, conn: Any, topic: str) -> bool:
+        """Rospy thread: ask the loop to adopt conn; True once it did (never both paths)."""
+        lock = threading.Lock()
+        done = threading.Event()
+        state = [None]  # None: undecided, True: the loop reads it, False: rospy does
+
+        def adopt() -> None:
+            with lock:
+                if state[0] is None:
+                    try:
+                        self._adopt(conn, topic)
+                        state[0] = True
+                    except Exception as exc:
+                        _log.warning("topic %s: direct read of %s failed: %s", topic, conn.endpoint_id, exc)
+                        state[0] = False
+            done.set()
+
+        try:
+            self.loop.call_soon_threadsafe(adopt)
+        except RuntimeError:  # loop closed
+            return False
+        done.wait(_ADOPT_TIMEOUT)
+        with lock:
+            if state[0] is None:
+                state[0] = False
+            return state[0]
+
+    def _adopt(self, conn: Any, topic: str) -> None:
+        """Loop thread: start reading conn's socket here (raises if it cannot)."""
+        if self.fail_direct_reads:
+            raise RuntimeError("direct reads made to fail (~test_fail_direct_reads)")
+        if conn.done or conn.socket is None or conn.header is None:
+            raise RuntimeError("connection not established")
+        buff = conn.read_buff
+        leftover = buff.getvalue()[: buff.tell()] if buff is not None else b""
+        # our own descriptor: rospy may close its socket object at any time (unsubscribe,
+        # shutdown); its shutdown() then ends this stream too, as EOF
+        sock = conn.socket.dup()
+        reader = LoopReader(
+            self.loop,
+            sock,
+            functools.partial(self._on_payloads, conn, topic),
+            functools.partial(self._on_reader_closed, conn, topic),
+        )
+        try:
+            reader.start()
+        except Exception:
+            sock.close()
+            raise
+        if buff is not None:
+            buff.seek(0)
+            buff.truncate()
+        self._readers[conn] = reader
+        self.counters["direct_read_connections"] += 1
+        if leftover:
+            reader.feed(leftover)
+
+    def _on_reader_closed(self, conn: Any, topic: str, error: Any) -> None:
+        """Loop thread: the stream ended; close rospy's side as its receive loop would."""
+        self._readers.pop(conn, None)
+        if error is not None:
+            _log.info("topic %s: connection from %s ended: %s", topic, conn.endpoint_id, error)
+        if not conn.done:
+            try:
+                conn.close()
+            except Exception:
+                _log.exception("topic %s: closing the connection from %s failed", topic, conn.endpoint_id)
+
+    def _on_payloads(self, conn: Any, topic: str, payloads: Any) -> None:
+        """Loop thread: wrap received messages and deliver them to the subscribed sessions."""
+        sub = self.subs.get(topic)
+        if sub is None or conn.done:
+            return
+        self.counters["direct_read_messages"] += len(payloads)
+        conn.stat_num_msg += len(payloads)
+        conn.stat_bytes += sum(len(p) + 4 for p in payloads)
+        header = conn.header or {}
+        latched = header.get("latching") == "1"
+        stamp = rospy.get_rostime()
+        secs, nsecs = stamp.secs, stamp.nsecs
+        sessions = list(sub.sessions)
+        wanted = set()
+        for session in sessions:
+            state = session.subs.get(topic)
+            if state is not None:
+                wanted.add("none" if state.compression == "png" else state.compression)
+        cls = sub.cls
+        for payload in payloads:
+            lazy = _LazyMessage(cls, payload)
+            message = TopicMessage(topic, lazy.to_dict, lambda p=payload: (p, secs, nsecs), latched)
+            try:
+                for compression in wanted:
+                    message.frame(compression)
+            except Exception as exc:
+                _log.error("topic %s: cannot decode or encode a message from %s: %s", topic, conn.endpoint_id, exc)
+                continue
+            if latched:
+                sub.latched[header.get("callerid", "")] = message
+            for session in sessions:
+                if session not in sub.sessions:
+                    continue
+                try:
+                    session.deliver(topic, message)
+                except Exception:
+                    _log.exception("delivery to client %s failed", session.client_id)
+
+    # ------------------------------------------------------------ rospy receive threads
+
     def _on_message(self, msg: Any, sub: Any) -> None:
         """Rospy thread: wrap the message, pre-encode what subscribers want, hop to the loop."""
+        self.counters["rospy_read_messages"] += 1
         header = getattr(msg, "_connection_header", None) or {}
         latched = header.get("latching") == "1"
         stamp = rospy.get_rostime()
@@ -697,6 +888,8 @@ class RosBackend(Backend):
 
     def shutdown(self) -> None:
         """Stop everything (node exit)."""
+        for reader in list(self._readers.values()):
+            reader.stop()
         for hosted in list(self.hosted.values()):
             self._unhost(hosted, "bridge shutting down")
         self.pool.shutdown(wait=False)
