@@ -630,7 +630,11 @@ class RosBackend(Backend):
                 if session not in sub.sessions:
                     continue
                 try:
-                    session.deliver(topic, message)
+                    # an idle client gets the cached wire frame at once (as from the ROS
+                    # threads); latched ones go through deliver, after a queued latched copy
+                    compression = None if latched else session.direct_compression(topic)
+                    if compression is None or not session.direct(message, compression):
+                        session.deliver(topic, message)
                 except Exception:
                     _log.exception("delivery to client %s failed", session.client_id)
 
