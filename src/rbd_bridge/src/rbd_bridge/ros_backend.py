@@ -63,6 +63,20 @@ class _Pub:
         self.clients = set()
 
 
+class _Cork:
+    """Holds the event loop's publishes while one client read is handled (one send per peer).
+
+    Set by :meth:`RosBackend.begin_batch` / :meth:`RosBackend.end_batch`; only writes from
+    the thread that set it are held.
+    """
+
+    __slots__ = ("thread", "pending")
+
+    def __init__(self) -> None:
+        self.thread = None
+        self.pending = []
+
+
 class _DirectConnection:
     """A rospy publisher connection that writes at once when it can, never blocking the caller.
 
@@ -75,8 +89,10 @@ class _DirectConnection:
     never delays other subscribers (each connection has its own backlog and thread).
     """
 
-    def __init__(self, connection: Any, queue_size: int) -> None:
+    def __init__(self, connection: Any, queue_size: int, cork: Any = None) -> None:
         self._connection = connection
+        self._cork = cork
+        self._parts = None  # writes held by the cork
         self._queue_size = max(1, queue_size)
         self._lock = threading.RLock()  # conn.close() calls _closed with it held
         self._wake = threading.Condition(self._lock)
@@ -97,7 +113,40 @@ class _DirectConnection:
             self._wake.notify()
 
     def write_data(self, data: bytes) -> bool:
-        """Send data now if the socket takes it; else queue it for the writer thread."""
+        """Send data now if the socket takes it; else queue it for the writer thread.
+
+        While the cork is set by the calling thread, data is held until :meth:`uncork`.
+        """
+        cork = self._cork
+        if cork is not None and cork.thread == threading.get_ident():
+            with self._lock:
+                if self._error is not None:
+                    error, self._error = self._error, None
+                    raise error
+                if self._connection.done:
+                    raise TransportTerminated("connection closed")
+                if self._parts is None:
+                    self._parts = [data]
+                    cork.pending.append(self)
+                else:
+                    self._parts.append(data)
+            return True
+        return self._write(data)
+
+    def uncork(self) -> None:
+        """Send the held writes as one (errors close the connection; rospy sees it next time)."""
+        with self._lock:
+            parts, self._parts = self._parts, None
+        if not parts:
+            return
+        try:
+            self._write(parts[0] if len(parts) == 1 else b"".join(parts))
+        except TransportTerminated:
+            pass
+        except Exception:
+            _log.exception("publisher connection to %s failed", self._connection.endpoint_id)
+
+    def _write(self, data: bytes) -> bool:
         conn = self._connection
         with self._lock:
             if self._error is not None:
@@ -166,7 +215,7 @@ class _DirectConnection:
                 return
 
 
-def _direct_publisher(topic: str, cls: Any, queue_size: int, latch: bool) -> Any:
+def _direct_publisher(topic: str, cls: Any, queue_size: int, latch: bool, cork: Any = None) -> Any:
     """A rospy.Publisher whose connections are :class:`_DirectConnection` s."""
     with warnings.catch_warnings():  # queue_size=None is deliberate: the queue is ours
         warnings.simplefilter("ignore")
@@ -175,7 +224,7 @@ def _direct_publisher(topic: str, cls: Any, queue_size: int, latch: bool) -> Any
     if not getattr(impl, "_rbd_direct", False):
         # one impl per topic in this process; wrap each connection rospy hands to it
         def add_connection(connection: Any) -> Any:
-            return _PublisherImpl.add_connection(impl, _DirectConnection(connection, queue_size))
+            return _PublisherImpl.add_connection(impl, _DirectConnection(connection, queue_size, cork))
 
         impl.add_connection = add_connection
         impl._rbd_direct = True
@@ -348,6 +397,8 @@ class RosBackend(Backend):
         self.direct_reads = direct_reads
         self.fail_direct_reads = fail_direct_reads
         self._readers = {}  # rospy connection -> LoopReader (loop thread only)
+        self._cork = _Cork()
+        self._cork_depth = 0
         # counters for the ~stats service; rospy-thread ones are approximate under races
         self.counters = {
             "direct_read_connections": 0,
@@ -409,7 +460,7 @@ class RosBackend(Backend):
         existing = self._master_type(topic)
         if existing and existing != type_name and existing != "*":
             raise BridgeError("advertise: %s already exists with type %s" % (topic, existing))
-        publisher = _direct_publisher(topic, cls, queue_size, latch)
+        publisher = _direct_publisher(topic, cls, queue_size, latch, self._cork)
         pub = _Pub(topic, type_name, cls, publisher)
         pub.clients.add(session.client_id)
         self.pubs[topic] = pub
@@ -490,6 +541,22 @@ class RosBackend(Backend):
         if not sub.sessions:
             del self.subs[topic]
             sub.subscriber.unregister()
+
+    def begin_batch(self) -> None:
+        """Loop thread: hold publishes until :meth:`end_batch` (one send per ROS peer)."""
+        self._cork_depth += 1
+        self._cork.thread = threading.get_ident()
+
+    def end_batch(self) -> None:
+        """Loop thread: send the publishes held since :meth:`begin_batch`."""
+        self._cork_depth -= 1
+        if self._cork_depth > 0:
+            return
+        self._cork_depth = 0
+        self._cork.thread = None
+        pending, self._cork.pending = self._cork.pending, []
+        for conn in pending:
+            conn.uncork()
 
     def stats(self) -> dict:
         """Counters of the receive paths (for the node's ``~stats`` service)."""
@@ -614,6 +681,31 @@ class RosBackend(Backend):
             state = session.subs.get(topic)
             if state is not None:
                 wanted.add("none" if state.compression == "png" else state.compression)
+        batch = len(payloads) > 1
+        if batch:  # a burst: queue it all, then one write per client
+            for session in sessions:
+                session.out.hold()
+        try:
+            self._deliver_payloads(conn, sub, payloads, sessions, wanted, latched, header, secs, nsecs, batch)
+        finally:
+            if batch:
+                for session in sessions:
+                    session.out.release()
+
+    def _deliver_payloads(
+        self,
+        conn: Any,
+        sub: Any,
+        payloads: Any,
+        sessions: Any,
+        wanted: Any,
+        latched: bool,
+        header: Any,
+        secs: int,
+        nsecs: int,
+        batch: bool,
+    ) -> None:
+        topic = sub.topic
         cls = sub.cls
         for payload in payloads:
             lazy = _LazyMessage(cls, payload)
@@ -632,7 +724,7 @@ class RosBackend(Backend):
                 try:
                     # an idle client gets the cached wire frame at once (as from the ROS
                     # threads); latched ones go through deliver, after a queued latched copy
-                    compression = None if latched else session.direct_compression(topic)
+                    compression = None if latched or batch else session.direct_compression(topic)
                     if compression is None or not session.direct(message, compression):
                         session.deliver(topic, message)
                 except Exception:
