@@ -11,7 +11,7 @@ import time
 import pytest
 from rospy.exceptions import TransportTerminated
 
-from rbd_bridge.ros_backend import _DirectConnection
+from rbd_bridge.ros_backend import _Cork, _DirectConnection
 
 
 class FakeTransport:
@@ -126,3 +126,63 @@ def test_backlog_writer_stops_when_the_connection_closes(pair):
     thread.join(5.0)
     assert not thread.is_alive()
     assert threading.active_count() < 50
+
+
+class CountingSocket:
+    """A socket wrapper counting send calls (one per syscall)."""
+
+    def __init__(self, sock):
+        self.sock = sock
+        self.sends = 0
+
+    def send(self, data, flags=0):
+        self.sends += 1
+        return self.sock.send(data, flags)
+
+    def sendall(self, data):
+        self.sends += 1
+        return self.sock.sendall(data)
+
+    def shutdown(self, how):
+        self.sock.shutdown(how)
+
+    def close(self):
+        self.sock.close()
+
+
+def test_writes_held_by_the_cork_leave_in_one_send_in_order():
+    a, b = socket.socketpair()
+    counting = CountingSocket(a)
+    cork = _Cork()
+    conn = _DirectConnection(FakeTransport(counting), queue_size=10, cork=cork)
+    other = []  # a write from another thread is not held
+    cork.thread = threading.get_ident()
+    for i in range(30):
+        assert conn.write_data(b"c%03d" % i)
+    thread = threading.Thread(target=lambda: other.append(conn.write_data(b"T")))
+    thread.start()
+    thread.join(5)
+    assert other == [True] and counting.sends == 1  # only the other thread's write went out
+    assert cork.pending == [conn]
+    cork.thread = None
+    conn.uncork()
+    assert counting.sends == 2
+    assert read_all(b, 1 + 120) == b"T" + b"".join(b"c%03d" % i for i in range(30))
+    conn.uncork()  # nothing held: nothing sent
+    assert counting.sends == 2
+    a.close()
+    b.close()
+
+
+def test_a_corked_write_to_a_closed_connection_raises_and_uncork_does_not():
+    a, b = socket.socketpair()
+    transport = FakeTransport(a)
+    cork = _Cork()
+    cork.thread = threading.get_ident()
+    conn = _DirectConnection(transport, queue_size=10, cork=cork)
+    assert conn.write_data(b"held")
+    transport.close()
+    with pytest.raises(TransportTerminated):
+        conn.write_data(b"late")
+    conn.uncork()  # the connection is gone: dropped quietly, rospy learns on its next write
+    b.close()

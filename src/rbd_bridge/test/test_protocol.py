@@ -288,6 +288,27 @@ def test_out_queue_is_bounded_by_frames_and_bytes():
     assert q.bytes <= 1000 and len(q) == 2
 
 
+def test_out_queue_hold_collects_a_burst_and_notifies_once_on_release():
+    calls = []
+    q = OutQueue(notify=lambda: calls.append(len(q)))
+    q.push("a")
+    assert calls == [1]  # not held: every push into an empty queue notifies
+    q.pop()
+    q.hold()
+    q.hold()
+    for i in range(5):
+        q.push("b%d" % i)
+    q.release()
+    assert calls == [1]  # still held once
+    q.release()
+    assert calls == [1, 5]
+    while q.pop() is not None:
+        pass
+    q.hold()
+    q.release()  # nothing waiting: no notification
+    assert calls == [1, 5]
+
+
 def test_fragment_size_and_compressions_on_delivery():
     session, _, out, _, _ = make()
     session.receive('{"op": "subscribe", "topic": "/t", "fragment_size": 10}')

@@ -78,6 +78,12 @@ class Backend:
         """Answer a request previously forwarded to session."""
         raise NotImplementedError
 
+    def begin_batch(self) -> None:
+        """Frames of one network read follow (the backend may hold its writes until end_batch)."""
+
+    def end_batch(self) -> None:
+        """The read's frames are handled: send what begin_batch held."""
+
     def session_closed(self, session: Any) -> NoReturn:
         """Release everything session held."""
         raise NotImplementedError
@@ -153,6 +159,7 @@ class OutQueue:
         self.bytes = 0
         self.frames = 0
         self.dropped = 0
+        self.held = 0
 
     def __len__(self) -> int:
         """Number of live frames."""
@@ -175,7 +182,17 @@ class OutQueue:
                     self._kill(per.popleft())
         while self.frames > self.max_frames or (self.bytes > self.max_bytes and self.frames > 1):
             self._drop_oldest()
-        if was_empty and self.notify is not None:
+        if was_empty and self.notify is not None and not self.held:
+            self.notify()
+
+    def hold(self) -> None:
+        """Collect pushes without notifying (a batch), until the matching :meth:`release`."""
+        self.held += 1
+
+    def release(self) -> None:
+        """End a :meth:`hold`; notify once if frames are waiting."""
+        self.held -= 1
+        if not self.held and self.frames and self.notify is not None:
             self.notify()
 
     def _kill(self, entry: Any) -> None:

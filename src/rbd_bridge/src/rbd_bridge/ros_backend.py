@@ -2,11 +2,17 @@
 
 All :class:`rbd_bridge.protocol.Backend` methods run on the server's asyncio loop thread;
 rospy callbacks run on rospy's threads and hop to the loop with ``call_soon_threadsafe``.
+With ``direct_reads`` (the default) rospy still registers subscriptions and makes each
+TCPROS connection (handshake included), but then the connection's socket is read by the
+event loop itself (:class:`rbd_bridge.tcpros.LoopReader`): no receive thread, no hop, and
+a message is deserialized only when a client needs it as JSON or CBOR. If taking over a
+connection fails, rospy's own receive loop serves it as before.
 Blocking ROS calls (services, master look-ups for rosapi, parameters) run in a thread pool.
 """
 
 import collections
 import concurrent.futures
+import functools
 import io
 import itertools
 import logging
@@ -20,6 +26,7 @@ import rosgraph
 import rospy
 import rosservice
 from rospy.exceptions import TransportTerminated
+from rospy.impl.tcpros_base import TCPROSTransport
 from rospy.topics import _PublisherImpl
 
 from rbd_bridge.msgconv import (
@@ -32,6 +39,7 @@ from rbd_bridge.msgconv import (
 )
 from rbd_bridge.protocol import Backend, BridgeError, TopicMessage
 from rbd_bridge.rosapi import RosApi, RosApiError
+from rbd_bridge.tcpros import LoopReader
 
 __all__ = ["RosBackend"]
 
@@ -41,6 +49,7 @@ _log = logging.getLogger("rbd_bridge")
 # event loop, which writes a whole burst per wake-up; isolated ones are sent directly.
 _BURST_GAP = 0.0002
 _RECV_SIZE = 65536  # rospy recv() size per read of a subscribed topic [bytes]
+_ADOPT_TIMEOUT = 5.0  # a ROS thread waits this long for the loop to take a connection [s]
 
 
 class _Pub:
@@ -52,6 +61,20 @@ class _Pub:
         self.cls = cls
         self.publisher = publisher
         self.clients = set()
+
+
+class _Cork:
+    """Holds the event loop's publishes while one client read is handled (one send per peer).
+
+    Set by :meth:`RosBackend.begin_batch` / :meth:`RosBackend.end_batch`; only writes from
+    the thread that set it are held.
+    """
+
+    __slots__ = ("thread", "pending")
+
+    def __init__(self) -> None:
+        self.thread = None
+        self.pending = []
 
 
 class _DirectConnection:
@@ -66,8 +89,10 @@ class _DirectConnection:
     never delays other subscribers (each connection has its own backlog and thread).
     """
 
-    def __init__(self, connection: Any, queue_size: int) -> None:
+    def __init__(self, connection: Any, queue_size: int, cork: Any = None) -> None:
         self._connection = connection
+        self._cork = cork
+        self._parts = None  # writes held by the cork
         self._queue_size = max(1, queue_size)
         self._lock = threading.RLock()  # conn.close() calls _closed with it held
         self._wake = threading.Condition(self._lock)
@@ -88,7 +113,40 @@ class _DirectConnection:
             self._wake.notify()
 
     def write_data(self, data: bytes) -> bool:
-        """Send data now if the socket takes it; else queue it for the writer thread."""
+        """Send data now if the socket takes it; else queue it for the writer thread.
+
+        While the cork is set by the calling thread, data is held until :meth:`uncork`.
+        """
+        cork = self._cork
+        if cork is not None and cork.thread == threading.get_ident():
+            with self._lock:
+                if self._error is not None:
+                    error, self._error = self._error, None
+                    raise error
+                if self._connection.done:
+                    raise TransportTerminated("connection closed")
+                if self._parts is None:
+                    self._parts = [data]
+                    cork.pending.append(self)
+                else:
+                    self._parts.append(data)
+            return True
+        return self._write(data)
+
+    def uncork(self) -> None:
+        """Send the held writes as one (errors close the connection; rospy sees it next time)."""
+        with self._lock:
+            parts, self._parts = self._parts, None
+        if not parts:
+            return
+        try:
+            self._write(parts[0] if len(parts) == 1 else b"".join(parts))
+        except TransportTerminated:
+            pass
+        except Exception:
+            _log.exception("publisher connection to %s failed", self._connection.endpoint_id)
+
+    def _write(self, data: bytes) -> bool:
         conn = self._connection
         with self._lock:
             if self._error is not None:
@@ -157,7 +215,7 @@ class _DirectConnection:
                 return
 
 
-def _direct_publisher(topic: str, cls: Any, queue_size: int, latch: bool) -> Any:
+def _direct_publisher(topic: str, cls: Any, queue_size: int, latch: bool, cork: Any = None) -> Any:
     """A rospy.Publisher whose connections are :class:`_DirectConnection` s."""
     with warnings.catch_warnings():  # queue_size=None is deliberate: the queue is ours
         warnings.simplefilter("ignore")
@@ -166,11 +224,30 @@ def _direct_publisher(topic: str, cls: Any, queue_size: int, latch: bool) -> Any
     if not getattr(impl, "_rbd_direct", False):
         # one impl per topic in this process; wrap each connection rospy hands to it
         def add_connection(connection: Any) -> Any:
-            return _PublisherImpl.add_connection(impl, _DirectConnection(connection, queue_size))
+            return _PublisherImpl.add_connection(impl, _DirectConnection(connection, queue_size, cork))
 
         impl.add_connection = add_connection
         impl._rbd_direct = True
     return publisher
+
+
+class _LazyMessage:
+    """A received message kept serialized until a client needs it as a dict."""
+
+    __slots__ = ("cls", "payload", "msg")
+
+    def __init__(self, cls: Any, payload: bytes) -> None:
+        self.cls = cls
+        self.payload = payload
+        self.msg = None
+
+    def to_dict(self, binary: bool) -> Any:
+        msg = self.msg
+        if msg is None:
+            msg = self.cls()
+            msg.deserialize(self.payload)
+            self.msg = msg
+        return msg_to_dict(msg, binary)
 
 
 class _Sub:
@@ -300,6 +377,9 @@ class RosBackend(Backend):
         service_timeout: Seconds a ROS caller waits for a client-hosted service.
         call_timeout: Default seconds for ``call_service`` without ``timeout`` (0 = none).
         workers: Threads for blocking calls.
+        direct_reads: Read subscribed TCPROS connections in the event loop (module doc).
+        fail_direct_reads: Test hook: every take-over fails, so rospy's receive threads
+            serve all connections (the fallback path).
     """
 
     def __init__(
@@ -309,9 +389,23 @@ class RosBackend(Backend):
         service_timeout: float = 10.0,
         call_timeout: float = 30.0,
         workers: int = 8,
+        direct_reads: bool = True,
+        fail_direct_reads: bool = False,
     ) -> None:
         """Create the backend (rospy.init_node must have been called)."""
         self.loop = loop
+        self.direct_reads = direct_reads
+        self.fail_direct_reads = fail_direct_reads
+        self._readers = {}  # rospy connection -> LoopReader (loop thread only)
+        self._cork = _Cork()
+        self._cork_depth = 0
+        # counters for the ~stats service; rospy-thread ones are approximate under races
+        self.counters = {
+            "direct_read_connections": 0,
+            "direct_read_messages": 0,
+            "direct_read_fallbacks": 0,
+            "rospy_read_messages": 0,
+        }
         self.policy = policy
         self.service_timeout = service_timeout
         self.call_timeout = call_timeout
@@ -366,7 +460,7 @@ class RosBackend(Backend):
         existing = self._master_type(topic)
         if existing and existing != type_name and existing != "*":
             raise BridgeError("advertise: %s already exists with type %s" % (topic, existing))
-        publisher = _direct_publisher(topic, cls, queue_size, latch)
+        publisher = _direct_publisher(topic, cls, queue_size, latch, self._cork)
         pub = _Pub(topic, type_name, cls, publisher)
         pub.clients.add(session.client_id)
         self.pubs[topic] = pub
@@ -434,6 +528,8 @@ class RosBackend(Backend):
         sub.subscriber = rospy.Subscriber(
             topic, cls, self._on_message, callback_args=sub, queue_size=None, buff_size=_RECV_SIZE, tcp_nodelay=True
         )
+        if self.direct_reads:
+            self._hook_connections(sub.subscriber.impl, topic)
         return type_name
 
     def unsubscribe(self, session: Any, topic: str) -> None:
@@ -446,8 +542,199 @@ class RosBackend(Backend):
             del self.subs[topic]
             sub.subscriber.unregister()
 
+    def begin_batch(self) -> None:
+        """Loop thread: hold publishes until :meth:`end_batch` (one send per ROS peer)."""
+        self._cork_depth += 1
+        self._cork.thread = threading.get_ident()
+
+    def end_batch(self) -> None:
+        """Loop thread: send the publishes held since :meth:`begin_batch`."""
+        self._cork_depth -= 1
+        if self._cork_depth > 0:
+            return
+        self._cork_depth = 0
+        self._cork.thread = None
+        pending, self._cork.pending = self._cork.pending, []
+        for conn in pending:
+            conn.uncork()
+
+    def stats(self) -> dict:
+        """Counters of the receive paths (for the node's ``~stats`` service)."""
+        stats = dict(self.counters)
+        stats["direct_reads"] = self.direct_reads
+        stats["direct_read_open"] = len(self._readers)
+        return stats
+
+    # ------------------------------------------------------------ direct reads (event loop)
+
+    def _hook_connections(self, impl: Any, topic: str) -> None:
+        """Make each new TCPROS connection of impl offer itself to the loop after its handshake.
+
+        rospy calls ``add_connection`` before the connection's thread starts; that thread
+        does the handshake and then calls ``conn.receive_loop``, which is replaced here.
+        """
+        if getattr(impl, "_rbd_direct_reads", False):
+            return
+        original = impl.add_connection
+
+        def add_connection(conn: Any) -> Any:
+            try:
+                conn.receive_loop = functools.partial(self._receive_loop, conn, topic)
+            except Exception:  # not a TCPROSTransport: rospy's path
+                pass
+            return original(conn)
+
+        impl.add_connection = add_connection
+        impl._rbd_direct_reads = True
+
+    def _receive_loop(self, conn: Any, topic: str, msgs_callback: Any) -> None:
+        """Rospy thread, after the handshake: hand the socket to the loop, else read as rospy."""
+        if self._offer(conn, topic):
+            return  # the loop reads it now; this thread ends
+        self.counters["direct_read_fallbacks"] += 1
+        _log.warning("topic %s: reading the connection from %s with rospy's thread", topic, conn.endpoint_id)
+        TCPROSTransport.receive_loop(conn, msgs_callback)
+
+    def _offer(self, conn: Any, topic: str) -> bool:
+        """Rospy thread: ask the loop to adopt conn; True once it did (never both paths)."""
+        lock = threading.Lock()
+        done = threading.Event()
+        state = [None]  # None: undecided, True: the loop reads it, False: rospy does
+
+        def adopt() -> None:
+            with lock:
+                if state[0] is None:
+                    try:
+                        self._adopt(conn, topic)
+                        state[0] = True
+                    except Exception as exc:
+                        _log.warning("topic %s: direct read of %s failed: %s", topic, conn.endpoint_id, exc)
+                        state[0] = False
+            done.set()
+
+        try:
+            self.loop.call_soon_threadsafe(adopt)
+        except RuntimeError:  # loop closed
+            return False
+        done.wait(_ADOPT_TIMEOUT)
+        with lock:
+            if state[0] is None:
+                state[0] = False
+            return state[0]
+
+    def _adopt(self, conn: Any, topic: str) -> None:
+        """Loop thread: start reading conn's socket here (raises if it cannot)."""
+        if self.fail_direct_reads:
+            raise RuntimeError("direct reads made to fail (~test_fail_direct_reads)")
+        if conn.done or conn.socket is None or conn.header is None:
+            raise RuntimeError("connection not established")
+        buff = conn.read_buff
+        leftover = buff.getvalue()[: buff.tell()] if buff is not None else b""
+        # our own descriptor: rospy may close its socket object at any time (unsubscribe,
+        # shutdown); its shutdown() then ends this stream too, as EOF
+        sock = conn.socket.dup()
+        reader = LoopReader(
+            self.loop,
+            sock,
+            functools.partial(self._on_payloads, conn, topic),
+            functools.partial(self._on_reader_closed, conn, topic),
+        )
+        try:
+            reader.start()
+        except Exception:
+            sock.close()
+            raise
+        if buff is not None:
+            buff.seek(0)
+            buff.truncate()
+        self._readers[conn] = reader
+        self.counters["direct_read_connections"] += 1
+        if leftover:
+            reader.feed(leftover)
+
+    def _on_reader_closed(self, conn: Any, topic: str, error: Any) -> None:
+        """Loop thread: the stream ended; close rospy's side as its receive loop would."""
+        self._readers.pop(conn, None)
+        if error is not None:
+            _log.info("topic %s: connection from %s ended: %s", topic, conn.endpoint_id, error)
+        if not conn.done:
+            try:
+                conn.close()
+            except Exception:
+                _log.exception("topic %s: closing the connection from %s failed", topic, conn.endpoint_id)
+
+    def _on_payloads(self, conn: Any, topic: str, payloads: Any) -> None:
+        """Loop thread: wrap received messages and deliver them to the subscribed sessions."""
+        sub = self.subs.get(topic)
+        if sub is None or conn.done:
+            return
+        self.counters["direct_read_messages"] += len(payloads)
+        conn.stat_num_msg += len(payloads)
+        conn.stat_bytes += sum(len(p) + 4 for p in payloads)
+        header = conn.header or {}
+        latched = header.get("latching") == "1"
+        stamp = rospy.get_rostime()
+        secs, nsecs = stamp.secs, stamp.nsecs
+        sessions = list(sub.sessions)
+        wanted = set()
+        for session in sessions:
+            state = session.subs.get(topic)
+            if state is not None:
+                wanted.add("none" if state.compression == "png" else state.compression)
+        batch = len(payloads) > 1
+        if batch:  # a burst: queue it all, then one write per client
+            for session in sessions:
+                session.out.hold()
+        try:
+            self._deliver_payloads(conn, sub, payloads, sessions, wanted, latched, header, secs, nsecs, batch)
+        finally:
+            if batch:
+                for session in sessions:
+                    session.out.release()
+
+    def _deliver_payloads(
+        self,
+        conn: Any,
+        sub: Any,
+        payloads: Any,
+        sessions: Any,
+        wanted: Any,
+        latched: bool,
+        header: Any,
+        secs: int,
+        nsecs: int,
+        batch: bool,
+    ) -> None:
+        topic = sub.topic
+        cls = sub.cls
+        for payload in payloads:
+            lazy = _LazyMessage(cls, payload)
+            message = TopicMessage(topic, lazy.to_dict, lambda p=payload: (p, secs, nsecs), latched)
+            try:
+                for compression in wanted:
+                    message.frame(compression)
+            except Exception as exc:
+                _log.error("topic %s: cannot decode or encode a message from %s: %s", topic, conn.endpoint_id, exc)
+                continue
+            if latched:
+                sub.latched[header.get("callerid", "")] = message
+            for session in sessions:
+                if session not in sub.sessions:
+                    continue
+                try:
+                    # an idle client gets the cached wire frame at once (as from the ROS
+                    # threads); latched ones go through deliver, after a queued latched copy
+                    compression = None if latched or batch else session.direct_compression(topic)
+                    if compression is None or not session.direct(message, compression):
+                        session.deliver(topic, message)
+                except Exception:
+                    _log.exception("delivery to client %s failed", session.client_id)
+
+    # ------------------------------------------------------------ rospy receive threads
+
     def _on_message(self, msg: Any, sub: Any) -> None:
         """Rospy thread: wrap the message, pre-encode what subscribers want, hop to the loop."""
+        self.counters["rospy_read_messages"] += 1
         header = getattr(msg, "_connection_header", None) or {}
         latched = header.get("latching") == "1"
         stamp = rospy.get_rostime()
@@ -697,6 +984,8 @@ class RosBackend(Backend):
 
     def shutdown(self) -> None:
         """Stop everything (node exit)."""
+        for reader in list(self._readers.values()):
+            reader.stop()
         for hosted in list(self.hosted.values()):
             self._unhost(hosted, "bridge shutting down")
         self.pool.shutdown(wait=False)

@@ -34,6 +34,7 @@ _log = logging.getLogger("rbd_bridge")
 _GUID = b"258EAFA5-E914-47DA-95CA-C5AB0DC85B11"
 _MAX_HANDSHAKE = 16384
 _RECV_SIZE = 65536
+_JOIN_BYTES = 65536  # small outgoing frames are joined into writes of up to this size
 
 
 def unmask(payload: bytes, mask: bytes) -> bytes:
@@ -118,11 +119,15 @@ class _Connection(asyncio.Protocol):
         if not self.open:
             if not self._handshake():
                 return
+        backend = self.server.backend
+        backend.begin_batch()  # the publishes of this read leave in one write per ROS peer
         try:
             self._parse()
         except Exception:  # never let a parser bug leave a half-dead connection
             _log.exception("client %s: frame parser error", self.peer)
             self.close(1011, "internal error")
+        finally:
+            backend.end_batch()
 
     def pause_writing(self) -> None:
         self.paused = True
@@ -304,19 +309,34 @@ class _Connection(asyncio.Protocol):
             if self.closing:
                 return
             self._write_head()
+            # small frames are joined into one write (one send for a burst), big ones
+            # are written as they are (no copy)
+            parts = []
+            size = 0
             while not self.paused and not self.closing:
                 frame = out.pop()
                 if frame is None:
-                    return
+                    break
                 if isinstance(frame, str):
                     data, opcode = frame.encode("utf-8"), 1
                 else:
                     data, opcode = frame, 2
                 if len(data) < 16384:
-                    write(frame_header(opcode, len(data)) + data)
-                else:  # no copy of big payloads
+                    parts.append(frame_header(opcode, len(data)))
+                    parts.append(data)
+                    size += len(data)
+                    if size < _JOIN_BYTES:
+                        continue
+                    write(b"".join(parts))
+                else:
+                    if parts:
+                        write(b"".join(parts))
                     write(frame_header(opcode, len(data)))
                     write(data)
+                parts = []
+                size = 0
+            if parts and not self.closing:
+                write(b"".join(parts))
 
     def try_direct(self, message: Any, compression: str) -> bool:
         """Any thread: send a topic frame at once if nothing is queued; True if taken.

@@ -1,0 +1,176 @@
+"""Reading a TCPROS topic stream on an asyncio event loop (no rospy, no thread).
+
+After its handshake, a TCPROS topic connection carries messages, each a 4-byte
+little-endian length followed by that many bytes of serialized message.
+:class:`TcprosFramer` cuts a byte stream into those payloads; :class:`LoopReader` feeds it
+from a connected socket registered with the event loop (non-blocking reads in the loop's
+own thread), and hands every batch of complete payloads to a callback.
+"""
+
+import logging
+import socket
+import struct
+from typing import Any, Callable, List, Optional
+
+__all__ = ["FramingError", "LoopReader", "TcprosFramer"]
+
+_log = logging.getLogger("rbd_bridge")
+_LEN = struct.Struct("<I")
+_MAX_MESSAGE = 1 << 30  # larger than any sane message: a corrupt stream, not data
+_READ_SIZE = 65536  # bytes per recv (bigger reads cost an allocation each on this VM)
+_READS_PER_WAKEUP = 16  # a burst is read in one wake-up, up to this many recvs
+
+
+class FramingError(ValueError):
+    """The stream is not a TCPROS message stream (absurd length).
+
+    ``payloads`` holds the complete messages that came before the bad length.
+    """
+
+    def __init__(self, text: str, payloads: List[bytes]) -> None:
+        """Record the message and the good payloads."""
+        super().__init__(text)
+        self.payloads = payloads
+
+
+class TcprosFramer:
+    """Incremental splitter of a TCPROS message stream into payloads.
+
+    Args:
+        max_message: Largest accepted payload in bytes.
+    """
+
+    def __init__(self, max_message: int = _MAX_MESSAGE) -> None:
+        """Start with an empty buffer."""
+        self.max_message = max_message
+        self._buf = bytearray()
+
+    @property
+    def buffered(self) -> int:
+        """Bytes received but not yet part of a complete message."""
+        return len(self._buf)
+
+    def feed(self, data: Any) -> List[bytes]:
+        """Add data (bytes-like); return the payloads completed by it, in order.
+
+        Raises:
+            FramingError: A length prefix is larger than ``max_message`` (the stream is
+                unusable from there on; the payloads before it are in the exception).
+        """
+        buf = self._buf
+        if buf:
+            buf += data
+            data = buf
+        out = []
+        pos = 0
+        end = len(data)
+        unpack = _LEN.unpack_from
+        while end - pos >= 4:
+            (size,) = unpack(data, pos)
+            if size > self.max_message:
+                buf.clear()
+                raise FramingError("TCPROS message of %d bytes announced" % size, out)
+            stop = pos + 4 + size
+            if stop > end:
+                break
+            out.append(bytes(data[pos + 4 : stop]))
+            pos = stop
+        if data is buf:
+            del buf[:pos]
+        elif pos < end:
+            buf += data[pos:]
+        return out
+
+
+class LoopReader:
+    """Read one connected TCPROS topic socket in the event loop's thread.
+
+    The socket stays in blocking mode for its other users; reads use ``MSG_DONTWAIT``
+    and run only when the loop reports the socket readable.
+
+    Args:
+        loop: The asyncio loop (all methods are called in its thread).
+        sock: Connected socket; owned (closed) by the reader from :meth:`start` on.
+        on_messages: Callable(list of payload bytes), called per batch of complete messages.
+        on_close: Callable(error or None), called once when the stream ends (EOF, socket
+            error, framing error or :meth:`stop`).
+    """
+
+    def __init__(
+        self,
+        loop: Any,
+        sock: socket.socket,
+        on_messages: Callable[[List[bytes]], Any],
+        on_close: Callable[[Optional[BaseException]], Any],
+    ) -> None:
+        """Prepare; nothing is read before :meth:`start`."""
+        self.loop = loop
+        self.sock = sock
+        self.on_messages = on_messages
+        self.on_close = on_close
+        self.framer = TcprosFramer()
+        self.closed = False
+        self.bytes = 0
+        self.messages = 0
+        self._fd = sock.fileno()
+        self._rbuf = bytearray(_READ_SIZE)
+
+    def start(self) -> None:
+        """Watch the socket (raises if the loop cannot)."""
+        self.loop.add_reader(self._fd, self._readable)
+
+    def stop(self, error: Optional[BaseException] = None) -> None:
+        """Stop watching and close the socket (idempotent); report through on_close."""
+        if self.closed:
+            return
+        self.closed = True
+        try:
+            self.loop.remove_reader(self._fd)
+        except Exception:  # loop already closed
+            pass
+        try:
+            self.sock.close()
+        except OSError:
+            pass
+        try:
+            self.on_close(error)
+        except Exception:
+            _log.exception("TCPROS reader close callback failed")
+
+    def _readable(self) -> None:
+        sock = self.sock
+        rbuf = self._rbuf
+        view = memoryview(rbuf)
+        for _ in range(_READS_PER_WAKEUP):
+            try:
+                n = sock.recv_into(rbuf, _READ_SIZE, socket.MSG_DONTWAIT)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:
+                self.stop(exc)
+                return
+            if n == 0:
+                self.stop(None)
+                return
+            self.bytes += n
+            if not self.feed(view[:n]) or n < _READ_SIZE:
+                return
+
+    def feed(self, data: Any) -> bool:
+        """Take stream bytes read elsewhere (the handshake's leftover); False once closed."""
+        if self.closed:
+            return False
+        error = None
+        try:
+            payloads = self.framer.feed(data)
+        except FramingError as exc:
+            payloads, error = exc.payloads, exc
+        if payloads:
+            self.messages += len(payloads)
+            try:
+                self.on_messages(payloads)
+            except Exception:
+                _log.exception("TCPROS reader message callback failed")
+        if error is not None:
+            self.stop(error)
+        return not self.closed

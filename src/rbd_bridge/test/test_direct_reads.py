@@ -1,0 +1,155 @@
+"""Subscribed ROS connections read by the bridge's event loop (``~direct_reads``) and the fallback.
+
+Two real bridges on one master with the echo peer: one with direct reads (the default), one
+whose take-overs are made to fail (``test_fail_direct_reads``), so rospy's receive threads
+serve it. Both must deliver the same messages; the node's ``~stats`` service tells which
+path carried them (it counts in the paths themselves, so a bridge that claims direct reads
+but does not use them fails here).
+"""
+
+import json
+import struct
+import time
+import types
+
+import pytest
+from rbd_bridge_testing import OPEN, ROOTCONF, start_bridge, start_echo, wait_until
+from std_msgs.msg import String
+from websockets.sync.client import connect
+
+from rbd_bridge import encoding
+
+
+@pytest.fixture(scope="module")
+def bridges():
+    env = ROOTCONF.RosEnv()
+    try:
+        start_echo(env, tick_rate=50.0)
+        direct, _ = start_bridge(env, node_name="bridge_direct", **OPEN)
+        fallback, _ = start_bridge(env, node_name="bridge_fallback", test_fail_direct_reads="true", **OPEN)
+        yield types.SimpleNamespace(env=env, direct=direct, fallback=fallback)
+    finally:
+        env.close()
+
+
+class Client:
+    def __init__(self, port):
+        self.ws = connect("ws://127.0.0.1:%d" % port, compression=None, max_size=None, open_timeout=15)
+
+    def send(self, frame):
+        self.ws.send(json.dumps(frame))
+
+    def recv_until(self, predicate, timeout=10.0):
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise TimeoutError("no matching frame")
+            data = self.ws.recv(timeout=left)
+            frame = json.loads(data) if isinstance(data, str) else encoding.cbor_loads(data)
+            if predicate(frame):
+                return frame
+
+    def call(self, service, args=None):
+        self.send({"op": "call_service", "id": "c-" + service, "service": service, "args": args or {}})
+        frame = self.recv_until(lambda f: f.get("op") == "service_response" and f.get("id") == "c-" + service)
+        assert frame["result"] is True, frame
+        return frame["values"]
+
+    def stats(self, node):
+        values = self.call("/%s/stats" % node)
+        assert values["success"] is True
+        return json.loads(values["message"])
+
+    def close(self):
+        self.ws.close()
+
+
+def _published(topic):
+    return lambda f: f.get("op") == "publish" and f.get("topic") == topic
+
+
+def _exercise(port):
+    """Latched, echo (JSON and cbor-raw) and a stream of ticks through one bridge."""
+    client = Client(port)
+    try:
+        client.send({"op": "subscribe", "topic": "/echo/latched"})
+        assert client.recv_until(_published("/echo/latched"))["msg"] == {"data": "hello latched"}
+        client.send({"op": "subscribe", "topic": "/echo/tick", "type": "std_msgs/Header"})
+        seqs = [client.recv_until(_published("/echo/tick"))["msg"]["seq"] for _ in range(20)]
+        assert seqs == sorted(seqs) and len(set(seqs)) == 20
+        client.send({"op": "advertise", "topic": "/echo/in", "type": "std_msgs/String"})
+        client.send({"op": "subscribe", "topic": "/echo/out", "type": "std_msgs/String"})
+        raw = Client(port)
+        raw.send({"op": "subscribe", "topic": "/echo/out", "type": "std_msgs/String", "compression": "cbor-raw"})
+        # publish until the echo connection exists, then 50 in order
+        deadline = time.monotonic() + 20
+        while True:
+            client.send({"op": "publish", "topic": "/echo/in", "msg": {"data": "prime"}})
+            try:
+                client.recv_until(_published("/echo/out"), timeout=0.3)
+                break
+            except TimeoutError:
+                assert time.monotonic() < deadline, "echo never came back"
+        for i in range(50):
+            client.send({"op": "publish", "topic": "/echo/in", "msg": {"data": "n%d" % i}})
+        got = []
+        while len(got) < 50:
+            data = client.recv_until(_published("/echo/out"))["msg"]["data"]
+            if data != "prime":
+                got.append(data)
+        assert got == ["n%d" % i for i in range(50)]
+        # cbor-raw: the serialized bytes as they came from ROS
+        frame = raw.recv_until(lambda f: _published("/echo/out")(f) and b"n49" in f["msg"]["bytes"], timeout=10)
+        expected = String()
+        expected.deserialize(frame["msg"]["bytes"])
+        assert expected.data == "n49"
+        assert struct.unpack("<I", frame["msg"]["bytes"][:4])[0] == 3
+        raw.close()
+        return client
+    except BaseException:
+        client.close()
+        raise
+
+
+def test_direct_reads_carry_latched_echo_raw_and_ticks_without_rospy_threads(bridges):
+    client = _exercise(bridges.direct)
+    try:
+        stats = client.stats("bridge_direct")
+        assert stats["direct_reads"] is True
+        assert stats["direct_read_connections"] >= 3  # latched, tick, out
+        assert stats["direct_read_messages"] >= 20 + 50 + 1
+        assert stats["rospy_read_messages"] == 0
+        assert stats["direct_read_fallbacks"] == 0
+    finally:
+        client.close()
+
+
+def test_a_failed_take_over_falls_back_to_rospy_with_the_same_messages(bridges):
+    client = _exercise(bridges.fallback)
+    try:
+        stats = client.stats("bridge_fallback")
+        assert stats["direct_read_connections"] == 0
+        assert stats["direct_read_fallbacks"] >= 3
+        assert stats["rospy_read_messages"] >= 20 + 50 + 1
+    finally:
+        client.close()
+
+
+def test_a_vanishing_publisher_closes_its_direct_connection_and_a_new_one_is_read(bridges):
+    client = Client(bridges.direct)
+    pub_cmd = ["rostopic", "pub", "-r", "20", "/direct/vanish", "std_msgs/String", "data: alive"]
+    try:
+        publisher = bridges.env.start(pub_cmd)
+        client.send({"op": "subscribe", "topic": "/direct/vanish", "type": "std_msgs/String"})
+        assert client.recv_until(_published("/direct/vanish"), timeout=20)["msg"] == {"data": "alive"}
+        open_with = client.stats("bridge_direct")["direct_read_open"]
+        ROOTCONF.stop_process(publisher)
+        assert wait_until(lambda: client.stats("bridge_direct")["direct_read_open"] == open_with - 1, timeout=15)
+        bridges.env.start(pub_cmd)
+        assert client.recv_until(_published("/direct/vanish"), timeout=20)["msg"] == {"data": "alive"}
+        assert client.stats("bridge_direct")["direct_read_open"] == open_with
+        client.send({"op": "unsubscribe", "topic": "/direct/vanish"})
+        assert wait_until(lambda: client.stats("bridge_direct")["direct_read_open"] == open_with - 1, timeout=15)
+    finally:
+        client.close()
