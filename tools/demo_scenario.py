@@ -28,7 +28,8 @@ TRICKS = ["walk", "spin", "wiggle", "lie_down"]
 GESTURE_OF = {"walk": "swipe_right", "spin": "circle", "wiggle": "wave", "lie_down": "push_down"}
 PHOTO_MOTION = {"walk": "right", "lie_down": "down"}  # gestures a moving real photo can show
 BAG_TOPICS = ["/rbd_sim/ground_truth", "/rbd_sim/obstacles", "/rbd_controller/state", "/rbd_controller/path_queue",
-              "/rbd_pos_controller/status", "/rbd_lidar/state", "/cmd_vel", "/rbd_gestrec/gesture", "/scan"]
+              "/rbd_pos_controller/status", "/rbd_lidar/state", "/cmd_vel", "/rbd_gestrec/gesture", "/scan",
+              "/rbd_localization/pose", "/odometry/filtered", "/zed2/zed_node/pose", "/rbd_controller/path"]
 
 
 def free_port():
@@ -207,6 +208,7 @@ def main():
     ap.add_argument("--columns", type=int, default=1024)
     ap.add_argument("--visual", action="store_true", help="open RViz (audience view) and the GUI")
     ap.add_argument("--trick-timeout", type=float, default=90.0)
+    ap.add_argument("launch_args", nargs="*", help="extra sim.launch arguments, e.g. follow_localization:=true")
     args = ap.parse_args()
     tricks = [t for t in args.tricks.split(",") if t]
     os.makedirs(args.out, exist_ok=True)
@@ -217,7 +219,7 @@ def main():
                       ROS_LOG_DIR=os.path.join(home, "log"), ROS_IP="127.0.0.1")
     launch_log = open(os.path.join(args.out, "roslaunch.log"), "w")
     cmd = ["roslaunch", "-p", str(port), "rbd_bringup", "sim.launch", "lidar_columns:=%d" % args.columns,
-           "bridge_port:=%d" % bridge_port, "rviz:=%s" % str(args.visual).lower()]
+           "bridge_port:=%d" % bridge_port, "rviz:=%s" % str(args.visual).lower()] + args.launch_args
     say("starting the simulated system: %s" % " ".join(cmd))
     launch = subprocess.Popen(cmd, stdout=launch_log, stderr=subprocess.STDOUT, start_new_session=True)
     procs = [launch]

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rbd_localization/geometry.h"
+#include "rbd_localization/scan_slice.h"
 
 namespace rbd_localization {
 
@@ -213,7 +214,19 @@ bool MapCorrectionNode::sensorTransform(const std::string& frame, Eigen::Isometr
   return true;
 }
 
-bool MapCorrectionNode::cloudToBase(const sensor_msgs::PointCloud2& cloud, Points2d* out) {
+ScanSlicer::Params MapCorrectionNode::slicerParams() const {
+  ScanSlicer::Params sp;
+  sp.z_min = params_.slice_z_min;
+  sp.z_max = params_.slice_z_max;
+  sp.min_range = params_.min_range;
+  sp.max_range = params_.max_range;
+  sp.bins = params_.slice_bins;
+  sp.max_points = params_.max_points;
+  return sp;
+}
+
+bool MapCorrectionNode::cloudToBase(const sensor_msgs::PointCloud2& cloud, const Eigen::Matrix3d& level,
+                                    Points2d* out) {
   Eigen::Isometry3d t;
   if (!sensorTransform(cloud.header.frame_id, &t)) return false;
   bool has_xyz[3] = {false, false, false};
@@ -228,60 +241,32 @@ bool MapCorrectionNode::cloudToBase(const sensor_msgs::PointCloud2& cloud, Point
     ROS_WARN_THROTTLE(2.0, "map_correction: cloud without float x/y/z or with a short data array ignored");
     return false;
   }
-  // Horizontal slice around the sensor height, nearest return per azimuth bin (a LaserScan).
-  const int bins = params_.slice_bins;
-  std::vector<double> best(bins, std::numeric_limits<double>::infinity());
-  std::vector<Eigen::Vector2d, Eigen::aligned_allocator<Eigen::Vector2d>> pts(bins);
-  const Eigen::Vector3d origin = t.translation();
+  // Levelled horizontal slice around the base height, nearest return per azimuth bin.
+  ScanSlicer slicer(slicerParams());
+  slicer.begin(t, level);
   sensor_msgs::PointCloud2ConstIterator<float> ix(cloud, "x"), iy(cloud, "y"), iz(cloud, "z");
-  for (; ix != ix.end(); ++ix, ++iy, ++iz) {
-    if (!std::isfinite(*ix) || !std::isfinite(*iy) || !std::isfinite(*iz)) continue;
-    const Eigen::Vector3d p = t * Eigen::Vector3d(*ix, *iy, *iz);
-    if (p.z() < params_.slice_z_min || p.z() > params_.slice_z_max) continue;
-    const double dx = p.x() - origin.x(), dy = p.y() - origin.y();
-    const double r = std::hypot(dx, dy);
-    if (r < params_.min_range || r > params_.max_range) continue;
-    int b = static_cast<int>((std::atan2(dy, dx) + M_PI) / (2.0 * M_PI) * bins);
-    b = std::min(std::max(b, 0), bins - 1);
-    if (r < best[b]) {
-      best[b] = r;
-      pts[b] = p.head<2>();
-    }
-  }
-  out->clear();
-  for (int b = 0; b < bins; ++b) {
-    if (std::isfinite(best[b])) out->push_back(pts[b]);
-  }
-  const size_t step = std::max<size_t>(1, (out->size() + params_.max_points - 1) / params_.max_points);
-  if (step > 1) {
-    Points2d dec;
-    for (size_t i = 0; i < out->size(); i += step) dec.push_back((*out)[i]);
-    out->swap(dec);
-  }
+  for (; ix != ix.end(); ++ix, ++iy, ++iz) slicer.add(Eigen::Vector3d(*ix, *iy, *iz));
+  *out = slicer.finish();
   return true;
 }
 
-bool MapCorrectionNode::scanToBase(const sensor_msgs::LaserScan& scan, Points2d* out) {
+bool MapCorrectionNode::scanToBase(const sensor_msgs::LaserScan& scan, const Eigen::Matrix3d& level,
+                                   Points2d* out) {
   Eigen::Isometry3d t;
   if (!sensorTransform(scan.header.frame_id, &t)) return false;
   const double lo = std::max(static_cast<double>(scan.range_min), params_.min_range);
   const double hi = std::min(static_cast<double>(scan.range_max), params_.max_range);
-  size_t valid = 0;
-  for (float r : scan.ranges) {
-    if (std::isfinite(r) && r >= lo && r <= hi) ++valid;
-  }
-  const size_t step = std::max<size_t>(1, (valid + params_.max_points - 1) / params_.max_points);
-  out->clear();
-  out->reserve(valid / step + 1);
-  size_t k = 0;
+  std::vector<Eigen::Vector3d> pts;
+  pts.reserve(scan.ranges.size());
   for (size_t i = 0; i < scan.ranges.size(); ++i) {
     const double r = scan.ranges[i];
     if (!(std::isfinite(r) && r >= lo && r <= hi)) continue;
-    if (k++ % step != 0) continue;
     const double a = scan.angle_min + i * static_cast<double>(scan.angle_increment);
-    const Eigen::Vector3d p = t * Eigen::Vector3d(r * std::cos(a), r * std::sin(a), 0.0);
-    out->emplace_back(p.x(), p.y());
+    pts.emplace_back(r * std::cos(a), r * std::sin(a), 0.0);
   }
+  ScanSlicer slicer(slicerParams());
+  slicer.begin(t, level);
+  *out = slicer.levelPlanar(pts);
   return true;
 }
 
@@ -305,7 +290,11 @@ void MapCorrectionNode::processPendingScan() {
   }
   last_match_stamp_ = stamp;
   Points2d points;
-  const bool ok = pending_scan_ ? scanToBase(*pending_scan_, &points) : cloudToBase(*pending_cloud_, &points);
+  // Levelled with the EKF's roll/pitch at the scan's stamp (a tilted body must not shorten the
+  // ranges or move the slice's height band).
+  const Eigen::Matrix3d level = levelFromBase(odom_from_base.linear());
+  const bool ok = pending_scan_ ? scanToBase(*pending_scan_, level, &points)
+                                : cloudToBase(*pending_cloud_, level, &points);
   pending_scan_.reset();
   pending_cloud_.reset();
   if (!ok) return;

@@ -18,6 +18,7 @@
 #include <string>
 
 #include "rbd_localization/map_correction.h"
+#include "rbd_localization/scan_slice.h"
 
 namespace rbd_localization {
 
@@ -38,7 +39,7 @@ struct MapCorrectionNodeParams {
   bool correction_enabled = true;        ///< false: map -> odom stays identity (comparison runs)
   /// Input: "scan" (LaserScan on `scan`) or "points" (PointCloud2 on `points`, sliced here).
   std::string input = "scan";
-  double slice_z_min = 0.0;  ///< [m] in base_frame: cloud points kept for the 2D slice
+  double slice_z_min = 0.0;  ///< [m] above base_frame (levelled): cloud points kept for the 2D slice
   double slice_z_max = 0.4;  ///< [m]
   int slice_bins = 720;      ///< azimuth bins of the slice (nearest point per bin)
 };
@@ -57,11 +58,12 @@ class MapCorrectionNode {
   void cloudCallback(const sensor_msgs::PointCloud2::ConstPtr& msg);
   bool acceptInput(const ros::Time& stamp);
   bool sensorTransform(const std::string& frame, Eigen::Isometry3d* out);
-  bool cloudToBase(const sensor_msgs::PointCloud2& cloud, Points2d* out);
+  ScanSlicer::Params slicerParams() const;
+  bool cloudToBase(const sensor_msgs::PointCloud2& cloud, const Eigen::Matrix3d& level, Points2d* out);
   void odomCallback(const nav_msgs::Odometry::ConstPtr& msg);
   void timerCallback(const ros::TimerEvent& ev);
   void processPendingScan();
-  bool scanToBase(const sensor_msgs::LaserScan& scan, Points2d* out);
+  bool scanToBase(const sensor_msgs::LaserScan& scan, const Eigen::Matrix3d& level, Points2d* out);
   void publishTransform();
   void publishMap(const ros::Time& stamp);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);

@@ -43,6 +43,7 @@ class Runner:
         self.est = None
         self.ekf = None
         self.tracks = {"truth": [], "corrected": [], "ekf": []}
+        self.max_err = 0.0  # corrected pose vs the latest ground truth since the last loop end
         self.cmd = rospy.Publisher("/cmd_vel", Twist, queue_size=1)
         rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_truth, queue_size=5)
         rospy.Subscriber("/rbd_localization/pose", PoseStamped, self.on_est, queue_size=5)
@@ -58,6 +59,8 @@ class Runner:
         with self.lock:
             self.est = (msg.pose.position.x, msg.pose.position.y, yaw_of(msg.pose.orientation))
             self.tracks["corrected"].append(self.est[:2])
+            if self.truth is not None:
+                self.max_err = max(self.max_err, math.hypot(self.est[0] - self.truth[0], self.est[1] - self.truth[1]))
 
     def on_ekf(self, msg):
         p = msg.pose.pose
@@ -121,6 +124,8 @@ class Runner:
                     continue
                 out[name] = {"pos_err": math.hypot(pose[0] - tx, pose[1] - ty),
                              "yaw_err_deg": abs(math.degrees(wrap(pose[2] - tyaw)))}
+            out["corrected_max_during_loop"] = self.max_err
+            self.max_err = 0.0
         return out
 
     def wait_ready(self, timeout=60.0):
