@@ -201,6 +201,10 @@ class Audience:
 
 def main():
     """Run the demo; exit 0 when every trick completed with no contact."""
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        # started in the background by a non-interactive shell: SIGINT arrives ignored and
+        # would stay ignored in roslaunch, which then could not be stopped by SIGINT
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "demo-output"))
     ap.add_argument("--tricks", default=",".join(TRICKS))

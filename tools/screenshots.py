@@ -138,6 +138,10 @@ def shoot_gui(out, delay=2.0):
 
 def main():
     """Take the screenshots asked for."""
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        # started in the background by a non-interactive shell: SIGINT arrives ignored and
+        # would stay ignored in roslaunch, which then could not be stopped by SIGINT
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out", nargs="?", default=os.path.join(ROOT, "docs"))
     ap.add_argument("--only", choices=["rviz", "gui"])

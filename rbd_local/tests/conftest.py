@@ -1,9 +1,18 @@
 """Test setup: import this checkout's rbd_local (not an installed copy) and share fixtures."""
 
 import os
+import signal
 import sys
 
 import pytest
+
+# Started in the background by a non-interactive shell (nohup, `cmd &` in a script, some CI
+# runners), this process inherits SIGINT as *ignored*, and so would every child: rosmaster and
+# roslaunch would then ignore the SIGINT that stops them, and each stop would wait for the
+# SIGKILL fallback (10 s per test here). A handler in this process makes children start with
+# the default disposition again.
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PKG_ROOT = os.path.dirname(HERE)
