@@ -221,7 +221,7 @@ class RobotLink:
                     LOG.warning("link to %s lost; reconnecting", self.address)
                 if now >= next_try or self._force:
                     self._force = False
-                    if self._connect():
+                    if self._try_connect():
                         was_connected = True
                         next_beat = 0.0
                         self._notify(True)
@@ -250,9 +250,25 @@ class RobotLink:
     # hours would pile them up.
     _shared_manager = None
 
+    def _try_connect(self) -> bool:
+        """One connection attempt; an unexpected error counts as a failed attempt.
+
+        The link thread must outlive anything the WebSocket stack raises.
+        """
+        try:
+            return self._connect()
+        except Exception:
+            LOG.exception("connection attempt to %s failed unexpectedly; retrying", self.address)
+            self._teardown()
+            return False
+
     def _connect(self) -> bool:
         ros = roslibpy.Ros(self.host, self.port)
-        ros.factory.stopTrying()  # reconnection is ours: a fresh client per attempt
+        # Reconnection is ours (a fresh client per attempt): only switch the factory's own retry
+        # off. factory.stopTrying() would also stop the connector, which roslibpy has already
+        # handed to the reactor thread: from this thread that raced with the reactor (a
+        # KeyError in epoll killed the link thread in one test run) or aborted the attempt.
+        ros.factory.continueTrying = 0
         if self.keepalive_s > 0:
             # autobahn aborts (TCP reset) a connection whose ping is not answered in time: the
             # link is seen down, and whatever sat in the dead connection's buffers dies with it.
