@@ -1,11 +1,15 @@
 """Helpers for rbd_bridge integration tests (imported by conftest.py and the test modules)."""
 
 import importlib.util
+import json
 import os
 import sys
 import time
 
 import rosgraph
+from websockets.sync.client import connect
+
+from rbd_bridge import encoding
 
 PKG = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ROOT = os.path.dirname(os.path.dirname(PKG))
@@ -65,3 +69,43 @@ def start_bridge(env, launch="bridge.launch", **args):
 
 
 OPEN = {"topics_glob": "[*]", "services_glob": "[*]", "params_glob": "[*]", "params_writable": "true"}
+
+
+class WsClient:
+    """A raw WebSocket client (websockets, sync): JSON or CBOR frames in, dicts out."""
+
+    def __init__(self, url, **kwargs):
+        self.ws = connect(url, compression=None, max_size=None, open_timeout=15, **kwargs)
+
+    def send(self, frame):
+        self.ws.send(frame if isinstance(frame, (str, bytes)) else json.dumps(frame))
+
+    def recv(self, timeout=10.0):
+        data = self.ws.recv(timeout=timeout)
+        return json.loads(data) if isinstance(data, str) else encoding.cbor_loads(data)
+
+    def recv_until(self, predicate, timeout=10.0):
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise TimeoutError("no matching frame")
+            frame = self.recv(left)
+            if predicate(frame):
+                return frame
+
+    def drain(self, duration=0.3):
+        """Collect every frame arriving within duration seconds."""
+        frames = []
+        deadline = time.monotonic() + duration
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return frames
+            try:
+                frames.append(self.recv(left))
+            except TimeoutError:
+                return frames
+
+    def close(self):
+        self.ws.close()

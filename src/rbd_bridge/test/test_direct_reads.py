@@ -13,11 +13,8 @@ import time
 import types
 
 import pytest
-from rbd_bridge_testing import OPEN, ROOTCONF, start_bridge, start_echo, wait_until
+from rbd_bridge_testing import OPEN, ROOTCONF, WsClient, start_bridge, start_echo, wait_until
 from std_msgs.msg import String
-from websockets.sync.client import connect
-
-from rbd_bridge import encoding
 
 
 @pytest.fixture(scope="module")
@@ -32,23 +29,9 @@ def bridges():
         env.close()
 
 
-class Client:
+class Client(WsClient):
     def __init__(self, port):
-        self.ws = connect("ws://127.0.0.1:%d" % port, compression=None, max_size=None, open_timeout=15)
-
-    def send(self, frame):
-        self.ws.send(json.dumps(frame))
-
-    def recv_until(self, predicate, timeout=10.0):
-        deadline = time.monotonic() + timeout
-        while True:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                raise TimeoutError("no matching frame")
-            data = self.ws.recv(timeout=left)
-            frame = json.loads(data) if isinstance(data, str) else encoding.cbor_loads(data)
-            if predicate(frame):
-                return frame
+        super().__init__("ws://127.0.0.1:%d" % port)
 
     def call(self, service, args=None):
         self.send({"op": "call_service", "id": "c-" + service, "service": service, "args": args or {}})
@@ -60,9 +43,6 @@ class Client:
         values = self.call("/%s/stats" % node)
         assert values["success"] is True
         return json.loads(values["message"])
-
-    def close(self):
-        self.ws.close()
 
 
 def _published(topic):
