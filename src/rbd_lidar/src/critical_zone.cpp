@@ -343,6 +343,13 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
     row_first[u] = found;
     const Interval* row_table = table + u * cols;
     const uint32_t first = static_cast<uint32_t>(u * cols);
+    auto append = [&](size_t col, uint32_t r) {
+      cand[found] = first + static_cast<uint32_t>(col);
+      cand_r[found] = r;
+      cand_cc[found] = static_cast<float>(cos_col[col]);
+      cand_sc[found] = static_cast<float>(sin_col[col]);
+      ++found;
+    };
     // Blocks of 8 pixels: the interval test makes a bit mask, and only blocks with a candidate
     // (a few percent, clustered) store anything.
     size_t c = 0;
@@ -370,11 +377,7 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
           uint32_t r;
           std::memcpy(&r, src + j * sizeof(uint32_t), sizeof(r));
           if (static_cast<uint32_t>(r - row_table[c + j].lo) < row_table[c + j].span) {
-            cand[found] = first + static_cast<uint32_t>(c + j);
-            cand_r[found] = r;
-            cand_cc[found] = static_cast<float>(cos_col[c + j]);
-            cand_sc[found] = static_cast<float>(sin_col[c + j]);
-            ++found;
+            append(c + j, r);
           }
         }
       }
@@ -392,11 +395,7 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
       while (mask != 0) {
         const unsigned j = static_cast<unsigned>(__builtin_ctz(mask));
         mask &= mask - 1;
-        cand[found] = first + static_cast<uint32_t>(c + j);
-        cand_r[found] = r8[j];
-        cand_cc[found] = static_cast<float>(cos_col[c + j]);
-        cand_sc[found] = static_cast<float>(sin_col[c + j]);
-        ++found;
+        append(c + j, r8[j]);
       }
     }
     for (; c < cols; ++c, src += stride) {
@@ -404,11 +403,7 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
       std::memcpy(&r, src, sizeof(r));
       valid += r != 0;
       if (static_cast<uint32_t>(r - row_table[c].lo) < row_table[c].span) {
-        cand[found] = first + static_cast<uint32_t>(c);
-        cand_r[found] = r;
-        cand_cc[found] = static_cast<float>(cos_col[c]);
-        cand_sc[found] = static_cast<float>(sin_col[c]);
-        ++found;
+        append(c, r);
       }
     }
   }
