@@ -4,17 +4,29 @@ import base64
 import os
 import socket
 import struct
+import sys
 import threading
 from typing import Any, Optional
+
+# kernel receive timestamps (struct timespec); Python's socket module has no name for it
+_SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35 if sys.platform.startswith("linux") else 0)
 
 
 class RawWs:
     """Blocking client: ``send_text``, ``send_binary``, ``recv`` (returns str or bytes)."""
 
-    def __init__(self, host: str, port: int, timeout: Optional[float] = 10.0) -> None:
-        """Connect and do the opening handshake."""
+    def __init__(self, host: str, port: int, timeout: Optional[float] = 10.0, rx_stamps: bool = False) -> None:
+        """Connect and do the opening handshake.
+
+        With ``rx_stamps``, :attr:`rx_stamp` holds the kernel's receive time (epoch seconds,
+        SO_TIMESTAMPNS) of the last segment read, i.e. when the data reached this socket.
+        """
         self.sock = socket.create_connection((host, port), timeout=timeout)
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.rx_stamp = None
+        self._stamped = bool(rx_stamps and _SO_TIMESTAMPNS)
+        if self._stamped:
+            self.sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
         key = base64.b64encode(os.urandom(16)).decode()
         request = (
             "GET / HTTP/1.1\r\nHost: %s:%d\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
@@ -53,9 +65,19 @@ class RawWs:
         """Send a binary frame."""
         self._send(2, bytes(data))
 
+    def _read(self, size: int) -> bytes:
+        if not self._stamped:
+            return self.sock.recv(size)
+        chunk, ancillary, _flags, _addr = self.sock.recvmsg(size, 64)
+        for level, kind, data in ancillary:
+            if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(data) >= 16:
+                secs, nsecs = struct.unpack("qq", data[:16])
+                self.rx_stamp = secs + nsecs * 1e-9
+        return chunk
+
     def _need(self, n: int) -> None:
         while len(self.buf) < n:
-            chunk = self.sock.recv(max(65536, n - len(self.buf)))
+            chunk = self._read(max(65536, n - len(self.buf)))
             if not chunk:
                 raise ConnectionError("connection closed")
             self.buf += chunk
