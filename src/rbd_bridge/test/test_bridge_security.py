@@ -40,6 +40,12 @@ def start_auth(env, secret_file):
         secret_file=secret_file,
         node_name="rbd_bridge_auth",
         topics_glob="[*]",
+        # rosbridge_websocket.launch habits: its unset max_message_size is the text "None",
+        # and its other arguments must be accepted (roslaunch refuses unknown ones)
+        max_message_size="None",
+        websocket_null_origin="true",
+        binary_encoder="default",
+        output="screen",
     )
 
 

@@ -1,0 +1,60 @@
+"""Reading the node's numeric parameters the way rosbridge's launch files pass them.
+
+rosbridge_websocket.launch passes ``max_message_size`` as the text ``None`` when it is not
+set, and roslaunch hands every ``$(arg)`` over as a string or number. :func:`number` maps
+those forms to a value, the default, or a clear error.
+"""
+
+from typing import Any, Callable, Optional
+
+__all__ = ["ParamError", "number"]
+
+_UNSET = ("", "none", "null", "default")
+
+
+class ParamError(ValueError):
+    """A parameter has a value that cannot be used."""
+
+
+def number(
+    name: str, value: Any, default: Any, kind: Callable[[Any], Any] = int, minimum: Optional[float] = None
+) -> Any:
+    """Return ``value`` as ``kind``; None, ``"None"`` or an empty text mean ``default``.
+
+    Args:
+        name: Parameter name (for the error text).
+        value: The value read from the parameter server.
+        default: Value used when the parameter is unset.
+        kind: ``int`` or ``float``.
+        minimum: Smallest accepted value, if any.
+
+    Returns:
+        The parsed value or ``default``.
+
+    Raises:
+        ParamError: The value is a boolean, not a number, or below ``minimum``.
+    """
+    if value is None or (isinstance(value, str) and value.strip().lower() in _UNSET):
+        return default
+    if isinstance(value, bool):
+        raise ParamError("~%s must be a number, not %r" % (name, value))
+    try:
+        if kind is int and isinstance(value, float):
+            if value != int(value):
+                raise ValueError(value)
+            parsed = int(value)
+        elif kind is int and isinstance(value, str):
+            as_float = float(value)
+            if as_float != int(as_float):
+                raise ValueError(value)
+            parsed = int(as_float)
+        else:
+            parsed = kind(value)
+    except (TypeError, ValueError, OverflowError):
+        wanted = "an integer" if kind is int else "a number"
+        raise ParamError("~%s must be %s, not %r" % (name, wanted, value)) from None
+    if parsed != parsed:
+        raise ParamError("~%s must be a number, not NaN" % name)
+    if minimum is not None and parsed < minimum:
+        raise ParamError("~%s must be >= %s, not %r" % (name, minimum, value))
+    return parsed
