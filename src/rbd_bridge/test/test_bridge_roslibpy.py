@@ -1,5 +1,6 @@
 """roslibpy (the real client library) against a real bridge, master and echo peer."""
 
+import itertools
 import json
 import threading
 import time
@@ -416,17 +417,17 @@ def test_fragments_both_ways_through_roslibpy(roslibpy_client):
     echoed = Inbox()
     roslibpy.Topic(ros, "/echo/out", "std_msgs/String").subscribe(echoed)
     text_in = "fragmented " * 20
-    n = [0]
+    frame_in = json.dumps({"op": "publish", "topic": "/echo/in", "msg": {"data": text_in}})
+    sets = itertools.count()
 
-    def send_fragmented(_i):
-        n[0] += 1
-        frame = json.dumps({"op": "publish", "topic": "/echo/in", "msg": {"data": text_in}})
-        for part in reversed(make_fragments(frame, 25, "in:%d" % n[0])):
+    def send_fragmented():
+        # (repeated until the echo peer has connected to the bridge's new publisher)
+        for part in reversed(make_fragments(frame_in, 25, "in:%d" % next(sets))):
             ros.send_on_ready(roslibpy.Message(part))
         time.sleep(0.1)
         return echoed.items
 
-    assert wait_until(lambda: send_fragmented(0), 10)
+    assert wait_until(send_fragmented, 10)
     assert echoed.items[0] == {"data": text_in}
     # out: a subscription with fragment_size gets fragment ops, never a whole publish
     out = roslibpy_client()
