@@ -169,3 +169,30 @@ def test_message_typedefs_cover_nested_types():
     field_defs = message_typedefs(PointField)[0]
     assert "FLOAT32" in field_defs["constnames"]
     assert field_defs["constvalues"][field_defs["constnames"].index("FLOAT32")] == "7"
+
+
+def test_char_arrays_are_base64_like_uint8_arrays():
+    # no message of Debian's ROS has a char[] field: generate one the way genpy does for .msg files
+    import io
+
+    from genpy.dynamic import generate_dynamic
+
+    chars = generate_dynamic("rbd_test/CharArrays", "char[] data\nchar[3] fixed\nchar one\n")["rbd_test/CharArrays"]
+    out = msg_to_dict(chars(data=b"ab\xff\x00", fixed=b"xyz", one=65))
+    assert out == {"data": base64.b64encode(b"ab\xff\x00").decode(), "fixed": "eHl6", "one": 65}
+    assert isinstance(msg_to_dict(chars(data=b"\x01"), binary=True)["data"], bytes)
+    from_b64, _ = dict_to_msg(chars, {"data": "YWL/AA==", "fixed": "eHl6", "one": 66}, now)
+    from_list, _ = dict_to_msg(chars, {"data": [97, 98, 255, 0], "fixed": [120, 121, 122], "one": 66}, now)
+    assert bytes(from_b64.data) == bytes(from_list.data) == b"ab\xff\x00"
+    assert bytes(from_b64.fixed) == bytes(from_list.fixed) == b"xyz"
+    buff = io.BytesIO()
+    from_list.serialize(buff)  # a valid ROS message
+    again = chars()
+    again.deserialize(buff.getvalue())
+    assert msg_to_dict(again) == msg_to_dict(from_b64)
+    with pytest.raises(ConversionError, match="fixed"):
+        dict_to_msg(chars, {"fixed": [1, 2]}, now)  # char[3]
+    with pytest.raises(ConversionError, match="data"):
+        dict_to_msg(chars, {"data": [256]}, now)
+    with pytest.raises(ConversionError, match="base64"):
+        dict_to_msg(chars, {"data": "not base64 !!"}, now)

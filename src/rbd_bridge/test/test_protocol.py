@@ -168,6 +168,10 @@ def test_status_only_after_set_level_and_up_to_that_level():
     assert frames == [
         {"op": "status", "level": "warning", "id": "p1", "msg": "publish /a: fields filled with defaults: data"}
     ]
+    session.receive('{"op": "no_such_op", "id": "u1"}')
+    session.receive('{"op": "publish", "id": "p2", "topic": "/a", "msg": {"data": "x"}}')  # fine: silent
+    frames = drain(out)
+    assert [(f["level"], f.get("id")) for f in frames] == [("error", "u1")] and "no_such_op" in frames[0]["msg"]
     session.receive('{"op": "set_level", "level": "bogus"}')  # dropped, level unchanged
     session.receive('{"op": "set_level", "level": "none"}')
     session.receive("{")

@@ -380,13 +380,15 @@ class Session:
         if self.closed:
             return
         self.received += 1
+        frame = None
         try:
             frame = self._decode(data)
             self._dispatch(frame, _depth)
         except BridgeError as exc:
             self.errors += 1
             self._log_rejected(exc)
-            self.status(exc.level, str(exc))
+            # an unknown op or a frame before auth: the status names the frame's id (as rosbridge)
+            self.status(exc.level, str(exc), frame.get("id") if frame is not None else None)
         except Exception as exc:  # a bug must not end the session
             self.errors += 1
             _log.exception("client %s: internal error", self.client_id)

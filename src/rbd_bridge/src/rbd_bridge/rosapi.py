@@ -259,14 +259,14 @@ class RosApi:
         }
 
     def _action_servers(self, args: Any) -> Any:
+        # as rosapi (ROS 1): a namespace (not the root) with all five actionlib topics
         topics = set(t for t, _ in self._topic_types())
         bases = set()
         for t in topics:
-            for suffix in _ACTION_SUFFIXES:
-                if t.endswith(suffix):
-                    base = t[: -len(suffix)]
-                    if all(base + s in topics for s in ("/goal", "/cancel", "/status")):
-                        bases.add(base)
+            if t.endswith("/goal"):
+                base = t[: -len("/goal")]
+                if base and all(base + s in topics for s in _ACTION_SUFFIXES):
+                    bases.add(base)
         return {"action_servers": sorted(bases)}
 
     # ------------------------------------------------------------ types
