@@ -161,3 +161,27 @@ def test_wrong_secret_closes_the_connection(robodog):
         ws.send(json.dumps({"op": "call_service", "id": "x", "service": "/rosapi/get_time"}))
         ws.recv(timeout=10)
     assert info.value.rcvd is not None and info.value.rcvd.code == 1008
+
+
+def _listening_addresses(port):
+    """Local IPv4 addresses with a listening TCP socket on port (from /proc/net/tcp)."""
+    found = []
+    with open("/proc/net/tcp") as table:
+        next(table)
+        for line in table:
+            fields = line.split()
+            local, state = fields[1], fields[3]
+            address, hex_port = local.split(":")
+            if state == "0A" and int(hex_port, 16) == port:
+                raw = bytes.fromhex(address)[::-1]  # little-endian in the table
+                found.append(".".join(str(b) for b in raw))
+    return found
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/net/tcp"), reason="needs Linux /proc/net/tcp")
+def test_address_argument_sets_the_bind_address(robodog):
+    # the fixture's bridges were started with address:=127.0.0.1; bound to 0.0.0.0 they
+    # would be reachable from other machines
+    _, port, auth_port = robodog
+    assert _listening_addresses(port) == ["127.0.0.1"]
+    assert _listening_addresses(auth_port) == ["127.0.0.1"]
