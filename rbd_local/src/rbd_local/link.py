@@ -61,10 +61,10 @@ class RobotLink:
             connect_timeout_s: time allowed for one connection attempt [s].
             gesture_max_age_s: queued gestures older than this are dropped, not sent [s].
             keepalive_s: a link silent about this long is dropped and re-established [s]
-                (0 disables): a WebSocket ping every keepalive_s / 3, to be answered within
-                the remaining 2/3. autobahn's timers have whole-second resolution, so at least
-                1 s + 2 s are used. Over a WLAN that goes silent the TCP connection stays
-                "open"; without this, requests written into it (an e-stop) would be delivered
+                (0 disables): the link thread sends a WebSocket ping every keepalive_s / 3
+                and drops the connection when nothing (pong or message) has come back for
+                keepalive_s. Over a WLAN that goes silent the TCP connection stays "open";
+                without this, requests written into it (an e-stop) would be delivered
                 whenever it came back.
             on_status: called with each ``/rbd_pos_controller/status`` string.
             on_state: called with each ``/rbd_controller/state`` string.
@@ -109,6 +109,9 @@ class RobotLink:
         self.sent_gestures = 0
         self.dropped_gestures = 0
         self.connect_count = 0
+        self._alive = None  # the connection's protocol while the keepalive watches it
+        self._alive_at = 0.0  # last pong or message received on it (monotonic)
+        self._next_ping = 0.0
 
     # ----------------------------------------------------------------- public API
     @property
@@ -229,6 +232,7 @@ class RobotLink:
                     next_try = time.monotonic() + self.retry_s
                 self._drain(send=False)
             else:
+                self._keepalive(now)
                 self._drain(send=True)
                 if self.heartbeat_hz > 0 and now >= next_beat:
                     next_beat = now + 1.0 / self.heartbeat_hz
@@ -269,13 +273,6 @@ class RobotLink:
         # handed to the reactor thread: from this thread that raced with the reactor (a
         # KeyError in epoll killed the link thread in one test run) or aborted the attempt.
         ros.factory.continueTrying = 0
-        if self.keepalive_s > 0:
-            # autobahn aborts (TCP reset) a connection whose ping is not answered in time: the
-            # link is seen down, and whatever sat in the dead connection's buffers dies with it.
-            interval = max(1.0, round(self.keepalive_s / 3.0))
-            ros.factory.setProtocolOptions(
-                autoPingInterval=interval, autoPingTimeout=max(2.0, round(self.keepalive_s - interval))
-            )
         if RobotLink._shared_manager is not None and hasattr(ros.factory, "_manager"):
             ros.factory._manager = RobotLink._shared_manager
         else:
@@ -305,10 +302,56 @@ class RobotLink:
                 topic = roslibpy.Topic(ros, name, msg_type, reconnect_on_close=False)
                 topic.subscribe(self._make_handler(name))
                 self._subs.append(topic)
+        self._watch(ros)
         self.connect_count += 1
         self._connected_evt.set()
         LOG.info("connected to %s", self.address)
         return True
+
+    # The keepalive is the link thread's own: it sends a WebSocket ping every keepalive_s / 3 and
+    # drops a connection that has answered nothing (no pong, no message) for keepalive_s.
+    # autobahn's built-in auto-ping was used before; in about one test-suite run in two its
+    # first ping was never scheduled and a silent link stayed "connected".
+    def _watch(self, ros: "roslibpy.Ros") -> None:
+        proto = getattr(ros.factory, "_proto", None)
+        self._alive = None
+        if self.keepalive_s <= 0 or proto is None or not hasattr(proto, "sendPing"):
+            return
+
+        def seen() -> None:
+            self._alive_at = time.monotonic()
+
+        on_pong, on_message = proto.onPong, proto.onMessage
+
+        def pong(payload: bytes) -> None:
+            seen()
+            on_pong(payload)
+
+        def message(payload: bytes, is_binary: bool) -> None:
+            seen()
+            on_message(payload, is_binary)
+
+        proto.onPong = pong
+        proto.onMessage = message
+        seen()
+        self._next_ping = 0.0
+        self._alive = proto
+
+    def _keepalive(self, now: float) -> None:
+        proto = self._alive
+        if proto is None:
+            return
+        from twisted.internet import reactor  # roslibpy's transport on CPython
+
+        if now - self._alive_at > self.keepalive_s:
+            LOG.warning("link to %s silent for %.1f s; dropping it", self.address, now - self._alive_at)
+            self._alive = None
+            self._connected_evt.clear()  # seen as down at once; the loop tears it down
+            reactor.callFromThread(proto.dropConnection, True)
+            return
+        if now >= self._next_ping:
+            self._next_ping = now + max(0.2, self.keepalive_s / 3.0)
+            reactor.callFromThread(proto.sendPing)
 
     def _make_handler(self, name: str) -> Callable[[dict], None]:
         callback = self._callbacks[name]
@@ -359,6 +402,7 @@ class RobotLink:
             LOG.exception("heartbeat failed")
 
     def _teardown(self) -> None:
+        self._alive = None
         with self._lock:
             ros, self._ros = self._ros, None
             self._pubs, self._subs = {}, []
