@@ -161,6 +161,15 @@ def test_call_service_success_failure_and_missing_service(roslibpy_client):
         srv.call(roslibpy.ServiceRequest({"dta": True}), timeout=10)
 
 
+def _service_gone(master, name):
+    """True once the master no longer knows the service."""
+    try:
+        master.lookupService(name)
+        return False
+    except Exception:
+        return True
+
+
 def test_client_hosted_service_is_a_ros_service_and_disappears_with_its_client(roslibpy_client, open_bridge):
     provider = roslibpy_client()
     seen = []
@@ -182,14 +191,9 @@ def test_client_hosted_service_is_a_ros_service_and_disappears_with_its_client(r
     assert result == {"success": False, "message": "from the web"} and seen == [{"data": True}]
     provider.close()
 
-    def gone():
-        try:
-            master.lookupService("/web/negate")
-            return False
-        except Exception:
-            return True
-
-    assert wait_until(gone, 10), "the service must be unregistered when its client disconnects"
+    assert wait_until(
+        lambda: _service_gone(master, "/web/negate"), 10
+    ), "the service must be unregistered when its client disconnects"
 
 
 def test_ros_provider_vanishing_mid_call_gives_an_error_not_a_hang(roslibpy_client, open_bridge):
@@ -328,14 +332,9 @@ def test_unadvertise_service_removes_the_ros_service(roslibpy_client, open_bridg
     assert "/web/unadvertised" in rosapi(provider, "services")["services"]
     service.unadvertise()
 
-    def gone():
-        try:
-            master.lookupService("/web/unadvertised")
-            return False
-        except Exception:
-            return True
-
-    assert wait_until(gone, 10), "unadvertise_service must unregister the ROS service"
+    assert wait_until(
+        lambda: _service_gone(master, "/web/unadvertised"), 10
+    ), "unadvertise_service must unregister the ROS service"
     with pytest.raises(rospy.ServiceException):
         rospy.ServiceProxy("/web/unadvertised", SetBool)(True)
     assert "/web/unadvertised" not in rosapi(provider, "services")["services"]

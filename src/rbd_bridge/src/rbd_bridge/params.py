@@ -39,11 +39,7 @@ def number(
     if isinstance(value, bool):
         raise ParamError("~%s must be a number, not %r" % (name, value))
     try:
-        if kind is int and isinstance(value, float):
-            if value != int(value):
-                raise ValueError(value)
-            parsed = int(value)
-        elif kind is int and isinstance(value, str):
+        if kind is int and isinstance(value, (float, str)):  # "1e6", 4096.0: whole numbers only
             as_float = float(value)
             if as_float != int(as_float):
                 raise ValueError(value)
