@@ -11,6 +11,8 @@ set +u
 . .venv/bin/activate
 set -u
 launcher=()
+# Paths under the checkout are hashed relative to it, so clones and worktrees share ccache hits.
+export CCACHE_BASEDIR="$root"
 if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
 catkin_make --source . --build build -j"${RBD_JOBS:-2}" \
   -DPYTHON_EXECUTABLE="$root/.venv/bin/python3" -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" "$@"
