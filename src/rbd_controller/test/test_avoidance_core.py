@@ -201,8 +201,8 @@ def test_wall_ahead_backs_off_to_the_margin():
     esc, why = plan_escape(r, ZONE, (1.0, 2.0, math.pi / 2), margin=0.15)
     assert esc is not None, why
     assert esc.side == BACK
-    assert esc.distance == pytest.approx(0.70 + 0.15 - 0.45)
-    assert esc.target == pytest.approx((1.0, 2.0 - 0.40))  # backwards along a +y heading
+    assert esc.distance == pytest.approx(0.70 + 0.15 + 0.05 - 0.45)
+    assert esc.target == pytest.approx((1.0, 2.0 - 0.45))  # backwards along a +y heading
 
 
 def test_wall_ahead_and_behind_side_steps_to_the_freer_side():

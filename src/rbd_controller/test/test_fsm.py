@@ -6,6 +6,7 @@ from rbd_controller.fsm import (
     RESUME,
     STOP_STATES,
     TRANSITIONS,
+    TRICK_STATES,
     WORK_STATES,
     Event,
     Fsm,
@@ -55,6 +56,7 @@ def test_values_match_controller_state_msg():
 def test_every_table_entry(state, event):
     fsm = fsm_in(state)
     resume_before = fsm.resume
+    collision_before = fsm.collision and event not in (Event.COLLISION_CLEAR,)
     accepted = fsm.fire(event)
     expected = TRANSITIONS.get((state, event))
     assert accepted == (expected is not None)
@@ -62,6 +64,10 @@ def test_every_table_entry(state, event):
         assert fsm.state == state
     elif expected == RESUME:
         assert fsm.state == resume_before
+    elif (collision_before and expected in WORK_STATES and expected not in GUARDED_STATES
+          and state not in TRICK_STATES):
+        # leaving a stop/guarded state for a trick state with the zone still occupied: stop first
+        assert fsm.state == State.COLLISION_DETECTED and fsm.resume == expected
     else:
         assert fsm.state == expected
 
@@ -210,7 +216,7 @@ def test_avoidance_cycle_through_the_table():
     entered = []
     hooks = {s: (lambda prev, s=s: entered.append(s)) for s in State}
     fsm = fsm_in(State.EXECUTING, hooks)
-    for event in (Event.COLLISION, Event.BLOCKED_STATIC, Event.AVOID, Event.ESCAPED, Event.COLLISION_CLEAR,
+    for event in (Event.COLLISION, Event.BLOCKED_STATIC, Event.AVOID, Event.COLLISION_CLEAR, Event.ESCAPED,
                   Event.DETOUR_DONE):
         fsm.fire(event)
     assert entered[-5:] == [State.COLLISION_DETECTED, State.BLOCKED, State.ESCAPING, State.AVOIDING,
@@ -264,7 +270,7 @@ def test_moving_obstacle_stops_an_escape():
     assert fsm.state == State.COLLISION_DETECTED and fsm.resume == State.ESCAPING
 
 
-@pytest.mark.parametrize("state", [State.BLOCKED, State.ESCAPING, State.AVOIDING])
+@pytest.mark.parametrize("state", [State.ESCAPING, State.AVOIDING])
 def test_give_up_returns_to_the_trick(state):
     fsm = fsm_in(state)
     fsm.fire(Event.GIVE_UP)
@@ -281,3 +287,18 @@ def test_dodge_cycle_and_dodge_from_a_collision_while_idle():
     fsm.fire(Event.DODGE)
     assert fsm.state == State.DODGING and fsm.collision
     assert not fsm_in(State.EXECUTING).fire(Event.DODGE)  # never while a trick runs
+
+
+def test_give_up_while_the_zone_is_occupied_stops_first():
+    fsm = fsm_in(State.BLOCKED)
+    fsm.fire(Event.GIVE_UP)
+    assert fsm.state == State.COLLISION_DETECTED and fsm.resume == State.EXECUTING
+    fsm.fire(Event.COLLISION_CLEAR)
+    assert fsm.state == State.EXECUTING
+
+
+def test_escaped_with_the_collision_flag_still_set_waits_for_it_to_clear():
+    fsm = fsm_in(State.ESCAPING)
+    fsm.fire(Event.COLLISION)
+    fsm.fire(Event.ESCAPED)
+    assert fsm.state == State.COLLISION_DETECTED and fsm.resume == State.AVOIDING

@@ -41,8 +41,16 @@ class ApproachDetector:
         """Forget the history (the robot moved)."""
         self.history = [[] for _ in range(4)]
 
-    def update(self, t: float, min_distance: Sequence[float]) -> List[int]:
-        """Add one reading at t [s]; return the approached sides, fastest first."""
+    def update(self, t: float, min_distance: Sequence[float], own: Tuple[float, float] = (0.0, 0.0)) -> List[int]:
+        """Add one reading at t [s]; return the approached sides, fastest first.
+
+        Args:
+            t: time of the reading [s].
+            min_distance: nearest distance per side (FRONT, LEFT, BACK, RIGHT) [m], inf: none.
+            own: the robot's own body velocity (vx, vy) [m/s]; closing caused by it is not an
+                approach (a robot walking home towards a standing visitor is not approached).
+        """
+        toward = (own[0], own[1], -own[0], -own[1])
         approached = []
         for s in range(4):
             d = float(min_distance[s])
@@ -55,8 +63,9 @@ class ApproachDetector:
                 self.last_occupied = t
                 old = [(tt, dd) for tt, dd in h if tt <= t - self.window]
                 ref = old[-1] if old else h[0]
-                if ref[0] < t and (ref[1] == math.inf or (ref[1] - d) / (t - ref[0]) >= self.approach_speed):
-                    approached.append((-(ref[1] - d) / max(t - ref[0], 1e-6), s))
+                closing = math.inf if ref[1] == math.inf else (ref[1] - d) / max(t - ref[0], 1e-6)
+                if ref[0] < t and closing - max(0.0, toward[s]) >= self.approach_speed:
+                    approached.append((-closing, s))
         return [s for _, s in sorted(approached)]
 
     def quiet_for(self, t: float) -> float:

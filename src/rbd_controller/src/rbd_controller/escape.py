@@ -18,6 +18,9 @@ FRONT, LEFT, BACK, RIGHT = 0, 1, 2, 3
 SIDE_NAMES = ("front", "left", "back", "right")
 #: Body-frame unit direction that moves towards each side.
 TOWARDS = {FRONT: (1.0, 0.0), LEFT: (0.0, 1.0), BACK: (-1.0, 0.0), RIGHT: (0.0, -1.0)}
+#: The escape aims this far beyond zone + margin (noise), and never moves less than MIN_STEP [m].
+OVERSHOOT = 0.05
+MIN_STEP = 0.1
 OPPOSITE = {FRONT: BACK, BACK: FRONT, LEFT: RIGHT, RIGHT: LEFT}
 PERPENDICULAR = {FRONT: (LEFT, RIGHT), BACK: (LEFT, RIGHT), LEFT: (FRONT, BACK), RIGHT: (FRONT, BACK)}
 
@@ -122,8 +125,8 @@ def plan_escape(
     candidates = []  # (side to move towards, distance, why)
     for s in blocking:
         away = OPPOSITE[s]
-        need = zone[s] + margin - reading.min_distance[s]
-        candidates.append((away, min(max_distance, max(0.05, need)), "away from the %s" % SIDE_NAMES[s]))
+        need = zone[s] + margin + OVERSHOOT - reading.min_distance[s]
+        candidates.append((away, min(max_distance, max(MIN_STEP, need)), "away from the %s" % SIDE_NAMES[s]))
     for s in blocking:
         for step in sorted(PERPENDICULAR[s], key=lambda p: -reading.min_distance[p]):
             candidates.append((step, side_step, "side-step from the %s" % SIDE_NAMES[s]))

@@ -78,8 +78,9 @@ class Event(enum.Enum):
 RESUME = "RESUME"
 
 STOP_STATES = (State.EMERGENCY_STOP, State.COLLISION_DETECTED, State.OPERATOR_LOST, State.BLOCKED)
+TRICK_STATES = (State.WAITING_FOR_GESTURE, State.GENERATING_PATH, State.EXECUTING)
 AVOID_STATES = (State.ESCAPING, State.AVOIDING, State.DODGING)
-WORK_STATES = (State.WAITING_FOR_GESTURE, State.GENERATING_PATH, State.EXECUTING) + AVOID_STATES
+WORK_STATES = TRICK_STATES + AVOID_STATES
 #: States whose motion is guarded per side by the position controller, not held by the collision flag.
 GUARDED_STATES = (State.ESCAPING, State.DODGING)
 
@@ -180,7 +181,12 @@ class Fsm:
                 target = State.COLLISION_DETECTED
             elif source in (State.COLLISION_DETECTED, State.BLOCKED) and self.operator_lost:
                 target = State.OPERATOR_LOST
-        if target in STOP_STATES and source in WORK_STATES:
+        if self.collision and target in WORK_STATES and target not in GUARDED_STATES and source not in TRICK_STATES:
+            # Leaving a stop or a guarded motion for a trick-like state while the zone still
+            # reports a collision (e.g. GIVE_UP while BLOCKED): stop first, go on when it clears.
+            self.resume = target
+            target = State.COLLISION_DETECTED
+        elif target in STOP_STATES and source in WORK_STATES:
             self.resume = source
         if target == source:
             return True
