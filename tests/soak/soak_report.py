@@ -132,6 +132,13 @@ def verdict(report: Dict[str, object]) -> List[str]:
         reasons.append("memory growth beyond the bound: %s" % ", ".join(grown))
     if report["tricks_completed"] < 1:
         reasons.append("no trick completed (the stack did not work)")
+    if report.get("box_contacts"):
+        reasons.append("%d contact(s) between the footprint and a dropped box" % len(report["box_contacts"]))
+    if report.get("arena_exits"):
+        reasons.append("the robot left the arena %d time(s)" % report["arena_exits"])
+    if report.get("avoidance") == "on" and report.get("boxes_every_s") and report.get("blocked_forever"):
+        reasons.append("blocked forever (stationary > 60 s with a trick pending) %d time(s)"
+                       % len(report["blocked_forever"]))
     if report.get("error"):
         reasons.append("driver error: %s" % report["error"])
     return reasons
@@ -154,6 +161,13 @@ def render_text(report: Dict[str, object]) -> str:
         "  contacts footprint-person: %d" % len(report["contacts"]),
         "  min clearance footprint-person: %s" % ("n/a" if min_c is None else "%.2f m" % min_c),
         "  ground-truth samples: %d" % report["truth_samples"],
+        "  boxes (issue 17): avoidance %s, %d dropped every %.0f s; box contacts %d, min box clearance %s; arena "
+        "exits %d; blocked forever %d; obstacles avoided %d; gave up %d; tricks/hour %.1f"
+        % (report.get("avoidance", "on"), report.get("boxes_dropped", 0), report.get("boxes_every_s", 0),
+           len(report.get("box_contacts", [])), "n/a" if report.get("min_box_clearance_m") is None
+           else "%.2f m" % report["min_box_clearance_m"], report.get("arena_exits", 0),
+           len(report.get("blocked_forever", [])), report.get("obstacles_avoided", 0),
+           len(report.get("avoidance_gave_up", [])), report.get("tricks_per_hour", 0.0)),
         "  node deaths / respawns / vanished: %s / %s / %s"
         % (report["node_deaths"], report["respawns"], report["vanished_nodes"]),
         "  memory (RSS MB, every %.0f s; warm-up %.0f s; flat = slope <= %.0f MB/h or growth <= %.0f MB):"

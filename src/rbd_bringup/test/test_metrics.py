@@ -42,3 +42,20 @@ def test_monitor_counts_each_contact_once_and_tracks_minimum():
     assert [c[0] for c in mon.contacts] == [0.1, 0.4]
     assert mon.min_clearance == pytest.approx(0.3 - 0.25 - 0.2)
     assert mon.min_clearance_at == 0.1
+
+
+def test_footprint_box_clearance_against_hand_geometry():
+    from rbd_bringup.metrics import footprint_box_clearance, outside_polygon
+
+    # A1 at the origin facing +x: its front edge at x = 0.25; a 0.4 m box whose face is at x = 0.55.
+    assert footprint_box_clearance((0.0, 0.0), 0.0, (0.75, 0.0), 0.0, (0.4, 0.4)) == pytest.approx(0.30)
+    # Turned by 90 deg the footprint reaches only 0.15 m ahead.
+    assert footprint_box_clearance((0.0, 0.0), math.pi / 2, (0.75, 0.0), 0.0, (0.4, 0.4)) == pytest.approx(0.40)
+    # Corner to corner: box at (1, 1) rotated 45 deg, its corner at 1 - 0.2 * sqrt(2) on the diagonal.
+    d = footprint_box_clearance((0.0, 0.0), 0.0, (1.0, 1.0), math.pi / 4, (0.4, 0.4))
+    # The box's near edge lies on x + y = 2 - 0.2 sqrt(2); the footprint's corner (0.25, 0.15) faces it.
+    assert d == pytest.approx((2 - 0.2 * math.sqrt(2) - 0.25 - 0.15) / math.sqrt(2))
+    assert footprint_box_clearance((0.0, 0.0), 0.0, (0.4, 0.0), 0.0, (0.4, 0.4)) == 0.0  # overlapping
+    assert footprint_box_clearance((0.0, 0.0), 0.0, (0.0, 0.0), 0.0, (0.1, 0.1)) == 0.0  # box under the robot
+    square = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
+    assert not outside_polygon((0.5, 0.5), square) and outside_polygon((1.5, 0.0), square)

@@ -85,9 +85,24 @@ def test_new_blocker_after_a_clear_gap_starts_its_own_clock():
     c = BlockClassifier(static_after=2.0)
     for i in range(30):
         c.update(0.1 * i, box_face(0.5, -0.2, 0.2))
-    c.update(3.0, [])
-    c.update(3.1, box_face(0.6, 0.1, 0.3))
+    for i in range(17):  # clear for 1.7 s (> max_gap 1.5 s)
+        c.update(3.0 + 0.1 * i, [])
+    c.update(4.7, box_face(0.6, 0.1, 0.3))
     assert c.classify() == UNKNOWN  # 0 s observed, although the history is longer
+
+
+def test_stop_and_go_at_the_same_box_keeps_the_clock():
+    c = BlockClassifier(static_after=2.0)
+    t = 0.0
+    for _ in range(4):  # 0.4 s blocked, 0.3 s clear (the zone shrinks when stopped), repeat
+        for _ in range(4):
+            c.update(t, box_face(0.5, -0.2, 0.2))
+            t += 0.1
+        for _ in range(3):
+            c.update(t, [])
+            t += 0.1
+    c.update(t, box_face(0.5, -0.2, 0.2))
+    assert c.classify() == STATIC, c.reason
 
 
 def test_near_fraction():

@@ -51,6 +51,67 @@ def footprint_clearance(
     return math.hypot(ex, ey) - person_radius
 
 
+def _rect(cx: float, cy: float, yaw: float, length: float, width: float) -> List[Tuple[float, float]]:
+    c, s = math.cos(yaw), math.sin(yaw)
+    hx, hy = length / 2.0, width / 2.0
+    return [(cx + c * x - s * y, cy + s * x + c * y) for x, y in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]
+
+
+def _segment_distance(p: Tuple[float, float], a: Tuple[float, float], b: Tuple[float, float]) -> float:
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    len2 = dx * dx + dy * dy
+    u = 0.0 if len2 == 0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2))
+    return math.hypot(p[0] - a[0] - u * dx, p[1] - a[1] - u * dy)
+
+
+def _inside(p: Tuple[float, float], poly: List[Tuple[float, float]]) -> bool:
+    inside = False
+    for (x1, y1), (x2, y2) in zip(poly, poly[1:] + poly[:1]):
+        if (y1 > p[1]) != (y2 > p[1]) and p[0] < x1 + (p[1] - y1) * (x2 - x1) / (y2 - y1):
+            inside = not inside
+    return inside
+
+
+def footprint_box_clearance(
+    robot_xy: Tuple[float, float],
+    robot_yaw: float,
+    box_xy: Tuple[float, float],
+    box_yaw: float,
+    box_size: Tuple[float, float],
+    length: float = A1_FOOTPRINT_LENGTH,
+    width: float = A1_FOOTPRINT_WIDTH,
+) -> float:
+    """Clearance between the robot's footprint rectangle and a box's footprint (a bag, a wall panel).
+
+    Args:
+        robot_xy: Footprint centre in the world [m].
+        robot_yaw: Heading [rad].
+        box_xy: Box centre [m].
+        box_yaw: Box rotation [rad].
+        box_size: (length along its x, width along its y) [m].
+        length: Footprint length [m].
+        width: Footprint width [m].
+
+    Returns:
+        Distance [m] between the two rectangles; 0 when they touch or overlap (a contact).
+    """
+    a = _rect(robot_xy[0], robot_xy[1], robot_yaw, length, width)
+    b = _rect(box_xy[0], box_xy[1], box_yaw, box_size[0], box_size[1])
+    if any(_inside(p, b) for p in a) or any(_inside(p, a) for p in b):
+        return 0.0
+    best = math.inf
+    for poly, other in ((a, b), (b, a)):
+        for p in poly:
+            for q, r in zip(other, other[1:] + other[:1]):
+                best = min(best, _segment_distance(p, q, r))
+    return best
+
+
+def outside_polygon(xy: Tuple[float, float], polygon: Iterable[Tuple[float, float]]) -> bool:
+    """True if the point lies outside the polygon (even-odd rule)."""
+    return not _inside(xy, list(polygon))
+
+
 class ContactMonitor:
     """Accumulates minimum clearance and contact events over a run."""
 

@@ -52,6 +52,7 @@ class BlockClassifier:
         max_shift: centroid shift that counts as motion [m].
         map_fraction: fraction of points on occupied map cells that makes them static at once.
         horizon: scans older than this are forgotten [s].
+        max_gap: scans without blocking points for longer than this end the observation [s].
 
     Raises:
         ValueError: non-positive static_after, match_radius or horizon.
@@ -65,6 +66,7 @@ class BlockClassifier:
         max_shift: float = 0.12,
         map_fraction: float = 0.7,
         horizon: float = 10.0,
+        max_gap: float = 1.5,
     ) -> None:
         for name, v in (("static_after", static_after), ("match_radius", match_radius), ("horizon", horizon)):
             if not math.isfinite(v) or v <= 0.0:
@@ -75,6 +77,7 @@ class BlockClassifier:
         self.max_shift = float(max_shift)
         self.map_fraction = float(map_fraction)
         self.horizon = max(float(horizon), self.static_after + 1.0)
+        self.max_gap = float(max_gap)
         self.scans = []  # type: List[Tuple[float, np.ndarray]]
         self.reason = ""
 
@@ -117,9 +120,16 @@ class BlockClassifier:
         centre = last.mean(axis=0)
         oldest = t_last
         next_check = 0.0  # compare with about ten scans per static_after, not every one
+        gap_since = None
         for t, pts in reversed(self.scans[:-1]):
             if len(pts) == 0:
-                break  # the blocker appeared after this scan
+                # Brief gaps are the zone shrinking when the robot stops (velocity-aware zone): the
+                # robot creeps stop-and-go at the same obstacle. A longer gap: it appeared after it.
+                gap_since = t_last if gap_since is None else gap_since
+                if gap_since - t > self.max_gap:
+                    break
+                continue
+            gap_since = None
             if t_last - t < next_check:
                 oldest = t
                 continue

@@ -24,6 +24,9 @@ from rbd_controller.fsm import Event, Fsm, State
 from rbd_controller.perception import AvoidParams, Perception
 from rbd_controller.watchdog import POLICIES, OperatorWatchdog
 
+#: Stopped again within this many seconds of a resume: the same blockage (stop-and-go creeping) [s].
+REBLOCK_WINDOW = 3.0
+
 PathResult = Tuple[bool, str, Sequence[Any], Sequence[str]]
 
 
@@ -147,6 +150,7 @@ class MainController:
         self.detour = None  # type: Optional[List[Any]]
         self.stats = {"avoided": 0, "gave_up": 0, "escapes": 0, "dodges": 0, "blocked": 0}
         self._stop_since = None  # type: Optional[float]
+        self._last_stop_end = -1e9
         self._episode_start = None  # type: Optional[float]
         self._attempts = 0
         self._retry_at = 0.0
@@ -301,12 +305,20 @@ class MainController:
     def _enter_stop(self, previous: State) -> None:
         self.sent_at = None  # the interrupted pose is re-sent on resume
         if self.fsm.state == State.COLLISION_DETECTED and previous not in (State.BLOCKED, State.EMERGENCY_STOP):
-            self._stop_since = self._now
+            # A robot that creeps stop-and-go at the same obstacle (the zone shrinks when it stops)
+            # is still blocked since the first stop.
+            if self._stop_since is None or self._now - self._last_stop_end > REBLOCK_WINDOW:
+                self._stop_since = self._now
         if self.fsm.state == State.BLOCKED:
             self.stats["blocked"] += 1
             self.ports.publish_avoidance({"event": "blocked", "detail": self._reason})
 
-    def _enter_avoidance(self, _previous: State) -> None:
+    def _enter_motion(self, previous: State) -> None:
+        if previous in (State.COLLISION_DETECTED, State.BLOCKED):
+            self._last_stop_end = self._now
+
+    def _enter_avoidance(self, previous: State) -> None:
+        self._enter_motion(previous)
         self.sent_at = None
         self.detour = None
         self._attempts = 0
@@ -332,7 +344,8 @@ class MainController:
         self._body_pose_wanted = (0.0, 0.0, 0.0)
         self.trick_home = self.perception.pose
 
-    def _enter_executing(self, _previous: State) -> None:
+    def _enter_executing(self, previous: State) -> None:
+        self._enter_motion(previous)
         self.sent_at = None
 
     # ------------------------------------------------------------------ loop
@@ -528,19 +541,21 @@ class MainController:
         resume = self.fsm.resume
         if not self._may_avoid(now):
             return
-        if resume in (State.EXECUTING, State.AVOIDING, State.ESCAPING):
+        dodging = resume in (State.WAITING_FOR_GESTURE, State.DODGING) and self.avoid.dodge and self.home is not None
+        if dodging and self.perception.recently_approached(now):
+            with self.lock:
+                if self.fsm.epoch == epoch:
+                    self._reason = "approached while stopped"
+                    self._fire_if(epoch, Event.DODGE)
+            return
+        if resume in (State.EXECUTING, State.AVOIDING, State.ESCAPING, State.WAITING_FOR_GESTURE):
+            # Also while idle: a robot put down (or left) facing a wall would never take a gesture.
             result, reason = self.perception.classify()
             with self.lock:
                 if result == STATIC and self.fsm.epoch == epoch:
                     self._reason = reason
                     self.ports.log("info", "blocked by a static obstacle: %s" % reason)
                     self._fire_if(epoch, Event.BLOCKED_STATIC)
-        elif resume in (State.WAITING_FOR_GESTURE, State.DODGING) and self.avoid.dodge and self.home is not None:
-            sides = self.perception.recently_approached(now)
-            with self.lock:
-                if sides and self.fsm.epoch == epoch:
-                    self._reason = "approached from the %s" % SIDE_NAMES[sides[0]]
-                    self._fire_if(epoch, Event.DODGE)
 
     def _tick_blocked(self, now: float, epoch: int) -> None:
         """BLOCKED: a moving blocker means a person (wait); else avoid after ~blocked_timeout."""

@@ -1,0 +1,531 @@
+"""Issue 17 experiments (active collision avoidance) on the safety stack, measured on ground truth.
+
+- ``box``: during ``walk`` a 0.4 m box is dropped with its near face 0.5 m ahead of the walking
+  robot (on the way back, where the detour has room). Measured per trick pose: reached within
+  0.1 m or skipped with the controller's reason; time lost against the same trick without a box;
+  minimum footprint-box clearance; contacts. Then the same with ``~avoidance`` off: the robot
+  must still be standing, trick pending, after the "blocked forever" time (thesis behaviour).
+- ``wall``: a wall panel with its face 0.45 m ahead of the idle robot, then ``walk``: it escapes,
+  takes the gesture and completes the trick or skips poses with a reason; the same with
+  avoidance off ends blocked.
+- ``visitor``: with ``~dodge`` on, a person walks straight at the idle robot at 0.5 and 1.0 m/s,
+  stops 0.55 m from its home (centre), waits, leaves. Measured: the robot steps back (largest
+  offset from home, bounded by ``~dodge_max``), never leaves the arena, returns home; minimum
+  clearance; contacts.
+
+Everything safety-related comes from the simulator: ``/rbd_sim/ground_truth`` (footprint vs box
+rectangle / person cylinder, rbd_bringup.metrics), the world's obstacle markers, and the arena
+the controller publishes. The controller's own topics only label what happened (states,
+avoidance events, the detour for the figure).
+"""
+
+import math
+import threading
+import time
+
+HERE_NOTE = "issue 17"
+BOX = 0.4  # edge of the box [m]
+
+
+def log(msg):
+    """One progress line."""
+    print("[avoidance] %s" % msg, flush=True)
+
+
+def wait_for(predicate, timeout, period=0.05):
+    """Poll predicate until true or timeout [s]."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(period)
+    return bool(predicate())
+
+
+class Watch:
+    """Ground truth, controller states, avoidance events, detour plans, queue and arena."""
+
+    def __init__(self):
+        import rospy
+        from geometry_msgs.msg import PolygonStamped
+        from nav_msgs.msg import Odometry, Path
+        from std_msgs.msg import String
+
+        from rbd_msgs.msg import PathQueue
+
+        self.lock = threading.Lock()
+        self.truth = []  # (t, x, y, yaw, speed)
+        self.states = []  # (t, state)
+        self.state = ""
+        self.events = []  # (t, text)
+        self.plans = []  # (t, [(x, y)])
+        self.queue = []
+        self.arena = None
+        self.subs = [
+            rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self._on_truth, queue_size=200),
+            rospy.Subscriber("/rbd_controller/state", String, self._on_state, queue_size=50),
+            rospy.Subscriber("/rbd_controller/avoidance", String, self._on_event, queue_size=50),
+            rospy.Subscriber("/rbd_controller/detour", Path, self._on_plan, queue_size=5),
+            rospy.Subscriber("/rbd_controller/path_queue", PathQueue, self._on_queue, queue_size=5),
+            rospy.Subscriber("/rbd_controller/arena", PolygonStamped, self._on_arena, queue_size=1),
+        ]
+
+    def _on_truth(self, msg):
+        p, q, tw = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist.linear
+        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        with self.lock:
+            self.truth.append((time.monotonic(), p.x, p.y, yaw, math.hypot(tw.x, tw.y)))
+            if len(self.truth) > 60000:
+                del self.truth[:20000]
+
+    def _on_state(self, msg):
+        with self.lock:
+            self.state = msg.data
+            self.states.append((time.monotonic(), msg.data))
+
+    def _on_event(self, msg):
+        with self.lock:
+            self.events.append((time.monotonic(), msg.data))
+        log("controller: %s" % msg.data)
+
+    def _on_plan(self, msg):
+        with self.lock:
+            self.plans.append((time.monotonic(), [(p.pose.position.x, p.pose.position.y) for p in msg.poses]))
+
+    def _on_queue(self, msg):
+        with self.lock:
+            self.queue = [(p.position.x, p.position.y) for p in msg.poses]
+
+    def _on_arena(self, msg):
+        with self.lock:
+            self.arena = [(p.x, p.y) for p in msg.polygon.points]
+
+    def pose(self):
+        """Latest ground truth (x, y, yaw)."""
+        with self.lock:
+            return self.truth[-1][1:4] if self.truth else None
+
+    def since(self, t0):
+        """Ground-truth samples after t0 (monotonic)."""
+        with self.lock:
+            return [s for s in self.truth if s[0] >= t0]
+
+    def wait_state(self, states, timeout):
+        """Until the controller is in one of states."""
+        return wait_for(lambda: self.state in states, timeout)
+
+    def close(self):
+        """Unsubscribe."""
+        for s in self.subs:
+            s.unregister()
+
+
+class Operator:
+    """Releases the e-stop, shows gestures (on the topic the bridge feeds), switches parameters."""
+
+    def __init__(self, watch):
+        import rospy
+        from std_msgs.msg import String
+        from std_srvs.srv import SetBool
+
+        from rbd_msgs.srv import PlaceBox, PlaceObstacle
+
+        self.watch = watch
+        self.gesture_pub = rospy.Publisher("/rbd_gestrec/gesture", String, queue_size=1)
+        rospy.wait_for_service("/rbd_controller/em_stop", 60.0)
+        self.em_stop = rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)
+        self.place_box = rospy.ServiceProxy("/rbd_sim/place_box", PlaceBox)
+        self.place_cylinder = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
+        self.String = String
+
+    def release(self):
+        """E-stop off, waiting for gestures."""
+        if self.watch.state != "WAITING_FOR_GESTURE":
+            self.em_stop(False)
+        return self.watch.wait_state(("WAITING_FOR_GESTURE",), 30.0)
+
+    def gesture(self, command, until=("GENERATING_PATH", "EXECUTING"), timeout=60.0):
+        """Show the gesture every 0.5 s until the controller takes it."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self.watch.state in until:
+                return True
+            if self.watch.state == "WAITING_FOR_GESTURE":
+                self.gesture_pub.publish(self.String(command))
+            time.sleep(0.5)
+        return False
+
+    @staticmethod
+    def switch(name, value):
+        """Set an rbd_controller parameter (re-read within 1 s)."""
+        import rospy
+
+        rospy.set_param("/rbd_controller/%s" % name, value)
+        time.sleep(1.3)
+
+
+def footprint_trace(samples, boxes, people=None):
+    """Minimum clearance and contacts along ground-truth samples (rbd_bringup.metrics)."""
+    from rbd_bringup.metrics import footprint_box_clearance, footprint_clearance
+
+    best, contacts = math.inf, 0
+    touching = False
+    for s in samples:
+        t, x, y, yaw = s[0], s[1], s[2], s[3]
+        d = math.inf
+        for bx, by, byaw, sx, sy in boxes:
+            d = min(d, footprint_box_clearance((x, y), yaw, (bx, by), byaw, (sx, sy)))
+        for px, py, r in (people(t) if people else []):
+            d = min(d, footprint_clearance((x, y), yaw, (px, py), r))
+        best = min(best, d)
+        if d <= 0.0 and not touching:
+            contacts += 1
+        touching = d <= 0.0
+    return best, contacts
+
+
+def stationary_for(samples, radius=0.05):
+    """Seconds the robot has stayed within radius of where it is at the end of samples."""
+    if not samples:
+        return 0.0
+    _, x, y = samples[-1][:3]
+    t_end = samples[-1][0]
+    for s in reversed(samples):
+        if math.hypot(s[1] - x, s[2] - y) > radius:
+            return t_end - s[0]
+    return t_end - samples[0][0]
+
+
+def trick_poses(start, names=("walk forward 0.6 m", "walk back to -0.6 m", "return to start")):
+    """The walk trick's three goals from its start pose (rbd_navigation's tricks.yaml)."""
+    x, y, yaw = start
+    c, s = math.cos(yaw), math.sin(yaw)
+    return [(names[0], x + 0.6 * c, y + 0.6 * s), (names[1], x - 0.6 * c, y - 0.6 * s), (names[2], x, y)]
+
+
+def pose_outcomes(samples, goals, events):
+    """Per goal: closest approach and whether the controller reported skipping it."""
+    skipped = [e for _, e in events if e.startswith("gave_up")]
+    out = []
+    for name, gx, gy in goals:
+        closest = min((math.hypot(s[1] - gx, s[2] - gy) for s in samples), default=math.inf)
+        out.append({"pose": name, "goal": [round(gx, 3), round(gy, 3)], "closest_m": round(closest, 3),
+                    "reached": closest <= 0.1})
+    return out, skipped
+
+
+def run_walk_with_box(ctx, watch, op, avoidance, blocked_wait):
+    """One walk with a box dropped on the way back; returns the measurements."""
+    import rospy
+
+    op.switch("avoidance", avoidance)
+    op.release()
+    start = watch.pose()
+    t0 = time.monotonic()
+    if not op.gesture("walk"):
+        raise RuntimeError("walk not taken")
+    # The way back: heading turned to the start's back, walking, past the first pose.
+    ok = wait_for(lambda: _walking_back(watch, start), 40.0, 0.02)
+    if not ok:
+        raise RuntimeError("the robot never walked the way back")
+    x, y, yaw = watch.pose()
+    d = 0.5 + BOX / 2.0
+    bx, by = x + d * math.cos(yaw), y + d * math.sin(yaw)
+    op.place_box(name="bag", x=bx, y=by, yaw=0.0, size_x=BOX, size_y=BOX, height=BOX, remove=False)
+    t_box = time.monotonic()
+    log("box dropped at (%.2f, %.2f), face 0.50 m ahead of the robot at (%.2f, %.2f) (avoidance %s)" % (
+        bx, by, x, y, "on" if avoidance else "off"))
+    result = {"avoidance": avoidance, "box": [bx, by, 0.0, BOX, BOX], "robot_at_drop": [x, y, yaw]}
+    if avoidance:
+        done = watch.wait_state(("WAITING_FOR_GESTURE",), 120.0 if not ctx.short else 90.0)
+        t1 = time.monotonic()
+        result["completed"] = done
+        result["duration_s"] = t1 - t0
+    else:
+        watch.wait_state(("COLLISION_DETECTED", "BLOCKED"), 5.0)
+        time.sleep(blocked_wait)
+        samples = watch.since(t_box)
+        result["stationary_s"] = stationary_for(samples)
+        with watch.lock:
+            result["state_at_end"] = watch.state
+            result["trick_pending"] = bool(watch.queue)
+        result["blocked_forever"] = (result["stationary_s"] >= blocked_wait - 1.0 and result["trick_pending"]
+                                     and result["state_at_end"] in ("BLOCKED", "COLLISION_DETECTED"))
+        t1 = time.monotonic()
+    samples = watch.since(t0)
+    result["min_clearance_m"], result["contacts"] = footprint_trace(watch.since(t_box), [result["box"]])
+    with watch.lock:
+        events = [(t, e) for t, e in watch.events if t >= t0]
+        plans = [p for t, p in watch.plans if t >= t0]
+        states = [s for t, s in watch.states if t0 <= t <= t1]
+        arena = watch.arena
+    result["poses"], result["skipped"] = pose_outcomes(samples, trick_poses(start), events)
+    result["events"] = [e for _, e in events]
+    result["states"] = states
+    result["path"] = [(s[1], s[2]) for s in samples[::5]]
+    result["plans"] = plans
+    result["arena"] = arena
+    op.place_box(name="bag", remove=True)
+    if not avoidance:
+        op.switch("avoidance", True)  # let the pending trick finish, clear of the box
+        watch.wait_state(("WAITING_FOR_GESTURE",), 60.0)
+    rospy.sleep(0.5)
+    return result
+
+
+def _walking_back(watch, start):
+    with watch.lock:
+        if len(watch.truth) < 2 or watch.state != "EXECUTING":
+            return False
+        _, x, y, yaw, speed = watch.truth[-1]
+    sx, sy, syaw = start
+    along = (x - sx) * math.cos(syaw) + (y - sy) * math.sin(syaw)
+    back = math.cos(yaw - syaw) < -0.95
+    return back and speed > 0.15 and along < 0.45
+
+
+def exp_box(ctx):
+    """Box on the path during walk, with and without avoidance."""
+    watch = Watch()
+    op = Operator(watch)
+    try:
+        on = run_walk_with_box(ctx, watch, op, True, 0.0)
+        log("box (avoidance on): completed %s in %.1f s, min clearance %.3f m, contacts %d, skipped %s" % (
+            on["completed"], on["duration_s"], on["min_clearance_m"], on["contacts"], on["skipped"]))
+        blocked_wait = 15.0 if ctx.short else 60.0
+        off = run_walk_with_box(ctx, watch, op, False, blocked_wait)
+        log("box (avoidance off): stationary %.1f s in %s, trick pending %s" % (
+            off["stationary_s"], off["state_at_end"], off["trick_pending"]))
+        baseline = None
+        if not ctx.short:
+            op.release()
+            t0 = time.monotonic()
+            op.gesture("walk")
+            watch.wait_state(("WAITING_FOR_GESTURE",), 60.0)
+            baseline = time.monotonic() - t0
+    finally:
+        watch.close()
+    result = {"on": on, "off": off, "baseline_s": baseline, "blocked_forever_s": 60.0 if not ctx.short else 15.0}
+    result["time_lost_s"] = None if baseline is None else on["duration_s"] - baseline
+    result["png"] = plot(ctx, "avoid_box.png", "Box on the path during walk", [on, off])
+    return result
+
+
+def exp_wall(ctx):
+    """A wall 0.45 m ahead of the idle robot, then walk; with and without avoidance."""
+    import rospy
+
+    watch = Watch()
+    op = Operator(watch)
+    runs = {}
+    try:
+        for avoidance in (True, False):
+            op.switch("avoidance", avoidance)
+            op.release()
+            wait_for(lambda: watch.state == "WAITING_FOR_GESTURE", 30.0)
+            start = watch.pose()
+            x, y, yaw = start
+            d = 0.45 + 0.05  # the panel is 0.1 m thick: its face 0.45 m ahead of base_link
+            wx, wy = x + d * math.cos(yaw), y + d * math.sin(yaw)
+            wall = [wx, wy, yaw, 0.1, 3.0]
+            op.place_box(name="wall", x=wx, y=wy, yaw=yaw, size_x=0.1, size_y=3.0, height=1.2, remove=False)
+            t0 = time.monotonic()
+            log("wall panel 0.45 m ahead of the robot at (%.2f, %.2f) (avoidance %s)" % (
+                x, y, "on" if avoidance else "off"))
+            r = {"avoidance": avoidance, "wall": wall, "start": list(start)}
+            if avoidance:
+                r["taken"] = op.gesture("walk", timeout=60.0)
+                r["completed"] = r["taken"] and watch.wait_state(("WAITING_FOR_GESTURE",), 120.0)
+                r["duration_s"] = time.monotonic() - t0
+            else:
+                wait = 15.0 if ctx.short else 60.0
+                r["taken"] = op.gesture("walk", timeout=wait)
+                samples = watch.since(t0)
+                r["stationary_s"] = stationary_for(samples)
+                r["state_at_end"] = watch.state
+                r["blocked_forever"] = not r["taken"] and r["stationary_s"] >= wait - 1.0
+            t1 = time.monotonic()
+            samples = watch.since(t0)
+            r["min_clearance_m"], r["contacts"] = footprint_trace(samples, [wall])
+            with watch.lock:
+                events = [(t, e) for t, e in watch.events if t >= t0]
+                r["plans"] = [p for t, p in watch.plans if t >= t0]
+                r["states"] = [s for t, s in watch.states if t0 <= t <= t1]
+                r["arena"] = watch.arena
+            r["events"] = [e for _, e in events]
+            r["skipped"] = [e for _, e in events if e.startswith("gave_up")]
+            r["path"] = [(s[1], s[2]) for s in samples[::5]]
+            op.place_box(name="wall", remove=True)
+            runs["on" if avoidance else "off"] = r
+            log("wall (avoidance %s): %s" % ("on" if avoidance else "off", {
+                k: r[k] for k in ("completed", "stationary_s", "blocked_forever", "min_clearance_m", "contacts",
+                                  "skipped") if k in r}))
+        op.switch("avoidance", True)
+        watch.wait_state(("WAITING_FOR_GESTURE",), 30.0)
+        rospy.sleep(0.5)
+    finally:
+        watch.close()
+    runs["png"] = plot(ctx, "avoid_wall.png", "Wall 0.45 m ahead, then walk", [runs["on"], runs["off"]])
+    return runs
+
+
+def exp_visitor(ctx):
+    """A visitor walks at the idle robot (0.5 and 1.0 m/s), stops 0.55 m from its home, leaves."""
+    import rospy
+
+    watch = Watch()
+    op = Operator(watch)
+    out = {"runs": []}
+    try:
+        op.switch("dodge", True)
+        op.release()
+        dodge_max = float(rospy.get_param("/rbd_controller/dodge_max", 0.5))
+        speeds = (1.0,) if ctx.short else (0.5, 1.0)
+        for v in speeds:
+            run = visitor_run(watch, op, v, dodge_max)
+            out["runs"].append(run)
+        op.switch("dodge", False)
+    finally:
+        watch.close()
+    out["png"] = plot_visitor(ctx, out["runs"])
+    return out
+
+
+def visitor_run(watch, op, v, dodge_max):
+    """One approach at v [m/s]: walk in from 2.2 m to 0.55 m, stand 3 s, walk away to 3 m."""
+    from rbd_bringup.metrics import outside_polygon
+
+    watch.wait_state(("WAITING_FOR_GESTURE",), 30.0)
+    time.sleep(1.0)
+    home = watch.pose()
+    x, y, yaw = home
+    c, s = math.cos(yaw), math.sin(yaw)
+    radius = 0.22
+    track = []
+    t0 = time.monotonic()
+
+    def walk(d0, d1, speed):
+        n = max(1, int(abs(d1 - d0) / speed * 20))
+        for i in range(n + 1):
+            d = d0 + (d1 - d0) * i / n
+            px, py = x + d * c, y + d * s
+            op.place_cylinder(name="visitor", x=px, y=py, radius=radius, height=1.7, remove=False)
+            track.append((time.monotonic(), px, py, radius))
+            time.sleep(0.05)
+
+    walk(2.2, 0.55, v)
+    hold_until = time.monotonic() + 3.0
+    while time.monotonic() < hold_until:
+        track.append((time.monotonic(), x + 0.55 * c, y + 0.55 * s, radius))
+        time.sleep(0.05)
+    walk(0.55, 3.0, v)
+    op.place_cylinder(name="visitor", remove=True)
+    back = watch.wait_state(("WAITING_FOR_GESTURE",), 5.0) and wait_for(lambda: _near(watch.pose(), home, 0.06),
+                                                                         25.0)
+    time.sleep(0.5)
+    t1 = time.monotonic()
+    samples = watch.since(t0)
+
+    def people(t):
+        best = min(track, key=lambda p: abs(p[0] - t))
+        return [best[1:]] if abs(best[0] - t) < 0.2 else []
+
+    min_c, contacts = footprint_trace(samples, [], people)
+    offsets = [math.hypot(q[1] - x, q[2] - y) for q in samples]
+    with watch.lock:
+        arena = watch.arena
+        states = [st for t, st in watch.states if t0 <= t <= t1]
+        events = [e for t, e in watch.events if t0 <= t <= t1]
+    exits = sum(1 for q in samples if arena and outside_polygon((q[1], q[2]), arena))
+    end = watch.pose()
+    run = {"speed_mps": v, "home": list(home), "min_clearance_m": min_c, "contacts": contacts,
+           "max_offset_m": max(offsets) if offsets else 0.0, "dodge_max_m": dodge_max,
+           "returned": bool(back), "final_offset_m": math.hypot(end[0] - x, end[1] - y),
+           "arena_exit_samples": exits, "arena": arena, "states": states, "events": events,
+           "dodged": "DODGING" in states, "path": [(q[1], q[2]) for q in samples[::3]],
+           "visitor": [(p[1], p[2]) for p in track[::4]]}
+    log("visitor %.1f m/s: dodged %s, max offset %.3f m, min clearance %.3f m, contacts %d, back home %s "
+        "(%.3f m), arena exits %d" % (v, run["dodged"], run["max_offset_m"], min_c, contacts, back,
+                                     run["final_offset_m"], exits))
+    return run
+
+
+def _near(pose, home, tol):
+    return pose is not None and math.hypot(pose[0] - home[0], pose[1] - home[1]) <= tol
+
+
+def _rect(x, y, yaw, sx, sy):
+    c, s = math.cos(yaw), math.sin(yaw)
+    pts = [(sx / 2, sy / 2), (-sx / 2, sy / 2), (-sx / 2, -sy / 2), (sx / 2, -sy / 2), (sx / 2, sy / 2)]
+    return [x + c * a - s * b for a, b in pts], [y + s * a + c * b for a, b in pts]
+
+
+def plot(ctx, name, title, runs):
+    """Ground-truth path, the obstacle, the planned detours and the arena, one panel per run."""
+    import os
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(runs), figsize=(4.2 * len(runs), 4.0))
+    for ax, r in zip(axes, runs):
+        box = r.get("box") or r.get("wall")
+        xs, ys = _rect(box[0], box[1], box[2], box[3], box[4])
+        ax.fill(xs, ys, color="tab:brown", alpha=0.6, label="obstacle")
+        if r.get("arena"):
+            ax.plot([p[0] for p in r["arena"] + r["arena"][:1]], [p[1] for p in r["arena"] + r["arena"][:1]],
+                    "k:", lw=1, label="arena")
+        for i, plan in enumerate(r.get("plans", [])):
+            if plan:
+                ax.plot([p[0] for p in plan], [p[1] for p in plan], "o--", color="tab:purple", ms=3, lw=1,
+                        label="planned detour" if i == 0 else None)
+        if r.get("path"):
+            ax.plot([p[0] for p in r["path"]], [p[1] for p in r["path"]], color="tab:blue", lw=1.3,
+                    label="robot (ground truth)")
+            ax.plot(r["path"][0][0], r["path"][0][1], "go", ms=5, label="start")
+        state = "avoidance on" if r.get("avoidance") else "avoidance off"
+        extra = ("min clearance %.2f m" % r["min_clearance_m"]) if math.isfinite(r["min_clearance_m"]) else ""
+        if not r.get("avoidance") and "stationary_s" in r:
+            extra = "standing %.0f s (blocked)" % r["stationary_s"]
+        ax.set_title("%s: %s\n%s" % (title, state, extra), fontsize=8)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=6, loc="best")
+        ax.set_xlabel("x [m]")
+    path = os.path.join(ctx.out, name)
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    return path
+
+
+def plot_visitor(ctx, runs):
+    """Robot path and visitor track per approach speed."""
+    import os
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(runs), figsize=(4.2 * len(runs), 3.6), squeeze=False)
+    for ax, r in zip(axes[0], runs):
+        hx, hy = r["home"][:2]
+        ax.add_patch(plt.Circle((hx, hy), r["dodge_max_m"], fill=False, ls="--", color="0.5", label="dodge_max"))
+        ax.plot([p[0] for p in r["visitor"]], [p[1] for p in r["visitor"]], ".", color="tab:orange", ms=3,
+                label="visitor centre")
+        ax.plot([p[0] for p in r["path"]], [p[1] for p in r["path"]], color="tab:blue", lw=1.5,
+                label="robot (ground truth)")
+        ax.plot(hx, hy, "go", label="home")
+        ax.set_title("visitor at %.1f m/s: max offset %.2f m, min clearance %.2f m" % (
+            r["speed_mps"], r["max_offset_m"], r["min_clearance_m"]), fontsize=8)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=6)
+    path = os.path.join(ctx.out, "avoid_visitor.png")
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    return path
