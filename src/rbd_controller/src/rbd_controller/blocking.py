@@ -120,16 +120,15 @@ class BlockClassifier:
         centre = last.mean(axis=0)
         oldest = t_last
         next_check = 0.0  # compare with about ten scans per static_after, not every one
-        gap_since = None
+        seen = t_last  # time of the latest non-empty scan passed so far
         for t, pts in reversed(self.scans[:-1]):
             if len(pts) == 0:
                 # Brief gaps are the zone shrinking when the robot stops (velocity-aware zone): the
                 # robot creeps stop-and-go at the same obstacle. A longer gap: it appeared after it.
-                gap_since = t_last if gap_since is None else gap_since
-                if gap_since - t > self.max_gap:
+                if seen - t > self.max_gap:
                     break
                 continue
-            gap_since = None
+            seen = t
             if t_last - t < next_check:
                 oldest = t
                 continue
