@@ -214,20 +214,26 @@ def pose_outcomes(samples, goals, events):
     return out, skipped
 
 
-def run_walk_with_box(ctx, watch, op, avoidance, blocked_wait):
-    """One walk with a box dropped on the way back; returns the measurements."""
+def run_trick_with_box(ctx, watch, op, trick, avoidance, blocked_wait):
+    """One trick with a box dropped 0.5 m ahead of the walking robot; returns the measurements.
+
+    ``walk`` gets it on its way back (between its poses: at least one pose then has the box in
+    its stop zone and is skipped with a reason); ``stroll`` on its way out (room for a detour).
+    """
     import rospy
 
     op.switch("avoidance", avoidance)
     op.release()
     start = watch.pose()
     t0 = time.monotonic()
-    if not op.gesture("walk"):
-        raise RuntimeError("walk not taken")
-    # The way back: heading turned to the start's back, walking, past the first pose.
-    ok = wait_for(lambda: _walking_back(watch, start), 40.0, 0.02)
+    if not op.gesture(trick):
+        raise RuntimeError("%s not taken" % trick)
+    if trick == "walk":  # the way back: heading turned to the start's back, past the first pose
+        ok = wait_for(lambda: _walking_back(watch, start), 40.0, 0.02)
+    else:  # the way out, 0.3 m past the start
+        ok = wait_for(lambda: _walking_out(watch, start), 40.0, 0.02)
     if not ok:
-        raise RuntimeError("the robot never walked the way back")
+        raise RuntimeError("the robot never walked where the box goes")
     x, y, yaw = watch.pose()
     d = 0.5 + BOX / 2.0
     bx, by = x + d * math.cos(yaw), y + d * math.sin(yaw)
@@ -235,7 +241,7 @@ def run_walk_with_box(ctx, watch, op, avoidance, blocked_wait):
     t_box = time.monotonic()
     log("box dropped at (%.2f, %.2f), face 0.50 m ahead of the robot at (%.2f, %.2f) (avoidance %s)" % (
         bx, by, x, y, "on" if avoidance else "off"))
-    result = {"avoidance": avoidance, "box": [bx, by, 0.0, BOX, BOX], "robot_at_drop": [x, y, yaw]}
+    result = {"trick": trick, "avoidance": avoidance, "box": [bx, by, 0.0, BOX, BOX], "robot_at_drop": [x, y, yaw]}
     if avoidance:
         done = watch.wait_state(("WAITING_FOR_GESTURE",), 120.0 if not ctx.short else 90.0)
         t1 = time.monotonic()
@@ -259,7 +265,9 @@ def run_walk_with_box(ctx, watch, op, avoidance, blocked_wait):
         plans = [p for t, p in watch.plans if t >= t0]
         states = [s for t, s in watch.states if t0 <= t <= t1]
         arena = watch.arena
-    result["poses"], result["skipped"] = pose_outcomes(samples, trick_poses(start), events)
+    goals = trick_poses(start) if trick == "walk" else stroll_poses(start)
+    result["poses"], result["skipped"] = pose_outcomes(samples, goals, events)
+    result["obstacles_avoided"] = sum(1 for _, e in events if e.startswith("avoided"))
     result["events"] = [e for _, e in events]
     result["states"] = states
     result["path"] = [(s[1], s[2]) for s in samples[::5]]
@@ -273,6 +281,23 @@ def run_walk_with_box(ctx, watch, op, avoidance, blocked_wait):
     return result
 
 
+def stroll_poses(start):
+    """The stroll trick's goals (rbd_navigation's tricks.yaml): 2 m out, back, turned forward."""
+    x, y, yaw = start
+    return [("stroll forward 2 m", x + 2.0 * math.cos(yaw), y + 2.0 * math.sin(yaw)),
+            ("stroll back to the start", x, y), ("face forward again", x, y)]
+
+
+def _walking_out(watch, start):
+    with watch.lock:
+        if len(watch.truth) < 2 or watch.state != "EXECUTING":
+            return False
+        _, x, y, yaw, speed = watch.truth[-1]
+    sx, sy, syaw = start
+    along = (x - sx) * math.cos(syaw) + (y - sy) * math.sin(syaw)
+    return math.cos(yaw - syaw) > 0.95 and speed > 0.15 and along > 0.3
+
+
 def _walking_back(watch, start):
     with watch.lock:
         if len(watch.truth) < 2 or watch.state != "EXECUTING":
@@ -284,30 +309,39 @@ def _walking_back(watch, start):
     return back and speed > 0.15 and along < 0.45
 
 
+def baseline(watch, op, trick):
+    """Duration of the trick without a box [s]."""
+    op.release()
+    t0 = time.monotonic()
+    op.gesture(trick)
+    watch.wait_state(("WAITING_FOR_GESTURE",), 90.0)
+    return time.monotonic() - t0
+
+
 def exp_box(ctx):
-    """Box on the path during walk, with and without avoidance."""
+    """A 0.4 m box 0.5 m ahead of the walking robot: walk (skips), stroll (detour), and avoidance off."""
     watch = Watch()
     op = Operator(watch)
+    result = {"blocked_forever_s": 15.0 if ctx.short else 60.0}
     try:
-        on = run_walk_with_box(ctx, watch, op, True, 0.0)
-        log("box (avoidance on): completed %s in %.1f s, min clearance %.3f m, contacts %d, skipped %s" % (
-            on["completed"], on["duration_s"], on["min_clearance_m"], on["contacts"], on["skipped"]))
-        blocked_wait = 15.0 if ctx.short else 60.0
-        off = run_walk_with_box(ctx, watch, op, False, blocked_wait)
-        log("box (avoidance off): stationary %.1f s in %s, trick pending %s" % (
+        for trick in (("stroll",) if ctx.short else ("stroll", "walk")):
+            on = run_trick_with_box(ctx, watch, op, trick, True, 0.0)
+            on["baseline_s"] = None if ctx.short else baseline(watch, op, trick)
+            on["time_lost_s"] = None if on["baseline_s"] is None else on["duration_s"] - on["baseline_s"]
+            result[trick] = on
+            log("box in %s (avoidance on): completed %s in %.1f s (lost %s s), min clearance %.3f m, contacts %d, "
+                "avoided %d, poses %s, skipped %s" % (
+                    trick, on["completed"], on["duration_s"], on["time_lost_s"], on["min_clearance_m"],
+                    on["contacts"], on["obstacles_avoided"], [(p["pose"], p["closest_m"]) for p in on["poses"]],
+                    on["skipped"]))
+        off = run_trick_with_box(ctx, watch, op, "walk", False, result["blocked_forever_s"])
+        result["off"] = off
+        log("box in walk (avoidance off): stationary %.1f s in %s, trick pending %s" % (
             off["stationary_s"], off["state_at_end"], off["trick_pending"]))
-        baseline = None
-        if not ctx.short:
-            op.release()
-            t0 = time.monotonic()
-            op.gesture("walk")
-            watch.wait_state(("WAITING_FOR_GESTURE",), 60.0)
-            baseline = time.monotonic() - t0
     finally:
         watch.close()
-    result = {"on": on, "off": off, "baseline_s": baseline, "blocked_forever_s": 60.0 if not ctx.short else 15.0}
-    result["time_lost_s"] = None if baseline is None else on["duration_s"] - baseline
-    result["png"] = plot(ctx, "avoid_box.png", "Box on the path during walk", [on, off])
+    panels = [result[t] for t in ("stroll", "walk") if t in result] + [result["off"]]
+    result["png"] = plot(ctx, "avoid_box.png", "0.4 m box 0.5 m ahead", panels)
     return result
 
 
@@ -485,7 +519,7 @@ def plot(ctx, name, title, runs):
             ax.plot([p[0] for p in r["path"]], [p[1] for p in r["path"]], color="tab:blue", lw=1.3,
                     label="robot (ground truth)")
             ax.plot(r["path"][0][0], r["path"][0][1], "go", ms=5, label="start")
-        state = "avoidance on" if r.get("avoidance") else "avoidance off"
+        state = "%s, avoidance %s" % (r.get("trick", "walk"), "on" if r.get("avoidance") else "off")
         extra = ("min clearance %.2f m" % r["min_clearance_m"]) if math.isfinite(r["min_clearance_m"]) else ""
         if not r.get("avoidance") and "stationary_s" in r:
             extra = "standing %.0f s (blocked)" % r["stationary_s"]

@@ -59,7 +59,7 @@ class World:
                 log=lambda level, msg: self.logs.append((level, msg)),
                 set_guarded_position=lambda x, y, v: self.send("guarded", x, y, None, v),
                 make_pose=lambda x, y, yaw: (x, y, yaw),
-                pose_xy=lambda p: (p[0], p[1]),
+                pose_xy=lambda p: (p[0], p[1], p[2]),
                 publish_avoidance=self.events.append,
             ),
             avoid=AvoidParams(**params),
@@ -187,6 +187,7 @@ def test_box_on_the_path_escape_detour_and_the_trick_ends_with_reasons():
     # the zone's reach of the box; the robot never touched it (0.25 m half length of the A1).
     assert w.ctl.stats["gave_up"] >= 1
     assert all("goal blocked" in e["detail"] for e in w.events if e["event"] == "gave_up")
+    assert sum(1 for e in w.events if e["event"] == "gave_up") == w.ctl.stats["gave_up"]
     assert w.min_clearance > 0.25
 
 

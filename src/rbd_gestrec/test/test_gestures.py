@@ -16,7 +16,7 @@ def default_buffer(max_age=0.0):
 def test_default_mapping_covers_the_four_tricks():
     with open(CONFIG) as fh:
         mapping = parse_mapping(yaml.safe_load(fh))
-    assert set(mapping.values()) == {"walk", "spin", "wiggle", "lie_down"}
+    assert set(mapping.values()) == {"walk", "spin", "wiggle", "lie_down", "stroll"}
 
 
 def test_each_gesture_returned_once_then_empty():

@@ -17,7 +17,7 @@ import threading
 from typing import Any, Callable, List, Sequence, Tuple
 
 from rbd_controller.blocking import MOVING, STATIC
-from rbd_controller.detour import DetourPlanner
+from rbd_controller.detour import DetourPlanner, zone_occupied_at
 from rbd_controller.dodge import dodge_target
 from rbd_controller.escape import SIDE_NAMES, TOWARDS, clear_by_margin, plan_escape
 from rbd_controller.fsm import Event, Fsm, State
@@ -47,7 +47,7 @@ class Ports:
         log: (level, message) -> None, level in "info", "warn", "error".
         set_guarded_position: (x, y, max_speed) -> (accepted, message) (SetGuardedPosition).
         make_pose: (x, y, yaw) -> a pose for set_position (geometry_msgs/Pose in the node).
-        pose_xy: pose -> (x, y) of a trick pose.
+        pose_xy: pose -> (x, y, yaw) of a trick pose.
         publish_avoidance: dict -> None: avoidance events, plans and the arena (RViz, reports).
     """
 
@@ -64,7 +64,7 @@ class Ports:
         log: Callable[[str, str], None],
         set_guarded_position: Callable[[float, float, float], Tuple[bool, str]] = None,
         make_pose: Callable[[float, float, float], Any] = None,
-        pose_xy: Callable[[Any], Tuple[float, float]] = None,
+        pose_xy: Callable[[Any], Tuple[float, float, float]] = None,
         publish_avoidance: Callable[[dict], None] = None,
     ) -> None:
         self.get_gesture = get_gesture
@@ -78,7 +78,7 @@ class Ports:
         self.log = log
         self.set_guarded_position = set_guarded_position or (lambda x, y, v: (False, "no guarded motion"))
         self.make_pose = make_pose or (lambda x, y, yaw: (x, y, yaw))
-        self.pose_xy = pose_xy or (lambda pose: (pose[0], pose[1]))
+        self.pose_xy = pose_xy or (lambda pose: (pose[0], pose[1], pose[2]))
         self.publish_avoidance = publish_avoidance or (lambda info: None)
 
 
@@ -525,9 +525,25 @@ class MainController:
         self.current = None
         self.sent_at = None
         self.detour = None
+        self._drop_unreachable()
         self._episode_start = None
         self.perception.forget_blocking()
         self._fire_if(epoch, Event.GIVE_UP)
+
+    def _goal_blocked(self, pose: Any, points: Any) -> int:
+        """Known obstacle points inside the stop zone of a robot at the trick pose."""
+        return zone_occupied_at(self.ports.pose_xy(pose), self.avoid.zone, points)
+
+    def _drop_unreachable(self) -> None:
+        """Caller holds the lock. Drop the queued poses whose zone the known obstacle occupies."""
+        since = self._episode_start if self._episode_start is not None else self._now
+        points = self.perception.obstacles(since - 5.0)
+        while self.queue and self._goal_blocked(self.queue[0][0], points):
+            _, name = self.queue.pop(0)
+            self.stats["gave_up"] += 1
+            reason = "goal blocked: the stop zone at %r would hold the obstacle" % name
+            self.ports.log("warn", "skipping %r: %s" % (name, reason))
+            self.ports.publish_avoidance({"event": "gave_up", "detail": reason})
 
     def _timed_out(self, now: float, epoch: int) -> bool:
         """Caller holds the lock. Give up when the avoidance of this pose took ~avoid_timeout."""
@@ -641,9 +657,14 @@ class MainController:
                     self._fire_if(epoch, Event.DETOUR_DONE)
                     return
                 start = p.pose
-                goal = self.ports.pose_xy(goal_pose)
+                goal = self.ports.pose_xy(goal_pose)[:2]
                 arena = p.ensure_arena(self.home or (start[0], start[1]))
                 since = self._episode_start if self._episode_start is not None else now
+                inside = self._goal_blocked(goal_pose, p.obstacles(since - 5.0))
+                if inside:
+                    self._give_up(epoch, "goal blocked: the stop zone at the goal would hold %d obstacle points"
+                                  % inside)
+                    return
         if self.detour is None:
             plan = self.planner.plan((start[0], start[1]), goal, p.grid, p.obstacles(since - 5.0), arena)
             with self.lock:

@@ -158,6 +158,30 @@ def distance_field(obstacles: np.ndarray, max_cells: int) -> np.ndarray:
     return dist
 
 
+def zone_occupied_at(goal: Tuple[float, float, float], zone: Sequence[float], points: Sequence[Point],
+                     margin: float = 0.05) -> int:
+    """Obstacle points inside the stop zone of a robot standing at goal (x, y, yaw).
+
+    Args:
+        goal: the pose [m, m, rad].
+        zone: stop-zone limits (FRONT, LEFT, BACK, RIGHT) [m], rbd_lidar's zone_*.
+        points: obstacle points in the map frame [m].
+        margin: added to every side [m].
+
+    Returns:
+        The number of points inside (a goal with points inside cannot be held: the zone would stop
+        the robot there).
+    """
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if not len(pts):
+        return 0
+    c, s = math.cos(goal[2]), math.sin(goal[2])
+    dx, dy = pts[:, 0] - goal[0], pts[:, 1] - goal[1]
+    bx, by = c * dx + s * dy, -s * dx + c * dy
+    inside = (bx < zone[0] + margin) & (by < zone[1] + margin) & (bx > -zone[2] - margin) & (by > -zone[3] - margin)
+    return int(inside.sum())
+
+
 class DetourPlanner:
     """Grid A* around blocking obstacles.
 

@@ -70,7 +70,7 @@ class AvoidParams:
         inflation: float = 0.45,
         clearance: float = 0.8,
         arena: Sequence[Sequence[float]] = (),
-        arena_half_size: float = 2.0,
+        arena_half_size: float = 3.0,
         zone: Sequence[float] = (0.70, 0.35, 0.55, 0.35),
         slowdown: Sequence[float] = (0.50, 0.20, 0.30, 0.20),
         point_threshold: int = 5,
