@@ -5,7 +5,9 @@ Starts a private ROS master and `rbd_bringup sim.launch`, plays the laptop app (
 the audience: gestures go through the app's own recognition pipeline (MediaPipe on a clip made
 from a real hand photo for `walk` and `lie_down`; recorded key-point sequences for `spin` and
 `wiggle`) and through the rosbridge-compatible server to the robot. During the walk a person
-steps into the robot's way and leaves again. Everything safety-related is measured on the
+steps into the robot's way and leaves again. Then the operator sends `stroll` (2 m out and
+back) and a bag is put down on the robot's way: it stops, classifies the bag as static, steps
+back and walks around it, out and back (issue 17). Everything safety-related is measured on the
 simulator's ground truth and on the command stream the A1 receives over LCM.
 
 Writes OUT/report.txt, OUT/report.json, OUT/run.png and OUT/demo.bag.
@@ -24,12 +26,14 @@ import threading
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-TRICKS = ["walk", "spin", "wiggle", "lie_down"]
+TRICKS = ["walk", "spin", "wiggle", "lie_down", "stroll"]
+OPERATOR_TRICKS = {"stroll"}  # sent as a command by the operator (no hand gesture of its own)
 GESTURE_OF = {"walk": "swipe_right", "spin": "circle", "wiggle": "wave", "lie_down": "push_down"}
 PHOTO_MOTION = {"walk": "right", "lie_down": "down"}  # gestures a moving real photo can show
 BAG_TOPICS = ["/rbd_sim/ground_truth", "/rbd_sim/obstacles", "/rbd_controller/state", "/rbd_controller/path_queue",
               "/rbd_pos_controller/status", "/rbd_lidar/state", "/cmd_vel", "/rbd_gestrec/gesture", "/scan",
-              "/rbd_localization/pose", "/odometry/filtered", "/zed2/zed_node/pose", "/rbd_controller/path"]
+              "/rbd_localization/pose", "/odometry/filtered", "/zed2/zed_node/pose", "/rbd_controller/path",
+              "/rbd_controller/avoidance", "/rbd_controller/detour", "/rbd_controller/blocking_points"]
 
 
 def free_port():
@@ -57,11 +61,12 @@ class Monitor:
         from visualization_msgs.msg import MarkerArray
 
         from rbd_bringup.a1_monitor import HighCmdMonitor
-        from rbd_bringup.metrics import ContactMonitor
+        from rbd_bringup.metrics import ContactMonitor, footprint_box_clearance
         from rbd_msgs.msg import CollisionState
 
         self.lock = threading.Lock()
         self.contacts = ContactMonitor()
+        self._box_clearance = footprint_box_clearance
         self.pose = None
         self.path = []
         self.people = {}
@@ -71,11 +76,22 @@ class Monitor:
         self.onsets = []
         self.stop_points = []
         self.commands = []
+        self.boxes = {}  # placed boxes: name -> (x, y, yaw, size_x, size_y)
+        self.boxes_seen = {}
+        self.box_contacts = []
+        self.min_box_clearance = math.inf
+        self._box_touching = set()
+        self.avoidance = []  # the controller's avoidance events
+        self.detours = []
         self._collision = False
         rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_truth, queue_size=50)
         rospy.Subscriber("/rbd_sim/obstacles", MarkerArray, self.on_people, queue_size=5)
         rospy.Subscriber("/rbd_controller/state", String, self.on_state, queue_size=20)
         rospy.Subscriber("/rbd_lidar/state", CollisionState, self.on_zone, queue_size=50)
+        rospy.Subscriber("/rbd_controller/avoidance", String, self.on_avoidance, queue_size=50)
+        from nav_msgs.msg import Path
+
+        rospy.Subscriber("/rbd_controller/detour", Path, self.on_detour, queue_size=5)
         # every HighCmd the A1 receives (wall time, commanded speed)
         self.a1 = HighCmdMonitor(lcm_url, record=self.on_command, clock=time.time)
 
@@ -95,11 +111,40 @@ class Monitor:
                 self.path.append((p.x, p.y))
             people = [(n, x, y, r) for n, (x, y, r) in self.people.items()]
             self.contacts.update(msg.header.stamp.to_sec(), (p.x, p.y), yaw, people)
+            touching = set()
+            for name, (bx, by, byaw, sx, sy) in self.boxes.items():
+                d = self._box_clearance((p.x, p.y), yaw, (bx, by), byaw, (sx, sy))
+                self.min_box_clearance = min(self.min_box_clearance, d)
+                if d <= 0.0:
+                    touching.add(name)
+                    if name not in self._box_touching:
+                        self.box_contacts.append((msg.header.stamp.to_sec(), name))
+            self._box_touching = touching
+
+    def on_avoidance(self, msg):
+        """The controller's avoidance events."""
+        with self.lock:
+            self.avoidance.append(msg.data)
+        say("avoidance: %s" % msg.data)
+
+    def on_detour(self, msg):
+        """Planned detours (for the figure)."""
+        with self.lock:
+            self.detours.append([(q.pose.position.x, q.pose.position.y) for q in msg.poses])
 
     def on_people(self, msg):
         """Current people and obstacles of the simulated world."""
         with self.lock:
             for m in msg.markers:
+                if m.ns == "placed_boxes":
+                    if m.action == 0 and m.type == 1:  # ADD CUBE
+                        q = m.pose.orientation
+                        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+                        self.boxes[m.text] = (m.pose.position.x, m.pose.position.y, yaw, m.scale.x, m.scale.y)
+                        self.boxes_seen[m.text] = self.boxes[m.text]
+                    elif m.action in (2, 3):
+                        self.boxes.pop(m.text, None)
+                    continue
                 if m.action != 0 or m.type != 3:  # ADD, CYLINDER
                     if m.action in (2, 3):  # DELETE, DELETEALL
                         self.people.pop(m.text or "%s/%d" % (m.ns, m.id), None)
@@ -209,6 +254,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "demo-output"))
     ap.add_argument("--tricks", default=",".join(TRICKS))
     ap.add_argument("--intrude", default="walk", help="trick during which a person steps in ('' = none)")
+    ap.add_argument("--bag", default="stroll", help="trick during which a bag is put down on the path ('' = none)")
     ap.add_argument("--columns", type=int, default=1024)
     ap.add_argument("--visual", action="store_true", help="open RViz (audience view) and the GUI")
     ap.add_argument("--trick-timeout", type=float, default=90.0)
@@ -276,7 +322,11 @@ def main():
             taken = False
             for attempt in range(5):
                 monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0)
-                audience.show(trick, seed=100 + 10 * i + attempt)
+                if trick in OPERATOR_TRICKS:
+                    say("the operator sends %r over the bridge" % trick)
+                    link.send_gesture(trick)
+                else:
+                    audience.show(trick, seed=100 + 10 * i + attempt)
                 if monitor.wait_state(("GENERATING_PATH", "EXECUTING"), 8.0):
                     taken = True
                     break
@@ -285,6 +335,8 @@ def main():
                 continue
             if trick == args.intrude:
                 intrude(monitor)
+            if trick == args.bag:
+                drop_bag(monitor)
             if monitor.wait_state(("EXECUTING",), 10.0) and wait_done(monitor, args.trick_timeout):
                 completed.append(trick)
                 say("trick %s completed (%d/%d)" % (trick, len(completed), len(tricks)))
@@ -312,13 +364,47 @@ def main():
     with monitor.lock:
         report = build_report(tricks, completed, monitor.contacts.contacts, monitor.contacts.min_clearance,
                               monitor.state_log, start_pose, monitor.pose,
-                              reaction_times(monitor.onsets, monitor.commands), 0.1, duration)
-        plot_run(monitor.path, monitor.people_log, monitor.stop_points, os.path.join(args.out, "run.png"))
+                              reaction_times(monitor.onsets, monitor.commands), 0.1, duration,
+                              avoidance_events=list(monitor.avoidance), obstacle_contacts=monitor.box_contacts,
+                              min_obstacle_clearance=monitor.min_box_clearance)
+        plot_run(monitor.path, monitor.people_log, monitor.stop_points, os.path.join(args.out, "run.png"),
+                 boxes=list(monitor.boxes_seen.values()), detours=list(monitor.detours))
     write_report(report, args.out)
     print(render_text(report), flush=True)
     print("written: %s/{report.txt, report.json, run.png, demo.bag}" % args.out, flush=True)
-    ok = report["collisions_with_people"] == 0 and len(completed) == len(tricks)
+    ok = (report["collisions_with_people"] == 0 and report["collisions_with_obstacles"] == 0
+          and len(completed) == len(tricks))
     return 0 if ok else 1
+
+
+def drop_bag(monitor):
+    """A bag is put down 0.5 m ahead of the robot on its way out; it stays until the trick is done."""
+    import rospy
+
+    from rbd_msgs.srv import PlaceBox
+
+    place = rospy.ServiceProxy("/rbd_sim/place_box", PlaceBox)
+    deadline = time.monotonic() + 20.0
+    start = monitor.pose
+    while time.monotonic() < deadline:
+        x, y, yaw = monitor.pose
+        along = (x - start[0]) * math.cos(start[2]) + (y - start[1]) * math.sin(start[2])
+        with monitor.lock:
+            moving = monitor.commands and monitor.commands[-1][1] > 0.1
+        if moving and monitor.state == "EXECUTING" and along > 0.3:
+            break
+        time.sleep(0.05)
+    x, y, yaw = monitor.pose
+    bx, by = x + 0.7 * math.cos(yaw), y + 0.7 * math.sin(yaw)
+    say("a visitor puts a bag (0.4 m box) down 0.5 m ahead of the walking robot at (%.2f, %.2f)" % (bx, by))
+    place(name="bag", x=bx, y=by, yaw=0.3, size_x=0.4, size_y=0.4, height=0.4, remove=False)
+
+    def take_away():
+        monitor.wait_state(("WAITING_FOR_GESTURE",), 120.0)
+        place(name="bag", remove=True)
+        say("the bag is taken away")
+
+    threading.Thread(target=take_away, daemon=True).start()
 
 
 def wait_done(monitor, timeout):

@@ -33,3 +33,18 @@ def test_report_counts_stops_resumes_and_pose_error():
     assert rep["reaction_goal_s"] == pytest.approx(0.12)
     text = render_text(rep)
     assert "collisions with people:  0" in text and "1 of 1" in text
+
+
+def test_report_counts_avoided_obstacles_and_time_blocked():
+    log = [(0, "WAITING_FOR_GESTURE"), (1, "GENERATING_PATH"), (2, "EXECUTING"), (4, "COLLISION_DETECTED"),
+           (5, "BLOCKED"), (8, "ESCAPING"), (11, "AVOIDING"), (20, "EXECUTING"), (30, "COLLISION_DETECTED"),
+           (32, "EXECUTING"), (40, "WAITING_FOR_GESTURE")]
+    events = ["blocked: unmoved", "escaped: clear", "plan: 2 waypoints", "avoided: reached", "gave_up: goal blocked"]
+    rep = build_report(["stroll"], ["stroll"], [], 1.0, log, (0, 0, 0), (0, 0, 0), [], 0.1, 40.0,
+                       avoidance_events=events, obstacle_contacts=[(12.0, "bag")], min_obstacle_clearance=0.0)
+    assert rep["obstacles_avoided"] == 1 and rep["avoidance_gave_up"] == ["gave_up: goal blocked"]
+    assert rep["time_blocked_s"] == pytest.approx(1 + 3 + 2)  # COLLISION_DETECTED 4-5, 30-32; BLOCKED 5-8
+    assert rep["time_avoiding_s"] == pytest.approx(3 + 9)
+    assert rep["collisions_with_obstacles"] == 1 and rep["min_distance_to_obstacle_m"] == 0.0
+    text = render_text(rep)
+    assert "obstacles avoided:       1 (1 pose(s) skipped)" in text and "time blocked:            6.0 s" in text

@@ -50,6 +50,9 @@ def build_report(
     reactions: Sequence[float],
     scan_period: float,
     duration: float,
+    avoidance_events: Sequence[str] = (),
+    obstacle_contacts: Sequence[Tuple[float, str]] = (),
+    min_obstacle_clearance: float = math.inf,
 ) -> Dict:
     """Collect the run's figures into one JSON-able dictionary.
 
@@ -64,6 +67,10 @@ def build_report(
         reactions: software reaction times [s] (see :func:`reaction_times`).
         scan_period: LiDAR scan period [s].
         duration: wall time of the scripted part [s].
+        avoidance_events: the controller's ``/rbd_controller/avoidance`` lines ("avoided: ...",
+            "gave_up: ...", ...).
+        obstacle_contacts: (time, obstacle) of every footprint contact with a placed box.
+        min_obstacle_clearance: smallest footprint-to-box clearance seen [m].
 
     Returns:
         The report.
@@ -75,7 +82,15 @@ def build_report(
     )
     dyaw = math.atan2(math.sin(final_pose[2] - start_pose[2]), math.cos(final_pose[2] - start_pose[2]))
     p99 = percentile(reactions, 99)
+    blocked, avoiding = time_in(state_log, BLOCKED_STATES), time_in(state_log, AVOIDING_STATES)
     return {
+        "obstacles_avoided": sum(1 for e in avoidance_events if e.startswith("avoided")),
+        "avoidance_gave_up": [e for e in avoidance_events if e.startswith("gave_up")],
+        "time_blocked_s": round(blocked, 1),
+        "time_avoiding_s": round(avoiding, 1),
+        "collisions_with_obstacles": len(obstacle_contacts),
+        "min_distance_to_obstacle_m": None if math.isinf(min_obstacle_clearance) else round(
+            min_obstacle_clearance, 3),
         "tricks_requested": list(tricks_requested),
         "tricks_completed": list(tricks_completed),
         "collisions_with_people": len(contacts),
@@ -95,6 +110,21 @@ def build_report(
     }
 
 
+#: Stopped by something in the zone (a person, or a static obstacle before or without avoidance).
+BLOCKED_STATES = ("COLLISION_DETECTED", "BLOCKED")
+#: Getting around a static obstacle.
+AVOIDING_STATES = ("ESCAPING", "AVOIDING")
+
+
+def time_in(state_log: Sequence[Tuple[float, str]], states: Sequence[str]) -> float:
+    """Seconds the controller spent in any of states (state changes (time, state), in order)."""
+    total = 0.0
+    for (t0, s0), (t1, _s1) in zip(state_log, state_log[1:]):
+        if s0 in states:
+            total += t1 - t0
+    return total
+
+
 def render_text(report: Dict) -> str:
     """Human-readable report (the demo's last screen and report.txt)."""
     lines = [
@@ -107,6 +137,11 @@ def render_text(report: Dict) -> str:
         "min distance to person:  %s m" % report["min_distance_to_person_m"],
         "stops / resumes:         %d / %d (collision stops: %d)" % (
             report["stops"], report["resumes"], report["collision_stops"]),
+        "obstacles avoided:       %d (%d pose(s) skipped), contacts with obstacles %d, min distance %s m" % (
+            report.get("obstacles_avoided", 0), len(report.get("avoidance_gave_up", [])),
+            report.get("collisions_with_obstacles", 0), report.get("min_distance_to_obstacle_m")),
+        "time blocked:            %.1f s stopped by people or obstacles, %.1f s getting around obstacles" % (
+            report.get("time_blocked_s", 0.0), report.get("time_avoiding_s", 0.0)),
         "final pose error:        %.3f m, %.1f deg (ground truth vs start)" % (
             report["final_position_error_m"], report["final_yaw_error_deg"]),
         "software reaction time:  p50 %s s, p99 %s s over %d stops (goal <= %s s: one scan + 20 ms)" % (
@@ -126,7 +161,9 @@ def write_report(report: Dict, out_dir: str) -> None:
 
 
 def plot_run(path_xy: Sequence[Tuple[float, float]], people: Dict[str, List[Tuple[float, float, float]]],
-             stop_points: Sequence[Tuple[float, float]], png: str) -> None:
+             stop_points: Sequence[Tuple[float, float]], png: str,
+             boxes: Sequence[Tuple[float, float, float, float, float]] = (),
+             detours: Sequence[Sequence[Tuple[float, float]]] = ()) -> None:
     """PNG of the run: the robot's ground-truth path, where people stood, where it stopped.
 
     Args:
@@ -134,6 +171,8 @@ def plot_run(path_xy: Sequence[Tuple[float, float]], people: Dict[str, List[Tupl
         people: person name -> list of (x, y, radius) samples.
         stop_points: robot positions at collision stops [m].
         png: output file.
+        boxes: placed boxes (x, y, yaw, size_x, size_y) [m, rad].
+        detours: planned detours (the controller's /rbd_controller/detour), each a list of (x, y).
     """
     import matplotlib
 
@@ -150,6 +189,14 @@ def plot_run(path_xy: Sequence[Tuple[float, float]], people: Dict[str, List[Tupl
         py = [s[1] for s in samples]
         ax.plot(px, py, ".", ms=2, color="tab:orange", alpha=0.4, label="people" if i == 0 else None)
         ax.add_patch(plt.Circle((px[-1], py[-1]), samples[-1][2], color="tab:orange", fill=False))
+    for i, (bx, by, byaw, lx, ly) in enumerate(boxes):
+        c, s = math.cos(byaw), math.sin(byaw)
+        corners = [(lx / 2, ly / 2), (-lx / 2, ly / 2), (-lx / 2, -ly / 2), (lx / 2, -ly / 2), (lx / 2, ly / 2)]
+        ax.fill([bx + c * u - s * v for u, v in corners], [by + s * u + c * v for u, v in corners], color="tab:brown",
+                alpha=0.7, label="bag (static obstacle)" if i == 0 else None)
+    for i, plan in enumerate(d for d in detours if d):
+        ax.plot([p[0] for p in plan], [p[1] for p in plan], "o--", color="tab:purple", ms=3, lw=1,
+                label="planned detour" if i == 0 else None)
     if stop_points:
         sx, sy = zip(*stop_points)
         ax.plot(sx, sy, "x", color="red", ms=10, mew=2, label="collision stop")
