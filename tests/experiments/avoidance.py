@@ -138,6 +138,21 @@ class Operator:
         self.place_cylinder = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
         self.String = String
 
+    def face(self, yaw):
+        """Turn the waiting robot on the spot to a world heading (the position controller directly)."""
+        import rospy
+        from geometry_msgs.msg import Pose
+
+        from rbd_msgs.srv import SetPosition
+
+        x, y, _ = self.watch.pose()
+        goal = Pose()
+        goal.position.x, goal.position.y = x, y
+        goal.orientation.z, goal.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
+        rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)(pose=goal)
+        wait_for(lambda: abs(math.sin((self.watch.pose()[2] - yaw) / 2.0)) < 0.03, 15.0)
+        time.sleep(1.0)
+
     def release(self):
         """E-stop off, waiting for gestures."""
         if self.watch.state != "WAITING_FOR_GESTURE":
@@ -224,6 +239,8 @@ def run_trick_with_box(ctx, watch, op, trick, avoidance, blocked_wait):
 
     op.switch("avoidance", avoidance)
     op.release()
+    # The lab's free side: its people walk at x > 2.8 m and y < -2 m; the stroll goes to -x.
+    op.face(math.pi)
     start = watch.pose()
     t0 = time.monotonic()
     if not op.gesture(trick):
@@ -243,7 +260,7 @@ def run_trick_with_box(ctx, watch, op, trick, avoidance, blocked_wait):
         bx, by, x, y, "on" if avoidance else "off"))
     result = {"trick": trick, "avoidance": avoidance, "box": [bx, by, 0.0, BOX, BOX], "robot_at_drop": [x, y, yaw]}
     if avoidance:
-        done = watch.wait_state(("WAITING_FOR_GESTURE",), 120.0 if not ctx.short else 90.0)
+        done = watch.wait_state(("WAITING_FOR_GESTURE",), 180.0)
         t1 = time.monotonic()
         result["completed"] = done
         result["duration_s"] = t1 - t0
@@ -367,7 +384,10 @@ def exp_wall(ctx):
             log("wall panel 0.45 m ahead of the robot at (%.2f, %.2f) (avoidance %s)" % (
                 x, y, "on" if avoidance else "off"))
             r = {"avoidance": avoidance, "wall": wall, "start": list(start)}
+            # The zone sees the wall; with avoidance the idle robot steps back, then takes gestures.
+            watch.wait_state(("COLLISION_DETECTED", "BLOCKED"), 5.0)
             if avoidance:
+                r["escaped"] = wait_for(lambda: watch.state == "WAITING_FOR_GESTURE", 40.0)
                 r["taken"] = op.gesture("walk", timeout=60.0)
                 r["completed"] = r["taken"] and watch.wait_state(("WAITING_FOR_GESTURE",), 120.0)
                 r["duration_s"] = time.monotonic() - t0

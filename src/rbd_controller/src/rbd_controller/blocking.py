@@ -25,20 +25,24 @@ MOVING = "moving"
 
 
 def near_fraction(points: np.ndarray, reference: np.ndarray, radius: float) -> float:
-    """Fraction of ``points`` (N x 2) with a point of ``reference`` (M x 2) within ``radius`` [m]."""
+    """Fraction of ``points`` (N x 2) with a point of ``reference`` (M x 2) within about ``radius`` [m].
+
+    Cell hashing at the radius (vectorised): a neighbour is any reference point in the 3 x 3
+    cells around a point's cell (so "within radius" up to a factor of 2 sqrt(2)).
+    """
     if len(points) == 0:
         return 1.0
     if len(reference) == 0:
         return 0.0
-    # Cell hashing at the radius: a neighbour is within the 3 x 3 cells around a point.
-    cells = set(map(tuple, np.floor(reference / radius).astype(np.int64).tolist()))
+    ref = np.floor(reference / radius).astype(np.int64)
     keys = np.floor(points / radius).astype(np.int64)
-    near = 0
-    offsets = [(dx, dy) for dx in (-1, 0, 1) for dy in (-1, 0, 1)]
-    for kx, ky in keys.tolist():
-        if any((kx + dx, ky + dy) in cells for dx, dy in offsets):
-            near += 1
-    return near / float(len(points))
+    big = np.int64(1 << 31)
+    ref_keys = np.unique(ref[:, 0] * big + ref[:, 1])
+    near = np.zeros(len(keys), dtype=bool)
+    for dx in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            near |= np.isin((keys[:, 0] + dx) * big + (keys[:, 1] + dy), ref_keys)
+    return float(near.mean())
 
 
 class BlockClassifier:

@@ -564,7 +564,8 @@ class MainController:
                     self._reason = "approached while stopped"
                     self._fire_if(epoch, Event.DODGE)
             return
-        if resume in (State.EXECUTING, State.AVOIDING, State.ESCAPING, State.WAITING_FOR_GESTURE):
+        if resume in (State.EXECUTING, State.AVOIDING, State.ESCAPING, State.WAITING_FOR_GESTURE,
+                      State.GENERATING_PATH):
             # Also while idle: a robot put down (or left) facing a wall would never take a gesture.
             result, reason = self.perception.classify()
             with self.lock:

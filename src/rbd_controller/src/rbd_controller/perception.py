@@ -127,10 +127,13 @@ class Perception:
         params: the avoidance parameters.
         obstacle_memory: blocking points are kept this long for the planner [s].
         scan_memory: scan points are kept this long [s].
+        shadow_depth: an obstacle is assumed this deep behind the face the LiDAR sees [m].
     """
 
-    def __init__(self, params: AvoidParams, obstacle_memory: float = 60.0, scan_memory: float = 1.0) -> None:
+    def __init__(self, params: AvoidParams, obstacle_memory: float = 60.0, scan_memory: float = 1.0,
+                 shadow_depth: float = 0.4) -> None:
         self.params = params
+        self.shadow_depth = float(shadow_depth)
         self.lock = threading.Lock()
         self.pose = None  # type: Optional[Tuple[float, float, float]]
         self.pose_time = None  # type: Optional[float]
@@ -183,12 +186,23 @@ class Perception:
                 self.approached, self.approached_time = sides, now
 
     def on_blocking_points(self, now: float, points: Sequence[Point]) -> None:
-        """The critical points of one scan, map frame."""
+        """The critical points of one scan, map frame.
+
+        For the planner each point also stands for what the LiDAR cannot see behind it: the
+        obstacle is assumed to extend ``shadow_depth`` further along the ray from the robot (a
+        box seen by its face is that deep; a wall, deeper than that anyway).
+        """
         arr = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         with self.lock:
             self.classifier.update(now, arr)
             if len(arr):
-                self._blocking.append((now, arr[:: max(1, len(arr) // 400)]))
+                thin = arr[:: max(1, len(arr) // 400)]
+                if self.pose is not None and self.shadow_depth > 0.0:
+                    ray = thin - np.array(self.pose[:2])
+                    ray /= np.maximum(np.hypot(ray[:, 0], ray[:, 1]), 1e-6)[:, None]
+                    steps = np.arange(0.1, self.shadow_depth + 1e-9, 0.1)
+                    thin = np.concatenate([thin] + [thin + d * ray for d in steps])
+                self._blocking.append((now, thin))
             while self._blocking and self._blocking[0][0] < now - self.obstacle_memory:
                 self._blocking.pop(0)
 
