@@ -151,6 +151,7 @@ class MainController:
         self.stats = {"avoided": 0, "gave_up": 0, "escapes": 0, "dodges": 0, "blocked": 0}
         self._stop_since = None  # type: Optional[float]
         self._last_stop_end = -1e9
+        self._progress_at = -1e9
         self._episode_start = None  # type: Optional[float]
         self._attempts = 0
         self._retry_at = 0.0
@@ -546,9 +547,16 @@ class MainController:
             self.ports.publish_avoidance({"event": "gave_up", "detail": reason})
 
     def _timed_out(self, now: float, epoch: int) -> bool:
-        """Caller holds the lock. Give up when the avoidance of this pose took ~avoid_timeout."""
-        if self._episode_start is not None and now - self._episode_start > self.avoid.avoid_timeout:
-            self._give_up(epoch, "no way found within avoid_timeout %.0f s" % self.avoid.avoid_timeout)
+        """Caller holds the lock. Give up when ~avoid_timeout passed without progress.
+
+        Progress is an escape that cleared the zone or a detour pose reached, so a slow but
+        working avoidance (people crossing, a loaded machine) is not cut short.
+        """
+        if self._episode_start is None:
+            return False
+        since = max(self._episode_start, self._progress_at)
+        if now - since > self.avoid.avoid_timeout:
+            self._give_up(epoch, "no progress within avoid_timeout %.0f s" % self.avoid.avoid_timeout)
             return True
         return False
 
@@ -612,6 +620,7 @@ class MainController:
             reading, pose = p.reading, p.pose
             if clear_by_margin(reading, a.zone, a.point_threshold, a.escape_margin):
                 self.stats["escapes"] += 1
+                self._progress_at = now
                 self.ports.log("info", "zone clear by %.2f m: planning the detour" % a.escape_margin)
                 self.ports.publish_avoidance({"event": "escaped", "detail": "zone clear by %.2f m" % a.escape_margin})
                 self._fire_if(epoch, Event.ESCAPED)
@@ -698,6 +707,7 @@ class MainController:
                 return
             if goal == "done" and self.detour:
                 self.detour.pop(0)
+                self._progress_at = now
             if not self.detour:
                 self.ports.log("info", "detour done: continuing the trick")
                 self._fire_if(epoch, Event.DETOUR_DONE)
