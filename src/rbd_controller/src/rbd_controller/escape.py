@@ -149,4 +149,5 @@ def plan_escape(
             continue
         target = (x + dist * wx, y + dist * wy)
         return Escape(side, dist, target, "%s: %.2f m towards the %s" % (why, dist, SIDE_NAMES[side])), ""
-    return None, "wedged: " + ", ".join(tried)
+    return None, "wedged: %s (points %s, nearest %s m)" % (
+        ", ".join(sorted(set(tried))), reading.points, ["%.2f" % d for d in reading.min_distance])

@@ -19,6 +19,7 @@ from rbd_controller.escape import ZoneReading
 
 Point = Tuple[float, float]
 GIVE_UP_POLICIES = ("skip", "home")
+MEMORY_CELL = 0.05  # obstacle memory resolution [m]
 
 
 class AvoidParams:
@@ -148,7 +149,8 @@ class Perception:
         self.grid = None  # type: Optional[GridMap]
         self.obstacle_memory = float(obstacle_memory)
         self.scan_memory = float(scan_memory)
-        self._blocking = []  # type: List[Tuple[float, np.ndarray]]
+        self._blocking = {}  # type: Dict[Tuple[int, int], float]
+        self._pruned = -math.inf
         self._scan = []  # type: List[Tuple[float, np.ndarray]]
         self.arena = params.arena
         self._arena_from_map = False
@@ -202,9 +204,13 @@ class Perception:
                     ray /= np.maximum(np.hypot(ray[:, 0], ray[:, 1]), 1e-6)[:, None]
                     steps = np.arange(0.1, self.shadow_depth + 1e-9, 0.1)
                     thin = np.concatenate([thin] + [thin + d * ray for d in steps])
-                self._blocking.append((now, thin))
-            while self._blocking and self._blocking[0][0] < now - self.obstacle_memory:
-                self._blocking.pop(0)
+                # Remembered as 5 cm cells with the time last seen (bounded however long it stands).
+                for key in set(map(tuple, np.floor(thin / MEMORY_CELL).astype(np.int64).tolist())):
+                    self._blocking[key] = now
+            if now - self._pruned > 1.0:
+                self._pruned = now
+                old = now - self.obstacle_memory
+                self._blocking = {k: t for k, t in self._blocking.items() if t >= old}
 
     def on_scan_points(self, now: float, points: Sequence[Point]) -> None:
         """Obstacle points of one scan (the central ring), map frame."""
@@ -221,15 +227,18 @@ class Perception:
 
     # ------------------------------------------------------------------ queries
     def obstacles(self, since: float = -math.inf) -> np.ndarray:
-        """Blocking points seen since ``since`` plus the recent scan points (N x 2)."""
+        """Blocking points (cell centres) seen since ``since`` plus the recent scan points (N x 2)."""
         with self.lock:
-            parts = [a for t, a in self._blocking if t >= since] + [a for _, a in self._scan]
+            cells = [k for k, t in self._blocking.items() if t >= since]
+            parts = [a for _, a in self._scan]
+        if cells:
+            parts.append((np.asarray(cells, dtype=np.float64) + 0.5) * MEMORY_CELL)
         return np.concatenate(parts) if parts else np.zeros((0, 2))
 
     def forget_blocking(self) -> None:
         """Drop the remembered blocking points and the classification history."""
         with self.lock:
-            self._blocking = []
+            self._blocking = {}
             self.classifier.reset()
 
     def classify(self) -> Tuple[str, str]:
