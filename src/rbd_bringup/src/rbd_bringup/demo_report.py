@@ -78,7 +78,8 @@ def build_report(
     states = [s for _, s in state_log]
     stops = sum(1 for s in states if s in ("COLLISION_DETECTED", "EMERGENCY_STOP"))
     resumes = sum(
-        1 for a, b in zip(states, states[1:]) if a in ("COLLISION_DETECTED", "EMERGENCY_STOP") and b == "EXECUTING"
+        1 for a, b in zip(states, states[1:])
+        if a in ("COLLISION_DETECTED", "EMERGENCY_STOP", "BLOCKED") and b == "EXECUTING"
     )
     dyaw = math.atan2(math.sin(final_pose[2] - start_pose[2]), math.cos(final_pose[2] - start_pose[2]))
     p99 = percentile(reactions, 99)

@@ -55,6 +55,7 @@ class Monitor:
     def __init__(self):
         self.lock = threading.Lock()
         self.truth = []  # (t, speed)
+        self.pose = (0.0, 0.0, 0.0)  # latest ground-truth (x, y, yaw)
         self.commands = []  # (t, speed) of every HighCmd the A1 receives
         self.states = []  # (t, state)
         self.cloud_mode = "pass"  # pass | silent | malformed
@@ -83,8 +84,10 @@ class Monitor:
             self.commands.append((t, speed))
 
     def on_truth(self, msg):
+        p, q = msg.pose.pose.position, msg.pose.pose.orientation
         with self.lock:
             self.truth.append((time.monotonic(), speed_of_twist(msg.twist.twist)))
+            self.pose = (p.x, p.y, math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z)))
 
     def on_state(self, msg):
         with self.lock:
@@ -444,6 +447,42 @@ class Faults(unittest.TestCase):
         self.collision(False)
         self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume")
         self.record(run=i, state="COLLISION+ESTOP", cmd_stop_s=cmd, truth_stop_s=truth)
+        self.estop_while_escaping(i)
+
+    def estop_while_escaping(self, i):
+        """Issue 17: the e-stop preempts an avoidance motion as it preempts a trick.
+
+        A wall panel goes up 0.45 m ahead of the idle robot: the zone stops it, the wall is
+        classified static and the robot steps back (ESCAPING, a guarded translation). Mid-step the
+        e-stop is engaged: zero velocity at the A1 and on ground truth within the same bounds as for
+        a trick; nothing moves while engaged; after the release the escape goes on.
+        """
+        from rbd_msgs.srv import PlaceBox
+
+        m = self.m
+        self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0), "trick did not finish")
+        with m.lock:
+            x, y, yaw = m.pose
+        place = rospy.ServiceProxy("/rbd_sim/place_box", PlaceBox)
+        place(name="wall", x=x + 0.5 * math.cos(yaw), y=y + 0.5 * math.sin(yaw), yaw=yaw, size_x=0.1, size_y=2.0,
+              height=1.0, remove=False)
+        try:
+            self.assertTrue(wait_for(lambda: m.state == "ESCAPING" and m.speed() > 0.05, 30.0),
+                            "no escape from the wall: state %r" % m.state)
+            t0 = time.monotonic()
+            self.em_stop(True)
+            cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.5)
+            self.assertEqual(m.state, "EMERGENCY_STOP")
+            self.em_stop(False)
+            self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0),
+                            "the escape did not finish after the release: %r" % m.state)
+            with m.lock:
+                end = m.pose
+            # It stepped back, away from the wall (never towards it).
+            self.assertLess((end[0] - x) * math.cos(yaw) + (end[1] - y) * math.sin(yaw), -0.15)
+            self.record(run=i, state="ESCAPING", cmd_stop_s=cmd, truth_stop_s=truth)
+        finally:
+            place(name="wall", remove=True)
 
     def fault_operator_link(self, i):
         m = self.m
