@@ -23,14 +23,16 @@ from rbd_controller.detour import DetourPlanner, distance_field
 RES = 0.05
 
 
-def box(cx, cy, half, step=0.02):
+def box(cx: float, cy: float, half: float, step: float = 0.02) -> list:
+    """Points on the outline of a square box [m]."""
     pts = []
     for u in np.arange(-half, half + 1e-9, step):
         pts += [(cx + u, cy - half), (cx + u, cy + half), (cx - half, cy + u), (cx + half, cy + u)]
     return pts
 
 
-def scenarios():
+def scenarios() -> dict:
+    """Scenario name -> (start, goal, obstacle points)."""
     rng = np.random.default_rng(3)
     clutter = []
     for _ in range(6):
@@ -45,7 +47,8 @@ def scenarios():
     }
 
 
-def clearance(path, obstacles):
+def clearance(path: list, obstacles: list) -> float:
+    """Smallest distance from the path's segments to the obstacle points [m]."""
     obs = np.asarray(obstacles)
     best = math.inf
     for a, b in zip(path, path[1:]):
@@ -55,7 +58,7 @@ def clearance(path, obstacles):
     return best
 
 
-def export(out, name, start, goal, obstacles, planner):
+def export(out: str, name: str, start: tuple, goal: tuple, obstacles: list, planner: DetourPlanner) -> None:
     """The inflated occupancy of the planning window as text: header, then rows of 0/1."""
     m = planner.window_margin
     x0, y0 = min(start[0], goal[0]) - m, min(start[1], goal[1]) - m
@@ -76,7 +79,8 @@ def export(out, name, start, goal, obstacles, planner):
     np.savetxt(os.path.join(out, name + ".obstacles"), pts, fmt="%.3f")
 
 
-def main():
+def main() -> None:
+    """Run the scenarios, print one JSON line each."""
     out = sys.argv[1] if len(sys.argv) > 1 else "."
     os.makedirs(out, exist_ok=True)
     planner = DetourPlanner(inflation=0.45, clearance=0.8)
