@@ -233,25 +233,6 @@ def test_reaction_time_every_intrusion_stops_within_a_scan(short_run):
 # ---------------------------------------------------------------------------------------------
 # Issue 17: active collision avoidance, on ground truth
 # ---------------------------------------------------------------------------------------------
-def test_box_on_the_path_is_got_around_and_without_avoidance_blocks_for_ever(short_run):
-    box = result(short_run, "box")
-    on = box["stroll"]
-    assert on["completed"], on["states"]
-    assert on["contacts"] == 0 and on["min_clearance_m"] > 0.0
-    assert all(p["reached"] for p in on["poses"]) or on["skipped"], on["poses"]
-    assert on["obstacles_avoided"] >= 1, on["events"]
-    assert any(len(p) >= 3 for p in on["plans"]), "no detour was planned"
-    off = box["off"]
-    assert off["blocked_forever"], off  # the thesis robot: standing, trick pending, until someone helps
-    assert off["contacts"] == 0
-
-
-def test_wall_ahead_is_escaped_and_without_avoidance_blocks_for_ever(short_run):
-    wall = result(short_run, "wall")
-    assert wall["on"]["completed"] and wall["on"]["contacts"] == 0, wall["on"]["states"]
-    assert wall["off"]["blocked_forever"] and wall["off"]["contacts"] == 0, wall["off"]
-
-
 def test_visitor_is_dodged_within_dodge_max_and_the_robot_returns_home(short_run):
     runs = result(short_run, "visitor")["runs"]
     assert runs
