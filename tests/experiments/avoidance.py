@@ -138,19 +138,23 @@ class Operator:
         self.place_cylinder = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
         self.String = String
 
-    def face(self, yaw):
-        """Turn the waiting robot on the spot to a world heading (the position controller directly)."""
+    def goto(self, x, y, yaw):
+        """Walk the waiting robot to a world pose (the position controller directly)."""
         import rospy
         from geometry_msgs.msg import Pose
 
         from rbd_msgs.srv import SetPosition
 
-        x, y, _ = self.watch.pose()
         goal = Pose()
         goal.position.x, goal.position.y = x, y
         goal.orientation.z, goal.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
         rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)(pose=goal)
-        wait_for(lambda: abs(math.sin((self.watch.pose()[2] - yaw) / 2.0)) < 0.03, 15.0)
+
+        def there():
+            px, py, pyaw = self.watch.pose()
+            return math.hypot(px - x, py - y) < 0.05 and abs(math.sin((pyaw - yaw) / 2.0)) < 0.03
+
+        wait_for(there, 40.0)
         time.sleep(1.0)
 
     def release(self):
@@ -239,8 +243,9 @@ def run_trick_with_box(ctx, watch, op, trick, avoidance, blocked_wait):
 
     op.switch("avoidance", avoidance)
     op.release()
-    # The lab's free side: its people walk at x > 2.8 m and y < -2 m; the stroll goes to -x.
-    op.face(math.pi)
+    # The lab's free middle: its people walk at x > 2.8 m and y < -2 m, furniture stands at
+    # x < -2 m; from (1, 0) facing -x the stroll's far pose (-1, 0) keeps 1.5 m from all of it.
+    op.goto(1.0, 0.0, math.pi)
     start = watch.pose()
     t0 = time.monotonic()
     if not op.gesture(trick):
