@@ -122,32 +122,42 @@ def plan_escape(
     if not blocking:
         return None, "zone already clear by %.2f m" % margin
     occupied = set(occupied_sides(reading, zone, threshold, 0.0))
-    candidates = []  # (side to move towards, distance, why)
+    candidates = []  # (sides moved towards, body-frame unit direction, distance, why)
     for s in blocking:
         away = OPPOSITE[s]
         need = zone[s] + margin + OVERSHOOT - reading.min_distance[s]
-        candidates.append((away, min(max_distance, max(MIN_STEP, need)), "away from the %s" % SIDE_NAMES[s]))
+        candidates.append(((away,), TOWARDS[away], min(max_distance, max(MIN_STEP, need)),
+                           "away from the %s" % SIDE_NAMES[s]))
     for s in blocking:
         for step in sorted(PERPENDICULAR[s], key=lambda p: -reading.min_distance[p]):
-            candidates.append((step, side_step, "side-step from the %s" % SIDE_NAMES[s]))
+            candidates.append(((step,), TOWARDS[step], side_step, "side-step from the %s" % SIDE_NAMES[s]))
+    for s in blocking:  # diagonally away: out of a corner (e.g. a wall behind and a box ahead-left)
+        away = OPPOSITE[s]
+        for step in sorted(PERPENDICULAR[s], key=lambda p: -reading.min_distance[p]):
+            u = (TOWARDS[away][0] + TOWARDS[step][0], TOWARDS[away][1] + TOWARDS[step][1])
+            n = math.hypot(*u)
+            candidates.append(((away, step), (u[0] / n, u[1] / n), side_step,
+                               "diagonally away from the %s" % SIDE_NAMES[s]))
     x, y, yaw = pose
     c, sn = math.cos(yaw), math.sin(yaw)
     tried = []
-    for side, dist, why in candidates:
-        if side in occupied or side in blocking:
-            tried.append("%s occupied" % SIDE_NAMES[side])
+    for sides, (bx, by), dist, why in candidates:
+        name = "-".join(SIDE_NAMES[t] for t in sides)
+        if any(t in occupied for t in sides):
+            tried.append("%s occupied" % name)
             continue
-        room = reading.min_distance[side] - zone[side] - margin  # free space beyond the zone on that side
-        if room < dist and math.isfinite(room):
-            dist = room
-        bx, by = TOWARDS[side]
+        for t in sides:  # free space beyond the zone on that side, along the motion
+            room = reading.min_distance[t] - zone[t] - margin
+            share = abs(TOWARDS[t][0] * bx + TOWARDS[t][1] * by)
+            if math.isfinite(room) and share > 0.0:
+                dist = min(dist, room / share)
         wx, wy = c * bx - sn * by, sn * bx + c * by
         if arena is not None:
             dist = min(dist, arena.reach((x, y), (wx, wy), dist, arena_margin))
         if dist < 0.05:
-            tried.append("%s: no room" % SIDE_NAMES[side])
+            tried.append("%s: no room" % name)
             continue
         target = (x + dist * wx, y + dist * wy)
-        return Escape(side, dist, target, "%s: %.2f m towards the %s" % (why, dist, SIDE_NAMES[side])), ""
+        return Escape(sides[0], dist, target, "%s: %.2f m towards the %s" % (why, dist, name)), ""
     return None, "wedged: %s (points %s, nearest %s m)" % (
         ", ".join(sorted(set(tried))), reading.points, ["%.2f" % d for d in reading.min_distance])
