@@ -24,6 +24,8 @@ from rbd_controller.fsm import Event, Fsm, State
 from rbd_controller.perception import AvoidParams, Perception
 from rbd_controller.watchdog import POLICIES, OperatorWatchdog
 
+#: Stops after which AVOIDING goes on with its detour instead of planning a new one.
+RESUMED_FROM = (State.COLLISION_DETECTED, State.EMERGENCY_STOP, State.OPERATOR_LOST)
 #: Stopped again within this many seconds of a resume: the same blockage (stop-and-go creeping) [s].
 REBLOCK_WINDOW = 3.0
 
@@ -321,7 +323,10 @@ class MainController:
     def _enter_avoidance(self, previous: State) -> None:
         self._enter_motion(previous)
         self.sent_at = None
-        self.detour = None
+        if not (self.fsm.state == State.AVOIDING and previous in RESUMED_FROM):
+            # A new obstacle (after BLOCKED / ESCAPING) means a new plan; after a stop that cleared
+            # by itself (a person passed, a stale scan, an e-stop) the current detour pose is re-sent.
+            self.detour = None
         self._attempts = 0
         self._retry_at = 0.0
         if self.fsm.state != State.DODGING and self._episode_start is None:
