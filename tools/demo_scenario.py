@@ -277,7 +277,7 @@ def main():
     try:
         import rospy
 
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + 150
         while True:
             try:
                 socket.create_connection(("127.0.0.1", port), 0.5).close()
@@ -287,7 +287,7 @@ def main():
                     raise RuntimeError("ROS master did not start") from exc
                 time.sleep(0.2)
         rospy.init_node("demo_audience", disable_signals=True)
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + 150
         while not rospy.has_param("/rbd_sim/lcm_url") and time.monotonic() < deadline:
             time.sleep(0.2)
         monitor = Monitor(rospy.get_param("/rbd_sim/lcm_url"))
@@ -300,10 +300,10 @@ def main():
         from rbd_local.link import RobotLink
 
         link = RobotLink(port=bridge_port).start()
-        if not link.wait_connected(60.0):
+        if not link.wait_connected(150.0):
             raise RuntimeError("laptop app could not reach the bridge on port %d" % bridge_port)
         say("laptop app connected to the bridge on port %d" % bridge_port)
-        if not monitor.wait_state(("EMERGENCY_STOP",), 60.0):
+        if not monitor.wait_state(("EMERGENCY_STOP",), 150.0):
             raise RuntimeError("controller did not come up in EMERGENCY_STOP")
         deadline = time.monotonic() + 30
         while monitor.pose is None and time.monotonic() < deadline:

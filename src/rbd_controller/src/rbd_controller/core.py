@@ -153,7 +153,9 @@ class MainController:
         self.stats = {"avoided": 0, "gave_up": 0, "escapes": 0, "dodges": 0, "blocked": 0}
         self._stop_since = None  # type: Optional[float]
         self._last_stop_end = -1e9
-        self._progress_at = -1e9
+        self._active = 0.0  # seconds spent in BLOCKED / ESCAPING / AVOIDING (avoid_timeout clock)
+        self._progress_active = 0.0
+        self._last_tick = None  # type: Optional[float]
         self._episode_start = None  # type: Optional[float]
         self._attempts = 0
         self._retry_at = 0.0
@@ -331,6 +333,7 @@ class MainController:
         self._retry_at = 0.0
         if self.fsm.state != State.DODGING and self._episode_start is None:
             self._episode_start = self._now
+            self._progress_active = self._active
         if self.fsm.state == State.DODGING:
             self.stats["dodges"] += 1
 
@@ -360,6 +363,9 @@ class MainController:
         self.check_lidar(now)
         self.check_operator(now)
         with self.lock:
+            if self._last_tick is not None and self.fsm.state in (State.BLOCKED, State.ESCAPING, State.AVOIDING):
+                self._active += max(0.0, min(now - self._last_tick, 1.0))
+            self._last_tick = now
             self._now = max(self._now, now)
             epoch = self.fsm.epoch
             state = self.fsm.state
@@ -554,13 +560,13 @@ class MainController:
     def _timed_out(self, now: float, epoch: int) -> bool:
         """Caller holds the lock. Give up when ~avoid_timeout passed without progress.
 
-        Progress is an escape that cleared the zone or a detour pose reached, so a slow but
-        working avoidance (people crossing, a loaded machine) is not cut short.
+        Progress is an escape that cleared the zone or a detour pose reached, and only the time spent
+        in BLOCKED, ESCAPING and AVOIDING counts (not stops for people, stale scans or the e-stop),
+        so a slow but working avoidance is not cut short.
         """
         if self._episode_start is None:
             return False
-        since = max(self._episode_start, self._progress_at)
-        if now - since > self.avoid.avoid_timeout:
+        if self._active - self._progress_active > self.avoid.avoid_timeout:
             self._give_up(epoch, "no progress within avoid_timeout %.0f s" % self.avoid.avoid_timeout)
             return True
         return False
@@ -625,7 +631,7 @@ class MainController:
             reading, pose = p.reading, p.pose
             if clear_by_margin(reading, a.zone, a.point_threshold, a.escape_margin):
                 self.stats["escapes"] += 1
-                self._progress_at = now
+                self._progress_active = self._active
                 self.ports.log("info", "zone clear by %.2f m: planning the detour" % a.escape_margin)
                 self.ports.publish_avoidance({"event": "escaped", "detail": "zone clear by %.2f m" % a.escape_margin})
                 self._fire_if(epoch, Event.ESCAPED)
@@ -712,7 +718,7 @@ class MainController:
                 return
             if goal == "done" and self.detour:
                 self.detour.pop(0)
-                self._progress_at = now
+                self._progress_active = self._active
             if not self.detour:
                 self.ports.log("info", "detour done: continuing the trick")
                 self._fire_if(epoch, Event.DETOUR_DONE)
