@@ -731,7 +731,10 @@ class MainController:
             if self.fsm.epoch != epoch:
                 return
             if not accepted:
-                self._give_up(epoch, "position controller refused %s: %s" % (name, message))
+                # A refusal can race with a stop being released; try again, then give up.
+                self._attempts += 1
+                if self._attempts >= 4:
+                    self._give_up(epoch, "position controller refused %s: %s" % (name, message))
                 return
             self.sent_at = now
             self.ports.publish(self)
