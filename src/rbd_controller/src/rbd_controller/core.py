@@ -622,7 +622,7 @@ class MainController:
                     self.ports.log("warn", "zone stale or invalid during the escape: stop")
                     self._fire_if(epoch, Event.ZONE_STALE)
                 return
-            timeout = a.escape_max / a.escape_speed * 2.0 + 5.0
+            timeout = a.escape_max / a.escape_speed * 1.5 + 3.0  # held by the guard this long: try another way
             goal = self._goal_state(now, timeout)
             if goal == "active":
                 return
@@ -636,7 +636,7 @@ class MainController:
                 self.ports.publish_avoidance({"event": "escaped", "detail": "zone clear by %.2f m" % a.escape_margin})
                 self._fire_if(epoch, Event.ESCAPED)
                 return
-            if self._attempts >= 4:
+            if self._attempts >= 3:
                 self._give_up(epoch, "wedged: no escape after %d attempts" % self._attempts)
                 return
             if now < self._retry_at:
