@@ -629,7 +629,7 @@ class MainController:
             if goal == "failed":
                 self._attempts += 1
             reading, pose = p.reading, p.pose
-            if clear_by_margin(reading, a.zone, a.point_threshold, a.escape_margin):
+            if clear_by_margin(reading, a.zone, 1, a.escape_margin):  # not one point within the margin
                 self.stats["escapes"] += 1
                 self._progress_active = self._active
                 self.ports.log("info", "zone clear by %.2f m: planning the detour" % a.escape_margin)
@@ -642,8 +642,8 @@ class MainController:
             if now < self._retry_at:
                 return
             arena = p.ensure_arena(self.home or (pose[0], pose[1]))
-            esc, why = plan_escape(reading, a.zone, pose, a.point_threshold, a.escape_margin, a.escape_max,
-                                   arena=arena)
+            # Like the position controller's guard: one critical point closes a side.
+            esc, why = plan_escape(reading, a.zone, pose, 1, a.escape_margin, a.escape_max, arena=arena)
             if esc is None:
                 self._attempts += 1
                 self._retry_at = now + 1.0
