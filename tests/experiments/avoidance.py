@@ -479,8 +479,7 @@ def visitor_run(watch, op, v, dodge_max):
         time.sleep(0.05)
     walk(0.55, 3.0, v)
     op.place_cylinder(name="visitor", remove=True)
-    back = watch.wait_state(("WAITING_FOR_GESTURE",), 5.0) and wait_for(lambda: _near(watch.pose(), home, 0.06),
-                                                                         25.0)
+    back = wait_for(lambda: watch.state == "WAITING_FOR_GESTURE" and _near(watch.pose(), home, 0.06), 40.0)
     time.sleep(0.5)
     t1 = time.monotonic()
     samples = watch.since(t0)
