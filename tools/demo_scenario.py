@@ -337,7 +337,8 @@ def main():
                 intrude(monitor)
             if trick == args.bag:
                 drop_bag(monitor)
-            if monitor.wait_state(("EXECUTING",), 10.0) and wait_done(monitor, args.trick_timeout):
+            timeout = args.trick_timeout * (2.0 if trick == args.bag else 1.0)  # the way round the bag, twice
+            if monitor.wait_state(("EXECUTING",), 10.0) and wait_done(monitor, timeout):
                 completed.append(trick)
                 say("trick %s completed (%d/%d)" % (trick, len(completed), len(tricks)))
             else:

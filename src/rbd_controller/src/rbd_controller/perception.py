@@ -57,7 +57,7 @@ class AvoidParams:
         enabled: bool = True,
         dodge: bool = False,
         blocked_timeout: float = 3.0,
-        static_after: float = 2.0,
+        static_after: float = 5.0,
         avoid_timeout: float = 60.0,
         max_detour_factor: float = 4.0,
         give_up: str = "skip",
