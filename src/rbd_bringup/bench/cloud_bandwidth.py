@@ -12,22 +12,21 @@ Writes OUTDIR/cloud_bandwidth.json and prints one row per mode.
 """
 
 import argparse
+import importlib.util
 import json
 import os
-import shutil
-import signal
-import socket
-import subprocess
 import sys
-import tempfile
 import time
 
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
-def free_port() -> int:
-    """A TCP port on 127.0.0.1 that is free right now."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+
+def root_conftest() -> object:
+    """The repository's conftest.py (private master, processes stopped by PID)."""
+    spec = importlib.util.spec_from_file_location("rbd_root_conftest", os.path.join(ROOT, "conftest.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def cpu_seconds(pid: int) -> float:
@@ -55,31 +54,23 @@ class Counter:
             self.msgs += 1
 
 
-def run_mode(columns: int, hz: int, seconds: float, env: dict) -> dict:
-    """Measure one mode against a fresh master; returns the row."""
+def run_mode(columns: int, hz: int, seconds: float, ros: object, conf: object) -> dict:
+    """Measure one mode against the private master; returns the row."""
     import rospy
 
-    procs = []
-    home = env["ROS_HOME"]
-
-    def start(name: str, cmd: list) -> subprocess.Popen:
-        log = open(os.path.join(home, name + ".log"), "w")
-        p = subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
-        procs.append(p)
-        return p
-
+    procs = [ros.start(["rosrun", "rbd_sim", "os1_sim", "_world:=lab", "_lidar_columns:=%d" % columns,
+                        "_lidar_hz:=%d" % hz, "_fixed_base_pose:=[0.0, 0.0, 0.28, 0.0, 0.0, 0.0]"])]
     try:
-        start("os1_sim", ["rosrun", "rbd_sim", "os1_sim", "_world:=lab", "_lidar_columns:=%d" % columns,
-                          "_lidar_hz:=%d" % hz, "_fixed_base_pose:=[0.0, 0.0, 0.28, 0.0, 0.0, 0.0]"])
-        dec = start("cloud_decimator", ["rosrun", "rbd_bringup", "cloud_decimator", "points:=/ouster/points",
-                                        "points_decimated:=/ouster/points_decimated"])
+        dec = ros.start(["rosrun", "rbd_bringup", "cloud_decimator", "points:=/ouster/points",
+                         "points_decimated:=/ouster/points_decimated"])
+        procs.append(dec)
         full, thin = Counter("/ouster/points"), Counter("/ouster/points_decimated")
         deadline = time.monotonic() + 60
         full.counting = thin.counting = True
         while (full.msgs < 3 or thin.msgs < 3) and time.monotonic() < deadline:
             time.sleep(0.1)
         if thin.msgs < 3:
-            raise RuntimeError("no decimated clouds (see %s)" % home)
+            raise RuntimeError("no decimated clouds (logs in %s)" % ros.home)
         full.counting = thin.counting = False
         full.bytes = full.msgs = thin.bytes = thin.msgs = 0
         cpu0, t0 = cpu_seconds(dec.pid), time.monotonic()
@@ -92,20 +83,15 @@ def run_mode(columns: int, hz: int, seconds: float, env: dict) -> dict:
                "points_Bps": full.bytes / dt, "points_hz": full.msgs / dt,
                "decimated_Bps": thin.bytes / dt, "decimated_hz": thin.msgs / dt,
                "points_Mbit_s": 8e-6 * full.bytes / dt, "decimated_Mbit_s": 8e-6 * thin.bytes / dt,
+               "points_bytes_per_cloud": full.bytes / max(1, full.msgs),
+               "decimated_bytes_per_cloud": thin.bytes / max(1, thin.msgs),
                "ratio": (full.bytes / float(thin.bytes)) if thin.bytes else None,
                "decimator_cpu_pct": 100.0 * cpu}
         rospy.loginfo("measured %s", row["mode"])
         return row
     finally:
         for p in reversed(procs):
-            if p.poll() is None:
-                os.killpg(p.pid, signal.SIGINT)
-        for p in reversed(procs):
-            try:
-                p.wait(15)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
-                p.wait()
+            conf.stop_process(p)
 
 
 def main() -> int:
@@ -116,42 +102,29 @@ def main() -> int:
     ap.add_argument("--modes", default="1024x10,2048x10")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
-    home = tempfile.mkdtemp(prefix="rbd-bw-home.")
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOME=home,
-               ROS_LOG_DIR=os.path.join(home, "log"), ROS_IP="127.0.0.1")
-    env.pop("ROS_HOSTNAME", None)
-    os.environ.update({k: env[k] for k in ("ROS_MASTER_URI", "ROS_HOME", "ROS_LOG_DIR", "ROS_IP")})
-    master = subprocess.Popen(["rosmaster", "--core", "-p", str(port)], env=env, stdout=subprocess.DEVNULL,
-                              stderr=subprocess.STDOUT, start_new_session=True)
+    conf = root_conftest()
+    ros = conf.RosEnv()
     rows = []
     try:
-        deadline = time.monotonic() + 30
-        while True:
-            try:
-                socket.create_connection(("127.0.0.1", port), 0.5).close()
-                break
-            except OSError:
-                if time.monotonic() > deadline:
-                    raise
-                time.sleep(0.1)
+        ros.use_in_this_process()
         import rospy
 
         rospy.init_node("cloud_bandwidth", anonymous=True, disable_signals=True)
         for mode in args.modes.split(","):
             columns, hz = (int(v) for v in mode.split("x"))
-            rows.append(run_mode(columns, hz, args.seconds, env))
+            rows.append(run_mode(columns, hz, args.seconds, ros, conf))
     finally:
-        os.killpg(master.pid, signal.SIGINT)
-        master.wait(15)
-        shutil.rmtree(home, ignore_errors=True)
+        ros.close()
     print("cloud_bandwidth: simulated OS1 (lab world), cloud_decimator defaults, %.0f s per mode" % args.seconds)
-    print("%-8s %14s %10s %16s %10s %7s %14s" % ("mode", "points Mbit/s", "points Hz", "decimated Mbit/s",
-                                                 "dec. Hz", "ratio", "decimator CPU"))
+    print("%-8s %14s %10s %11s %16s %8s %10s %7s %14s" % (
+        "mode", "points Mbit/s", "points Hz", "kB/cloud", "decimated Mbit/s", "dec. Hz", "kB/cloud", "ratio",
+        "decimator CPU"))
     for r in rows:
-        print("%-8s %14.1f %10.1f %16.2f %10.1f %7.1f %13.1f%%" % (
-            r["mode"], r["points_Mbit_s"], r["points_hz"], r["decimated_Mbit_s"], r["decimated_hz"],
-            r["ratio"] or float("nan"), r["decimator_cpu_pct"]))
+        print("%-8s %14.1f %10.1f %11.1f %16.2f %8.1f %10.1f %7.1f %13.1f%%" % (
+            r["mode"], r["points_Mbit_s"], r["points_hz"], r["points_bytes_per_cloud"] / 1e3, r["decimated_Mbit_s"],
+            r["decimated_hz"], r["decimated_bytes_per_cloud"] / 1e3, r["ratio"] or float("nan"),
+            r["decimator_cpu_pct"]))
+    print("(the simulated OS1 must keep up with its rate for the Mbit/s to be the sensor's: check the Hz columns)")
     with open(os.path.join(args.out, "cloud_bandwidth.json"), "w") as fh:
         json.dump(rows, fh, indent=2)
     return 0
