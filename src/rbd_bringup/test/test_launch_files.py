@@ -7,6 +7,7 @@ Expected values come from their sources: the thesis' Table 2 (k_x 2.5 /s, +-0.3 
 (conftest.py).
 """
 
+import copy
 import math
 import os
 import subprocess
@@ -19,13 +20,19 @@ PKG = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LAUNCH = os.path.join(PKG, "launch")
 
 
+_DUMPS = {}
+
+
 def dump_params(launch, *args, env=None):
-    """{param: value} as roslaunch would set them."""
-    out = subprocess.run(["roslaunch", "--dump-params", os.path.join(LAUNCH, launch)] + list(args),  # noqa: UP022
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True, timeout=120,
-                         env=env)
-    assert out.returncode == 0, out.stderr + out.stdout
-    return yaml.safe_load(out.stdout)
+    """{param: value} as roslaunch would set them (each launch/args/package path dumped once)."""
+    key = (launch, args, (env or os.environ).get("ROS_PACKAGE_PATH"))
+    if key not in _DUMPS:
+        out = subprocess.run(["roslaunch", "--dump-params", os.path.join(LAUNCH, launch)] + list(args),  # noqa: UP022
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True, timeout=120,
+                             env=env)
+        assert out.returncode == 0, out.stderr + out.stdout
+        _DUMPS[key] = yaml.safe_load(out.stdout)
+    return copy.deepcopy(_DUMPS[key])
 
 
 def load_config(launch, *args):
