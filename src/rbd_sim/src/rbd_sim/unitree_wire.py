@@ -24,52 +24,74 @@ _C = {"uint8_t": "B", "int8_t": "b", "uint16_t": "H", "int16_t": "h", "uint32_t"
 
 
 class Struct:
-    """A packed C struct declared as ``(member, C type or Struct, array length)`` in order."""
+    """A packed C struct declared as ``(member, C type or Struct, array length)`` in order.
+
+    The members' offsets follow from the declaration (no padding); the whole struct is one
+    ``struct.Struct`` format, so a packet is packed or unpacked in one call.
+    """
 
     def __init__(self, name: str, members: Sequence[Tuple[str, object, int]]) -> None:
         self.name = name
         self.members = []  # type: list  # (name, type, n, offset, element size)
+        codes = []
         offset = 0
         for member, ctype, n in members:
-            size = ctype.size if isinstance(ctype, Struct) else struct.calcsize("<" + _C[ctype])
+            if isinstance(ctype, Struct):
+                size = ctype.size
+                codes.append(ctype.codes * n)
+            else:
+                size = struct.calcsize("<" + _C[ctype])
+                codes.append("%d%s" % (n, _C[ctype]))
             self.members.append((member, ctype, n, offset, size))
             offset += size * n
         self.size = offset
+        self.codes = "".join(codes)
+        self._struct = struct.Struct("<" + self.codes)
+        self.count = len(self._struct.unpack(bytes(self._struct.size)))  # number of leaf values
+        assert self._struct.size == self.size, (name, self._struct.size, self.size)
+
+    def flatten(self, values: Dict[str, object], out: list) -> None:
+        """Append the leaf values of ``values`` in declaration order (missing members: zero)."""
+        for member, ctype, n, _offset, _size in self.members:
+            value = values.get(member)
+            if isinstance(ctype, Struct):
+                items = ([value] if n == 1 else list(value)) if value is not None else []
+                for item in items[:n]:
+                    ctype.flatten(item, out)
+                out.extend([0] * (ctype.count * (n - min(len(items), n))))
+            elif value is None:
+                out.extend([0] * n)
+            elif n == 1:
+                out.append(value)
+            else:
+                out.extend(bytearray(value) if isinstance(value, bytes) else value)
 
     def encode(self, values: Dict[str, object]) -> bytes:
         """Packed bytes; members missing from ``values`` are zero."""
-        buf = bytearray(self.size)
-        self._encode_into(buf, 0, values)
-        return bytes(buf)
-
-    def _encode_into(self, buf: bytearray, base: int, values: Dict[str, object]) -> None:
-        for member, ctype, n, offset, size in self.members:
-            if member not in values:
-                continue
-            value = values[member]
-            if isinstance(ctype, Struct):
-                for i, item in enumerate([value] if n == 1 else value):
-                    ctype._encode_into(buf, base + offset + i * size, item)
-            else:
-                items = [value] if n == 1 else list(bytearray(value) if isinstance(value, bytes) else value)
-                struct.pack_into("<%d%s" % (n, _C[ctype]), buf, base + offset, *items)
+        out = []  # type: list
+        self.flatten(values, out)
+        return self._struct.pack(*out)
 
     def decode(self, data: bytes) -> Dict[str, object]:
         """Member values (arrays as tuples, nested structs as dicts); ValueError on a wrong size."""
         if len(data) != self.size:
             raise ValueError("%s must be %d bytes, got %d" % (self.name, self.size, len(data)))
-        return self._decode_from(bytes(data), 0)
+        values = self._struct.unpack(data)
+        return self._rebuild(values, 0)[0]
 
-    def _decode_from(self, data: bytes, base: int) -> Dict[str, object]:
+    def _rebuild(self, values: tuple, i: int) -> tuple:
         out = {}  # type: Dict[str, object]
-        for member, ctype, n, offset, size in self.members:
+        for member, ctype, n, _offset, _size in self.members:
             if isinstance(ctype, Struct):
-                items = [ctype._decode_from(data, base + offset + i * size) for i in range(n)]
+                items = []
+                for _ in range(n):
+                    item, i = ctype._rebuild(values, i)
+                    items.append(item)
                 out[member] = items[0] if n == 1 else tuple(items)
             else:
-                got = struct.unpack_from("<%d%s" % (n, _C[ctype]), data, base + offset)
-                out[member] = got[0] if n == 1 else got
-        return out
+                out[member] = values[i] if n == 1 else values[i:i + n]
+                i += n
+        return out, i
 
 
 CARTESIAN = Struct("Cartesian", [("x", "float", 1), ("y", "float", 1), ("z", "float", 1)])
