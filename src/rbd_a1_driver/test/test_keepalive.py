@@ -10,7 +10,7 @@ import time
 import lcm
 import pytest
 
-from rbd_a1_driver.keepalive import KeepAlive, zero_velocity
+from rbd_a1_driver.keepalive import KeepAlive, record, zero_velocity
 from rbd_wire_oracle import unitree as vendor
 
 WALK = vendor.pack(vendor.HIGH_CMD, {"mode": 2, "gaitType": 1, "velocity": (0.3, 0.1), "yawSpeed": 0.2})
@@ -66,9 +66,9 @@ def test_process_fills_the_silence_of_its_driver_and_exits_with_the_pipe():
     proc = subprocess.Popen([sys.executable, "-m", "rbd_a1_driver.keepalive", url, "0.004", "0.01", "0.05"],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE)
     try:
-        assert proc.stdout.readline() == b"ready\n"
-        os.write(proc.stdin.fileno(), WALK)  # the driver's packet; then it "stalls"
+        assert proc.stdout.readline().startswith(b"ready SCHED_")
         t0 = time.monotonic()
+        os.write(proc.stdin.fileno(), record(WALK, t0))  # the driver's packet; then it "stalls"
         while time.monotonic() - t0 < 0.3:
             lc.handle_timeout(10)
         assert len(got) > 30, "the keep-alive did not fill the silence"
@@ -76,6 +76,8 @@ def test_process_fills_the_silence_of_its_driver_and_exits_with_the_pipe():
         last = vendor.unpack(vendor.HIGH_CMD, got[-1][1])
         assert first["velocity"] == pytest.approx((0.3, 0.1))
         assert last["velocity"] == (0.0, 0.0) and last["yawSpeed"] == 0.0
+        moving = [t for t, data in got if vendor.unpack(vendor.HIGH_CMD, data)["velocity"] != (0.0, 0.0)]
+        assert moving[-1] - t0 < 0.05 + 0.01  # repeated for hold after the driver's send time, no longer
         proc.stdin.close()
         assert proc.wait(5.0) == 0
     finally:

@@ -12,19 +12,32 @@ most ``hold`` seconds after the driver's last packet, then the same command with
 and zero yaw rate. When the pipe closes (the driver exits or dies), it stops at once.
 
 Run by the driver as ``python -m rbd_a1_driver.keepalive URL PERIOD GAP HOLD`` with the pipe on
-stdin, in a session of its own (``setsid``): with the kernel's autogroup scheduling, a session
-shares the CPU as one group, so the keep-alive does not wait behind the driver's (or roslaunch's)
-busy threads. It writes one line to stdout when it is ready. :class:`KeepAlive` is the ROS-free
-decision, tested on its own.
+stdin (records: the driver's send time and the HighCmd), in a session of its own (``setsid``):
+with the kernel's autogroup scheduling, a session shares the CPU as one group, so the keep-alive
+does not wait behind the driver's (or roslaunch's) busy threads; where it may (root or
+CAP_SYS_NICE), it also takes the lowest real-time priority (SCHED_FIFO 1), so that its wake-ups
+are not queued behind other processes on a loaded machine (it sleeps between packets: about 1 %
+of a core). It writes one line to stdout when it is ready, naming its scheduling.
+:class:`KeepAlive` is the ROS-free decision, tested on its own.
 """
 
 import os
 import select
+import struct
 import sys
 import time
 from typing import Optional
 
 from rbd_a1_driver import unitree_layout as ul
+
+#: One record on the pipe: the driver's send time (time.monotonic(), the same clock in every process
+#: of the host) and the HighCmd bytes.
+RECORD = struct.Struct("<d%ds" % ul.HIGH_CMD_SIZE)
+
+
+def record(packet: bytes, sent: float) -> bytes:
+    """The pipe record of a HighCmd the driver published at ``sent`` (monotonic)."""
+    return RECORD.pack(sent, packet)
 
 
 def zero_velocity(packet: bytes) -> bytes:
@@ -61,7 +74,7 @@ class KeepAlive:
         self.filled = 0
 
     def from_driver(self, packet: bytes, now: float) -> None:
-        """The driver published ``packet`` at ``now``."""
+        """The driver published ``packet`` at ``now`` (its own send time, not when it was read here)."""
         if packet != self.last:
             self._zero = None
         self.last = packet
@@ -87,15 +100,24 @@ class KeepAlive:
         return max(0.0, self.next_fill - now)
 
 
+def realtime() -> str:
+    """Take SCHED_FIFO priority 1 if allowed; returns the scheduling now in force, for the log."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))
+        return "SCHED_FIFO 1"
+    except (AttributeError, OSError) as e:  # not Linux, or no permission
+        return "SCHED_OTHER (no real-time priority: %s)" % e
+
+
 def run(url: str, period: float, gap: float, hold: float, fd: int = 0) -> int:
     """Read the driver's packets from ``fd`` and fill its silences on ``url`` until ``fd`` closes."""
     import lcm  # here, so that the module imports without LCM (unit tests)
 
     lc = lcm.LCM(url)
     keep = KeepAlive(period, gap, hold)
-    size = ul.HIGH_CMD_SIZE
+    size = RECORD.size
     pending = b""
-    sys.stdout.write("ready\n")
+    sys.stdout.write("ready %s\n" % realtime())
     sys.stdout.flush()
     while True:
         timeout = keep.wait(time.monotonic())
@@ -108,7 +130,8 @@ def run(url: str, period: float, gap: float, hold: float, fd: int = 0) -> int:
             pending += data
             whole = len(pending) - len(pending) % size
             if whole:
-                keep.from_driver(pending[whole - size:whole], now)
+                sent, packet = RECORD.unpack(pending[whole - size:whole])
+                keep.from_driver(packet, sent)
                 pending = pending[whole:]
         packet = keep.due(now)
         if packet is not None:
