@@ -15,10 +15,15 @@ Sources of the facts (``#pragma pack(1)``, little-endian; ``../shared/INTERFACES
   ``HighState`` 1025 B with ``IMU imu`` at 10, ``MotorState motorState[20]`` at 63,
   ``int16_t footForce[4]`` at 823, ``mode`` at 839 ... ``wirelessRemote[40]`` at 977,
   ``crc`` at 1021 (offsets as published in INTERFACES.md "Correction").
-* ``MotorState`` (38 B; the same member order in every comm.h of the SDK, v3.2 to v3.8):
-  ``uint8_t mode; float q, dq, ddq, tauEst, q_raw, dq_raw, ddq_raw; int8_t temperature;
-  uint32_t reserve[2]``. The motor index is ``leg * 3 + joint`` with legs FR 0, FL 1, RR 2,
-  RL 3 and joints hip 0, thigh 1, calf 2 (SDK ``quadruped.h``: FR_0 = 0 ... RL_2 = 11).
+* ``MotorState`` (38 B): ``uint8_t mode; float q, dq, ddq, tauEst, q_raw, dq_raw, ddq_raw;
+  int8_t temperature; uint32_t reserve[2]`` -> offsets 0, 1, 5, 9, 13, 17, 21, 25, 29, 30.
+  Read in unitreerobotics/unitree_legged_sdk@1cca3a3 ``include/unitree_legged_sdk/comm.h`` (the
+  Go1 line) and in forks carrying the A1's v3.2/v3.3-era headers (geyang, westonrobot,
+  Taucrates, marzima ``unitree_legged_sdk``): the same members in the same order in all of
+  them, plain C arrays or ``std::array``. The 597a66a (3.3.4) file itself was not in the public
+  index searched; its 1025 B total and ``footForce`` at 823 = 63 + 20 * 38 agree with 38 B.
+  The motor index is ``leg * 3 + joint`` with legs FR 0, FL 1, RR 2, RL 3 and joints hip 0,
+  thigh 1, calf 2 (SDK ``quadruped.h``: FR_0 = 0 ... RL_2 = 11).
 * The hand-held remote inside ``wirelessRemote[40]``: ``xRockerBtnDataStruct`` of the SDK's
   ``joystick.h`` (v3.5.1, written for the Go1; the same remote family as the A1's): ``uint8_t
   head[2]``, ``xKeySwitchUnion btn`` (uint16, bit fields from bit 0: R1, L1, start, select, R2,
