@@ -7,13 +7,16 @@ in HighCmd, shown by the mock as /rbd_sim/led, red in EMERGENCY_STOP, the GUI's 
 """
 
 import math
+import os
 import time
 import unittest
 
 import rosnode
+import rospkg
 import rospy
 import rostest
 import tf2_ros
+import yaml
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState, PointCloud2
 from std_msgs.msg import String
@@ -26,6 +29,7 @@ from rbd_bringup.a1_monitor import yaw_of
 EXPECTED_NODES = [
     "/mock_a1", "/rbd_a1_driver", "/os1_sim", "/zed2_sim", "/world", "/robot_state_publisher",
     "/rbd_controller", "/rbd_pos_controller", "/rbd_navigation", "/rbd_gestrec", "/rbd_bridge", "/rbd_lidar",
+    "/joint_state_fallback", "/cloud_decimator",
 ]
 
 
@@ -65,6 +69,8 @@ class SimSmoke(unittest.TestCase):
         self.clouds += 1
 
     def on_joints(self, msg):
+        if msg._connection_header.get("callerid") != "/rbd_a1_driver":
+            return  # the standing-pose fallback (rbd_bringup) publishes here too while the driver is silent
         self.joints = msg
         self.thighs.append(msg.position[1])
 
@@ -87,11 +93,15 @@ class SimSmoke(unittest.TestCase):
 
         buf = tf2_ros.Buffer()
         tf2_ros.TransformListener(buf)
-        mount = buf.lookup_transform("base_link", "os_sensor", rospy.Time(0), rospy.Duration(10.0))
-        self.assertAlmostEqual(mount.transform.translation.z, 0.07, places=3)
+        mount = buf.lookup_transform("base_link", "os_sensor", rospy.Time(0), rospy.Duration(10.0)).transform
+        with open(os.path.join(rospkg.RosPack().get_path("rbd_bringup"), "config", "mounts.yaml")) as fh:
+            xyz = yaml.safe_load(fh)["os_sensor"]["xyz"]
+        t = mount.translation
+        for got, want in zip((t.x, t.y, t.z), xyz):
+            self.assertAlmostEqual(got, want, places=6)
 
         # SDK 3.3.4 motor states through the driver: the A1 standing (a1_description angles).
-        self.assertTrue(wait_for(lambda: self.joints is not None, 10.0), "no /joint_states")
+        self.assertTrue(wait_for(lambda: self.joints is not None, 10.0), "no /joint_states from rbd_a1_driver")
         self.assertEqual(list(self.joints.name[:3]), ["FR_hip_joint", "FR_thigh_joint", "FR_calf_joint"])
         for leg in range(4):
             self.assertTrue(0.7 <= self.joints.position[3 * leg + 1] <= 0.9, self.joints.position)
