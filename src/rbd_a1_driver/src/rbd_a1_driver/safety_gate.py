@@ -55,12 +55,12 @@ class GateConfig:
         estop_required: bool = False,
         remote_estop: bool = True,
     ) -> None:
-        for name, flag in (("estop_required", estop_required), ("remote_estop", remote_estop)):
+        values = dict(locals())
+        values.pop("self")
+        for name in ("estop_required", "remote_estop"):
+            flag = values.pop(name)
             if not isinstance(flag, bool):
                 raise ValueError("%s must be true or false, got %r" % (name, flag))
-        values = dict(locals())
-        for name in ("self", "estop_required", "remote_estop", "name", "flag"):
-            values.pop(name)
         for name, value in values.items():
             if not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise ValueError("%s must be a finite number, got %r" % (name, value))
