@@ -160,6 +160,7 @@ class MainController:
         self._attempts = 0
         self._retry_at = 0.0
         self._reason = ""
+        self.remote_held = False  # the A1 remote's e-stop combination is held (rbd_a1_driver reports it)
         self.fsm = Fsm(
             on_enter={
                 State.EMERGENCY_STOP: self._enter_stop,
@@ -195,8 +196,14 @@ class MainController:
 
     # ------------------------------------------------------------------ stop inputs
     def set_emergency(self, engaged: bool) -> str:
-        """Engage/release the e-stop (service, CLI, GUI); returns a message."""
+        """Engage/release the e-stop (service, CLI, GUI); returns a message.
+
+        A release while the A1 remote's e-stop combination is held is refused (see
+        :meth:`release_refusal`); the state does not change.
+        """
         with self.lock:
+            if not engaged and self.remote_held:
+                return self.release_refusal()
             before = self.fsm.state
             if not engaged and self.operator.lost(self._now):
                 self.operator.disarm()  # the release acknowledges the lost link
@@ -204,6 +211,24 @@ class MainController:
             self._sync_stops()
             self.ports.publish(self)
             return "%s -> %s" % (before.name, self.fsm.state.name)
+
+    def release_refusal(self) -> str:
+        """Why an e-stop release would be refused now ("" if it would not)."""
+        if self.remote_held:
+            return "release refused: the e-stop combination is held on the A1's remote"
+        return ""
+
+    def set_remote_estop(self, held: bool) -> str:
+        """The A1's remote holds (True) or let go of (False) its e-stop combination.
+
+        Held engages the e-stop through the same event as the service and blocks releases
+        until it is let go; letting go releases nothing (the operator does). Returns a message.
+        """
+        with self.lock:
+            self.remote_held = bool(held)
+            if not held:
+                return "remote e-stop combination let go"
+            return self.set_emergency(True)
 
     def set_collision(self, detected: bool) -> str:
         """Collision reported (True) or cleared (False) by rbd_lidar; returns a message."""
