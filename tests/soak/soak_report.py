@@ -3,6 +3,7 @@
 Used by ``tests/soak/run`` and unit-tested in ``tests/test_soak.py``.
 """
 
+import collections
 import math
 import re
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -115,6 +116,90 @@ class StateCounter:
             if self.last_completion is not None:
                 self.longest_gap_s = max(self.longest_gap_s, t - self.last_completion)
             self.last_completion = t
+
+
+class BoxWatch:
+    """What happened around each dropped box, so that every box contact can be explained.
+
+    Fed with ground truth (pose and body twist), the controller's states and rbd_lidar's zone
+    states, each with its time [s]; keeps a few seconds of each. A drop records how far from the
+    footprint (and from the stop zone) the box landed and how fast the robot went; a contact
+    records the state, the speed and direction of motion, how long after the drop it happened,
+    when the zone first reported a collision after the drop and how far the robot moved after
+    that, and the stale-zone reports just before it.
+
+    Args:
+        keep_s: seconds of history kept.
+    """
+
+    def __init__(self, keep_s: float = 10.0) -> None:
+        self.keep_s = keep_s
+        self.truth = collections.deque()  # (t, x, y, yaw, vx, vy, wz)
+        self.zone = collections.deque()  # (t, collision, stale)
+        self.states = collections.deque()  # (t, state)
+        self.drops = []  # type: List[Dict[str, object]]
+        self.contacts = []  # type: List[Dict[str, object]]
+        self._first_collision = {}  # type: Dict[str, float]
+
+    def _trim(self, buf: collections.deque, t: float) -> None:
+        while buf and buf[0][0] < t - self.keep_s:
+            buf.popleft()
+
+    def on_truth(self, t: float, pose: Tuple[float, float, float], twist: Tuple[float, float, float]) -> None:
+        """A ground-truth sample: pose (x, y, yaw) and body twist (vx, vy, wz)."""
+        self.truth.append((t,) + tuple(pose) + tuple(twist))
+        self._trim(self.truth, t)
+
+    def on_zone(self, t: float, collision: bool, stale: bool) -> None:
+        """A zone state of rbd_lidar."""
+        self.zone.append((t, bool(collision), bool(stale)))
+        self._trim(self.zone, t)
+        if collision and self.drops:
+            self._first_collision.setdefault(self.drops[-1]["name"], t)
+
+    def on_state(self, t: float, state: str) -> None:
+        """A controller state message."""
+        if not self.states or self.states[-1][1] != state:
+            self.states.append((t, state))
+        self._trim(self.states, t)
+
+    def state(self) -> str:
+        """The latest controller state ("" before the first)."""
+        return self.states[-1][1] if self.states else ""
+
+    def on_drop(self, t: float, name: str, box: Sequence[float], gap: float, zone_gap: float) -> Dict[str, object]:
+        """A box (x, y, yaw, size_x, size_y) dropped ``gap`` from the footprint, ``zone_gap`` from the zone."""
+        last = self.truth[-1] if self.truth else None
+        drop = {"name": name, "t": t, "box": [round(v, 3) for v in box], "gap_m": round(gap, 3),
+                "zone_gap_m": round(zone_gap, 3), "state": self.state(),
+                "speed_mps": round(math.hypot(last[4], last[5]), 3) if last else None}
+        self.drops.append(drop)
+        return drop
+
+    def on_contact(self, t: float, name: str) -> Dict[str, object]:
+        """The footprint touched box ``name`` at t: the context of the contact."""
+        drop = next((d for d in reversed(self.drops) if d["name"] == name), None)
+        last = self.truth[-1] if self.truth else None
+        first = self._first_collision.get(name)
+        moved = None
+        if first is not None and last is not None:
+            after = [s for s in self.truth if s[0] >= first]
+            if after:
+                moved = round(math.hypot(last[1] - after[0][1], last[2] - after[0][2]), 3)
+        info = {
+            "t": round(t, 2), "box": name, "state": self.state(),
+            "since_drop_s": None if drop is None else round(t - drop["t"], 2),
+            "drop": drop,
+            "body_twist": None if last is None else [round(v, 3) for v in last[4:7]],
+            "states_since_drop": [(round(ts - drop["t"], 2), st) for ts, st in self.states
+                                  if drop is not None and ts >= drop["t"] - 1.0],
+            "first_zone_collision_after_drop_s": None if first is None or drop is None else round(first - drop["t"], 2),
+            "moved_since_first_zone_collision_m": moved,
+            "stale_zone_reports_last_3s": sum(1 for ts, _, st in self.zone if st and ts >= t - 3.0),
+            "zone_collision_now": self.zone[-1][1] if self.zone else None,
+        }
+        self.contacts.append(info)
+        return info
 
 
 def verdict(report: Dict[str, object]) -> List[str]:

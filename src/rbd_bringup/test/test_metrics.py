@@ -59,3 +59,28 @@ def test_footprint_box_clearance_against_hand_geometry():
     assert footprint_box_clearance((0.0, 0.0), 0.0, (0.0, 0.0), 0.0, (0.1, 0.1)) == 0.0  # box under the robot
     square = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
     assert not outside_polygon((0.5, 0.5), square) and outside_polygon((1.5, 0.0), square)
+
+
+def test_box_ahead_puts_the_box_gap_ahead_of_the_footprint():
+    from rbd_bringup.metrics import box_ahead, footprint_box_clearance
+
+    # A1 at the origin facing +x, front edge at x = 0.25: a 0.4 m box 0.5 m ahead has its centre at 0.95.
+    x, y, yaw = box_ahead((0.0, 0.0, 0.0), 0.5, (0.4, 0.4))
+    assert (x, y, yaw) == pytest.approx((0.95, 0.0, 0.0), abs=1e-6)
+    # Turned 45 deg, its corner leads: half diagonal 0.2 sqrt(2) behind the centre.
+    x, _, yaw = box_ahead((0.0, 0.0, 0.0), 0.5, (0.4, 0.4), box_yaw=math.pi / 4)
+    assert x == pytest.approx(0.75 + 0.2 * math.sqrt(2.0), abs=1e-6) and yaw == pytest.approx(math.pi / 4)
+    # Robot at (1, 2) facing +y, box 0.1 m to its left (-x in the world): centre at y = 2 + 0.25 + 0.3 + 0.2.
+    x, y, yaw = box_ahead((1.0, 2.0, math.pi / 2), 0.3, (0.4, 0.4), lateral=0.1, box_yaw=0.3)
+    assert footprint_box_clearance((1.0, 2.0), math.pi / 2, (x, y), yaw, (0.4, 0.4)) == pytest.approx(0.3, abs=1e-6)
+    assert x == pytest.approx(0.9) and yaw == pytest.approx(math.pi / 2 + 0.3)
+    assert box_ahead((1.0, 2.0, math.pi / 2), 0.3, (0.4, 0.4), lateral=0.1)[1] == pytest.approx(2.75, abs=1e-6)
+
+
+def test_box_ahead_rejects_bad_input():
+    from rbd_bringup.metrics import box_ahead
+
+    for bad in ((0.0, (0.4, 0.4), 0.0), (-0.1, (0.4, 0.4), 0.0), (0.5, (0.0, 0.4), 0.0),
+                (float("nan"), (0.4, 0.4), 0.0), (0.3, (0.4, 0.4), 1.0)):  # the last: 1 m beside the robot
+        with pytest.raises(ValueError):
+            box_ahead((0.0, 0.0, 0.0), bad[0], bad[1], lateral=bad[2])

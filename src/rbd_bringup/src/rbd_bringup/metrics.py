@@ -107,6 +107,62 @@ def footprint_box_clearance(
     return best
 
 
+def box_ahead(
+    robot_pose: Tuple[float, float, float],
+    gap: float,
+    box_size: Tuple[float, float],
+    lateral: float = 0.0,
+    box_yaw: float = 0.0,
+    length: float = A1_FOOTPRINT_LENGTH,
+    width: float = A1_FOOTPRINT_WIDTH,
+) -> Tuple[float, float, float]:
+    """Where to put a box on the robot's way so that it lands ``gap`` ahead of the footprint.
+
+    The way a visitor drops a bag in front of a walking robot: the box centre lies on the line
+    ``lateral`` to the side of the robot's heading, as far ahead as makes the clearance between
+    the footprint and the box (:func:`footprint_box_clearance`) exactly ``gap``, whatever its
+    rotation. With ``gap`` beyond the stop zone's front margin the box lands outside the zone.
+
+    Args:
+        robot_pose: (x, y, yaw) of the footprint centre in the world [m, rad].
+        gap: clearance between the footprint and the box [m], > 0.
+        box_size: (length along its x, width along its y) [m].
+        lateral: offset of the box centre to the left of the heading [m].
+        box_yaw: rotation of the box relative to the robot's heading [rad].
+        length: footprint length [m].
+        width: footprint width [m].
+
+    Returns:
+        (x, y, yaw) of the box centre in the world [m, rad].
+
+    Raises:
+        ValueError: gap <= 0, non-finite values, box sizes <= 0, or a lateral offset that puts the
+            box beside the robot (not on its way: already ``gap`` away at the footprint's centre).
+    """
+    values = tuple(robot_pose) + (gap, lateral, box_yaw) + tuple(box_size)
+    if not all(math.isfinite(v) for v in values) or gap <= 0.0 or min(box_size) <= 0.0:
+        raise ValueError("box_ahead needs finite values, gap > 0 and box sizes > 0, got %r" % (values,))
+    x, y, yaw = robot_pose
+    c, s = math.cos(yaw), math.sin(yaw)
+    world_yaw = yaw + box_yaw
+
+    def clearance(d: float) -> float:
+        bx, by = x + c * d - s * lateral, y + s * d + c * lateral
+        return footprint_box_clearance((x, y), yaw, (bx, by), world_yaw, box_size, length, width)
+
+    if clearance(0.0) >= gap:
+        raise ValueError("a box %.2f m to the side is not on the robot's way" % lateral)
+    lo, hi = 0.0, length / 2.0 + gap + math.hypot(*box_size)  # clearance(lo) < gap < clearance(hi)
+    for _ in range(60):  # the clearance grows with the distance ahead: bisection to well below 1 um
+        mid = 0.5 * (lo + hi)
+        if clearance(mid) < gap:
+            lo = mid
+        else:
+            hi = mid
+    d = 0.5 * (lo + hi)
+    return x + c * d - s * lateral, y + s * d + c * lateral, world_yaw
+
+
 def outside_polygon(xy: Tuple[float, float], polygon: Iterable[Tuple[float, float]]) -> bool:
     """True if the point lies outside the polygon (even-odd rule)."""
     return not _inside(xy, list(polygon))
