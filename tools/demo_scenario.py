@@ -379,9 +379,10 @@ def main():
 
 
 def drop_bag(monitor):
-    """A bag is put down 0.5 m ahead of the robot on its way out; it stays until the trick is done."""
+    """A bag is put down 0.5 m ahead of the robot's footprint on its way out; it stays until the trick is done."""
     import rospy
 
+    from rbd_bringup.metrics import box_ahead
     from rbd_msgs.srv import PlaceBox
 
     place = rospy.ServiceProxy("/rbd_sim/place_box", PlaceBox)
@@ -396,9 +397,10 @@ def drop_bag(monitor):
             break
         time.sleep(0.05)
     x, y, yaw = monitor.pose
-    bx, by = x + 0.7 * math.cos(yaw), y + 0.7 * math.sin(yaw)
+    # 0.5 m ahead of the footprint: outside the stop zone (0.37 m ahead of it), not dropped onto the robot.
+    bx, by, byaw = box_ahead((x, y, yaw), 0.5, (0.4, 0.4), box_yaw=0.3)
     say("a visitor puts a bag (0.4 m box) down 0.5 m ahead of the walking robot at (%.2f, %.2f)" % (bx, by))
-    place(name="bag", x=bx, y=by, yaw=0.3, size_x=0.4, size_y=0.4, height=0.4, remove=False)
+    place(name="bag", x=bx, y=by, yaw=byaw, size_x=0.4, size_y=0.4, height=0.4, remove=False)
 
     def take_away():
         monitor.wait_state(("WAITING_FOR_GESTURE",), 120.0)

@@ -1,7 +1,8 @@
 """Issue 17 experiments (active collision avoidance) on the safety stack, measured on ground truth.
 
 - ``box``: during ``walk`` a 0.4 m box is dropped with its near face 0.5 m ahead of the walking
-  robot (on the way back, where the detour has room). Measured per trick pose: reached within
+  robot's footprint (outside its stop zone, as a visitor drops a bag; on the way back, where the
+  detour has room). Measured per trick pose: reached within
   0.1 m or skipped with the controller's reason; time lost against the same trick without a box;
   minimum footprint-box clearance; contacts. Then the same with ``~avoidance`` off: the robot
   must still be standing, trick pending, after the "blocked forever" time (thesis behaviour).
@@ -25,6 +26,8 @@ import time
 
 HERE_NOTE = "issue 17"
 BOX = 0.4  # edge of the box [m]
+#: The box lands this far ahead of the robot's footprint [m]: outside the stop zone (0.37 m ahead of it).
+DROP_GAP = 0.5
 
 
 def log(msg):
@@ -241,6 +244,8 @@ def run_trick_with_box(ctx, watch, op, trick, avoidance, blocked_wait):
     """
     import rospy
 
+    from rbd_bringup.metrics import box_ahead
+
     op.switch("avoidance", avoidance)
     op.release()
     # The lab's free middle: its people walk at x > 2.8 m and y < -2 m, furniture stands at
@@ -257,13 +262,14 @@ def run_trick_with_box(ctx, watch, op, trick, avoidance, blocked_wait):
     if not ok:
         raise RuntimeError("the robot never walked where the box goes")
     x, y, yaw = watch.pose()
-    d = 0.5 + BOX / 2.0
-    bx, by = x + d * math.cos(yaw), y + d * math.sin(yaw)
-    op.place_box(name="bag", x=bx, y=by, yaw=0.0, size_x=BOX, size_y=BOX, height=BOX, remove=False)
+    # As a visitor drops a bag: its face DROP_GAP ahead of the footprint, outside the stop zone.
+    bx, by, byaw = box_ahead((x, y, yaw), DROP_GAP, (BOX, BOX))
+    op.place_box(name="bag", x=bx, y=by, yaw=byaw, size_x=BOX, size_y=BOX, height=BOX, remove=False)
     t_box = time.monotonic()
-    log("box dropped at (%.2f, %.2f), face 0.50 m ahead of the robot at (%.2f, %.2f) (avoidance %s)" % (
-        bx, by, x, y, "on" if avoidance else "off"))
-    result = {"trick": trick, "avoidance": avoidance, "box": [bx, by, 0.0, BOX, BOX], "robot_at_drop": [x, y, yaw]}
+    log("box dropped at (%.2f, %.2f), face %.2f m ahead of the footprint of the robot at (%.2f, %.2f) (avoidance %s)"
+        % (bx, by, DROP_GAP, x, y, "on" if avoidance else "off"))
+    result = {"trick": trick, "avoidance": avoidance, "box": [bx, by, byaw, BOX, BOX], "robot_at_drop": [x, y, yaw],
+              "drop_gap_m": DROP_GAP}
     if avoidance:
         done = watch.wait_state(("WAITING_FOR_GESTURE",), 180.0)
         t1 = time.monotonic()

@@ -176,6 +176,14 @@ class BoxWatch:
         self.drops.append(drop)
         return drop
 
+    def on_clearance(self, t: float, name: str, clearance: float) -> None:
+        """Footprint-box clearance [m] of box ``name`` at t: the smallest per drop, with the state then."""
+        drop = self.drops[-1] if self.drops and self.drops[-1]["name"] == name else None
+        if drop is not None and clearance < drop.get("min_clearance_m", math.inf):
+            drop["min_clearance_m"] = round(clearance, 3)
+            drop["min_clearance_after_s"] = round(t - drop["t"], 2)
+            drop["min_clearance_state"] = self.state()
+
     def on_contact(self, t: float, name: str) -> Dict[str, object]:
         """The footprint touched box ``name`` at t: the context of the contact."""
         drop = next((d for d in reversed(self.drops) if d["name"] == name), None)
