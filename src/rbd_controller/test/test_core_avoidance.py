@@ -34,7 +34,7 @@ STROLL = [(2.0, 0.0, 0.0), (0.0, 0.0, math.pi), (0.0, 0.0, 0.0)]
 
 
 class World:
-    def __init__(self, dodge=False, enabled=True, path=WALK, **avoid):
+    def __init__(self, dodge=False, enabled=True, path=WALK, relative=False, **avoid):
         self.x, self.y, self.yaw = 0.0, 0.0, 0.0
         self.obstacles = {}
         self.t = 0.0
@@ -53,7 +53,7 @@ class World:
         self.ctl = MainController(
             Ports(
                 get_gesture=lambda: self.gestures.pop(0) if self.gestures else "",
-                generate_path=lambda c: (True, "ok", list(path), ["a", "b", "c"]),
+                generate_path=lambda c: (True, "ok", self.trick(path, relative), ["a", "b", "c"]),
                 set_position=lambda pose: self.send("normal", pose[0], pose[1], pose[2]),
                 set_body_pose=lambda r, p, h: True,
                 pos_emergency=lambda on: self.hold(on),
@@ -69,6 +69,13 @@ class World:
             avoid=AvoidParams(**params),
         )
         self.ctl.start()
+
+    def trick(self, path, relative):
+        """The trick's poses: as given, or (like rbd_navigation) relative to where the robot stands."""
+        if not relative:
+            return list(path)
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        return [(self.x + c * x - s * y, self.y + s * x + c * y, self.yaw + yaw) for x, y, yaw in path]
 
     def hold(self, on):
         self.held = on
@@ -203,8 +210,41 @@ def test_walk_with_the_box_between_its_poses_skips_them_with_reasons():
     w.obstacles["box"] = box(-0.05, 0.0)  # in the stop zone of the two remaining poses
     assert w.run_until(lambda: w.ctl.state == State.WAITING_FOR_GESTURE, 60.0), (states(w), w.logs[-5:])
     skipped = [e["detail"] for e in w.events if e["event"] == "gave_up"]
-    assert len(skipped) == 2 and all("goal blocked" in d for d in skipped)
+    # The two poses, then the walk back home the skips call for: home's stop zone holds the box too.
+    assert len(skipped) == 3 and all("goal blocked" in d for d in skipped), skipped
+    assert any("walking back" in msg for _, msg in w.logs)
     assert w.min_clearance > 0.25
+
+
+def test_a_trick_left_away_from_home_by_the_avoidance_ends_with_a_walk_home():
+    w = World(relative=True)
+    w.start_walk()
+    assert w.run_until(lambda: len(w.goals) == 2, 5.0)
+    w.obstacles["box"] = box(-0.05, 0.0)  # blocks the rest of the trick and home
+    assert w.run_until(lambda: w.ctl.state == State.WAITING_FOR_GESTURE, 60.0), (states(w), w.logs[-5:])
+    away, heading = (w.x, w.y), w.yaw
+    assert math.hypot(*away) > 0.2 and abs(math.sin(heading)) < 1e-9  # left where the escape took it
+    del w.obstacles["box"]  # the bag is taken away
+    w.step(3)
+    n = len(w.goals)
+    w.gestures.append("walk")  # the next trick runs from there and ends with the walk home
+    assert w.run_until(lambda: w.ctl.state == State.EXECUTING, 3.0)
+    assert w.run_until(lambda: w.ctl.state == State.WAITING_FOR_GESTURE, 60.0), (states(w), w.logs[-5:])
+    sent = [(g[2], g[3]) for g in w.goals[n:] if g[0] == State.EXECUTING]
+    c = math.cos(heading)
+    assert len(sent) == 4
+    for got, want in zip(sent[:3], [(away[0] + 0.6 * c, away[1]), (away[0] - 0.6 * c, away[1]), away]):
+        assert got == pytest.approx(want, abs=1e-6)  # the trick, from where it stood
+    assert sent[3] == (0.0, 0.0)  # then home, once
+    assert (w.x, w.y) == pytest.approx((0.0, 0.0), abs=1e-9) and w.yaw == pytest.approx(0.0)
+
+
+def test_a_trick_ending_at_home_adds_nothing():
+    w = World()
+    w.start_walk()
+    assert w.run_until(lambda: w.ctl.state == State.WAITING_FOR_GESTURE, 60.0)
+    assert [(g[2], g[3]) for g in w.goals] == [(0.6, 0.0), (-0.6, 0.0), (0.0, 0.0)]
+    assert not any("walking back" in msg for _, msg in w.logs)
 
 
 def test_with_avoidance_off_it_stays_blocked():
@@ -305,3 +345,21 @@ def test_no_dodge_when_disabled_or_from_standing_things():
     w.ctl.set_emergency(False)
     w.step(30)
     assert w.ctl.state == State.WAITING_FOR_GESTURE and w.goals == []
+
+
+def test_home_is_where_the_estop_was_released_not_where_a_trick_ended():
+    w = World(relative=True)
+    w.ctl.set_emergency(False)
+    w.step(3)
+    assert w.ctl.home == (0.0, 0.0)
+    w.ctl.set_emergency(True)
+    w.x, w.y, w.yaw = 1.0, 0.5, math.pi / 2  # the operator carries the robot under the e-stop
+    w.step(3)
+    assert w.ctl.home == (0.0, 0.0)  # not while it is engaged
+    w.ctl.set_emergency(False)
+    w.step(3)
+    assert w.ctl.home == (1.0, 0.5) and w.ctl.home_yaw == pytest.approx(math.pi / 2)
+    w.gestures.append("walk")
+    assert w.run_until(lambda: w.ctl.state == State.EXECUTING, 3.0)
+    assert w.run_until(lambda: w.ctl.state == State.WAITING_FOR_GESTURE, 60.0)
+    assert w.ctl.home == (1.0, 0.5) and not any("walking back" in msg for _, msg in w.logs)

@@ -147,7 +147,9 @@ class MainController:
         self.avoid = avoid if avoid is not None else AvoidParams(enabled=False, dodge=False)
         self.perception = Perception(self.avoid)
         self.planner = DetourPlanner(inflation=self.avoid.inflation, clearance=self.avoid.clearance)
-        self.home = None  # type: Optional[Tuple[float, float]]
+        self.home = None  # type: Optional[Tuple[float, float]]  # where the show is (dodge, arena, back home)
+        self.home_yaw = None  # type: Optional[float]
+        self._returning = False  # the "back home" pose of this trick is queued (tried once per trick)
         self.trick_home = None  # type: Optional[Tuple[float, float, float]]
         self.detour = None  # type: Optional[List[Any]]
         self.stats = {"avoided": 0, "gave_up": 0, "escapes": 0, "dodges": 0, "blocked": 0}
@@ -364,8 +366,11 @@ class MainController:
 
     def _enter_waiting(self, previous: State) -> None:
         pose = self.perception.pose
-        if pose is not None and (self.home is None or previous in (State.EXECUTING, State.GENERATING_PATH)):
-            self.home = (pose[0], pose[1])
+        if pose is not None and (self.home is None or previous == State.EMERGENCY_STOP):
+            # Home is where the operator released the robot (carrying it elsewhere under the e-stop
+            # and releasing it there moves the show), not wherever a trick happened to end.
+            self.home, self.home_yaw = (pose[0], pose[1]), pose[2]
+        self._returning = False
         self._episode_start = None
         self.command = ""
         self.queue = []
@@ -426,7 +431,8 @@ class MainController:
     def _tick_waiting(self, now: float, epoch: int) -> None:
         if self.home is None and self.perception.pose is not None:
             with self.lock:
-                self.home = self.perception.pose[:2]  # the first pose seen while waiting
+                pose = self.perception.pose  # the first pose seen while waiting
+                self.home, self.home_yaw = (pose[0], pose[1]), pose[2]
         if self.avoid.dodge and self.home is not None and self._may_avoid(now):
             sides = self.perception.recently_approached(now)
             if sides:
@@ -477,7 +483,7 @@ class MainController:
                 return
             if self.current is None:
                 if not self.queue:
-                    self._fire_if(epoch, Event.QUEUE_EMPTY)
+                    self._trick_done(epoch)
                     return
                 self.current = self.queue.pop(0)
             pose, name = self.current
@@ -507,7 +513,7 @@ class MainController:
                 self.perception.forget_blocking()
             self.ports.publish(self)
             if not self.queue:
-                self._fire_if(epoch, Event.QUEUE_EMPTY)
+                self._trick_done(epoch)
             return
         if not self.seen_running and now - self.sent_at > self.start_timeout:
             self.ports.log("error", "position controller never reported running; aborting trick")
@@ -517,6 +523,27 @@ class MainController:
                 "error", "pose %r not reached in %.0f s; aborting trick" % (self.current[1], self.pose_timeout)
             )
             self._fire_if(epoch, Event.ABORT)
+
+    def _trick_done(self, epoch: int) -> None:
+        """Caller holds the lock. The queue is empty: back home first if avoidance left the robot away.
+
+        A trick whose poses were skipped (or whose way was changed by a detour) can end away from
+        where it started; tricks are relative to the robot, so every later trick would start there
+        and the show would wander off. With avoidance on, a robot ending more than
+        ``~home_tolerance`` from home gets one more pose, home (once per trick; if that pose is
+        blocked too it is skipped with its reason like any other).
+        """
+        pose = self.perception.pose
+        if (self.avoid.enabled and not self._returning and self.home is not None and pose is not None
+                and math.hypot(pose[0] - self.home[0], pose[1] - self.home[1]) > self.avoid.home_tolerance):
+            self._returning = True
+            away = math.hypot(pose[0] - self.home[0], pose[1] - self.home[1])
+            self.queue.append((self.ports.make_pose(self.home[0], self.home[1], self.home_yaw),
+                               "back home (%.2f m away after avoiding)" % away))
+            self.ports.log("info", "trick done %.2f m from home: walking back" % away)
+            self.ports.publish(self)
+            return
+        self._fire_if(epoch, Event.QUEUE_EMPTY)
 
     # ------------------------------------------------------------------ avoidance (issue 17)
     def _may_avoid(self, now: float) -> bool:

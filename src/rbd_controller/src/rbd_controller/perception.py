@@ -47,6 +47,8 @@ class AvoidParams:
         zone: rbd_lidar's stop zone per side (FRONT, LEFT, BACK, RIGHT) [m].
         slowdown: rbd_lidar's slowdown band per side [m].
         point_threshold: rbd_lidar's point_threshold.
+        home_tolerance: a trick that ends farther than this from home (after avoiding) is followed
+            by a walk back home [m].
 
     Raises:
         ValueError: a value out of range.
@@ -75,6 +77,7 @@ class AvoidParams:
         zone: Sequence[float] = (0.70, 0.35, 0.55, 0.35),
         slowdown: Sequence[float] = (0.50, 0.20, 0.30, 0.20),
         point_threshold: int = 5,
+        home_tolerance: float = 0.2,
     ) -> None:
         positive = {
             "blocked_timeout": blocked_timeout,
@@ -88,6 +91,7 @@ class AvoidParams:
             "dodge_step": dodge_step,
             "dodge_return_after": dodge_return_after,
             "arena_half_size": arena_half_size,
+            "home_tolerance": home_tolerance,
         }
         for name, v in positive.items():
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
@@ -119,6 +123,7 @@ class AvoidParams:
         self.zone = [float(z) for z in zone]
         self.slowdown = [float(z) for z in slowdown]
         self.point_threshold = int(point_threshold)
+        self.home_tolerance = float(home_tolerance)
 
 
 class Perception:
