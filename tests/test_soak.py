@@ -108,6 +108,9 @@ def test_box_watch_explains_a_contact():
     assert info["stale_zone_reports_last_3s"] == 1 and info["zone_collision_now"] is True
     assert [s for _, s in info["states_since_drop"]] == ["EXECUTING", "COLLISION_DETECTED"]
     assert drop["min_clearance_m"] == 0.0 and drop["min_clearance_state"] == "COLLISION_DETECTED"
+    assert drop["clearance_3s_m"] == 0.0  # within 3 s of the drop: the stop for it
+    w.on_clearance(5.0, "box0", -1.0)  # 4 s later (an overlap later on): not part of the stop any more
+    assert drop["clearance_3s_m"] == 0.0 and drop["min_clearance_m"] == -1.0
     assert w.contacts == [info]
 
 

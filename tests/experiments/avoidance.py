@@ -24,6 +24,8 @@ import math
 import threading
 import time
 
+import analysis  # tests/experiments is on the path (experiments.py runs these)
+
 HERE_NOTE = "issue 17"
 BOX = 0.4  # edge of the box [m]
 #: The box lands this far ahead of the robot's footprint [m]: outside the stop zone (0.37 m ahead of it).
@@ -57,7 +59,7 @@ class Watch:
         from rbd_msgs.msg import PathQueue
 
         self.lock = threading.Lock()
-        self.truth = []  # (t, x, y, yaw, speed)
+        self.truth = []  # (t, x, y, yaw, speed, vx, vy): velocity in the world frame
         self.states = []  # (t, state)
         self.state = ""
         self.events = []  # (t, text)
@@ -76,8 +78,10 @@ class Watch:
     def _on_truth(self, msg):
         p, q, tw = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist.linear
         yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        c, s = math.cos(yaw), math.sin(yaw)  # the twist is in the body frame
         with self.lock:
-            self.truth.append((time.monotonic(), p.x, p.y, yaw, math.hypot(tw.x, tw.y)))
+            self.truth.append((time.monotonic(), p.x, p.y, yaw, math.hypot(tw.x, tw.y), c * tw.x - s * tw.y,
+                               s * tw.x + c * tw.y))
             if len(self.truth) > 60000:
                 del self.truth[:20000]
 
@@ -320,7 +324,7 @@ def _walking_out(watch, start):
     with watch.lock:
         if len(watch.truth) < 2 or watch.state != "EXECUTING":
             return False
-        _, x, y, yaw, speed = watch.truth[-1]
+        _, x, y, yaw, speed = watch.truth[-1][:5]
     sx, sy, syaw = start
     along = (x - sx) * math.cos(syaw) + (y - sy) * math.sin(syaw)
     return math.cos(yaw - syaw) > 0.95 and speed > 0.15 and along > 0.3
@@ -330,7 +334,7 @@ def _walking_back(watch, start):
     with watch.lock:
         if len(watch.truth) < 2 or watch.state != "EXECUTING":
             return False
-        _, x, y, yaw, speed = watch.truth[-1]
+        _, x, y, yaw, speed = watch.truth[-1][:5]
     sx, sy, syaw = start
     along = (x - sx) * math.cos(syaw) + (y - sy) * math.sin(syaw)
     back = math.cos(yaw - syaw) < -0.95
@@ -371,6 +375,121 @@ def exp_box(ctx):
     panels = [result[t] for t in ("stroll", "walk") if t in result] + [result["off"]]
     result["png"] = plot(ctx, "avoid_box.png", "0.4 m box 0.5 m ahead", panels)
     return result
+
+
+def exp_detect(ctx):
+    """The lowest box the zone sees, per side, just inside the zone's edge and 5 cm from the footprint.
+
+    The OS1 sits 0.35 m above the floor and its lowest beam points 21.5 deg down, and rbd_lidar
+    ignores the floor band (``floor_clearance``): close to the robot only taller things reach a
+    beam. A 0.4 m wide, 0.2 m deep box faces each side at the two distances; its height is bisected
+    (1 cm) for the lowest that makes ``point_threshold`` critical points in the second scan after it
+    is placed. The robot stands in EMERGENCY_STOP meanwhile (no avoidance motion).
+    """
+    import rospy
+    from std_srvs.srv import SetBool
+
+    from rbd_bringup.metrics import A1_FOOTPRINT_LENGTH, A1_FOOTPRINT_WIDTH
+    from rbd_msgs.srv import PlaceBox
+
+    zone = ctx.zone()
+    watch = Watch()
+    place = rospy.ServiceProxy("/rbd_sim/place_box", PlaceBox)
+    rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)(True)
+    try:
+        if not wait_for(lambda: watch.pose() is not None and watch.state == "EMERGENCY_STOP", 10.0):
+            raise RuntimeError("no ground truth or not in EMERGENCY_STOP")
+        x, y, yaw = watch.pose()
+        # The LiDAR in the body frame: where the footprint's edges are, seen from it.
+        dx, dy = zone.origin[0] - x, zone.origin[1] - y
+        lx = math.cos(yaw) * dx + math.sin(yaw) * dy
+        ly = -math.sin(yaw) * dx + math.cos(yaw) * dy
+        half_l, half_w = A1_FOOTPRINT_LENGTH / 2.0, A1_FOOTPRINT_WIDTH / 2.0
+        # (name, angle from the LiDAR, rbd_msgs/CollisionState side index, zone limit, footprint edge)
+        sides = [("front", 0.0, 0, zone.zone[0], half_l - lx), ("back", math.pi, 2, zone.zone[1], half_l + lx),
+                 ("left", math.pi / 2, 1, zone.zone[2], half_w - ly), ("right", -math.pi / 2, 3, zone.zone[3],
+                                                                      half_w + ly)]
+        threshold = zone.threshold
+
+        def seen(angle, dist, height):
+            a = zone.yaw + angle
+            cx, cy = zone.origin[0] + (dist + 0.1) * math.cos(a), zone.origin[1] + (dist + 0.1) * math.sin(a)
+            if not place(name="probe", x=cx, y=cy, yaw=a, size_x=0.2, size_y=0.4, height=height,
+                         remove=False).success:
+                raise RuntimeError("place_box refused")
+            return zone.tripped(rospy.get_time())
+
+        out = []
+        for name, angle, _index, limit, edge in sides:
+            row = {"side": name, "zone_m": limit, "footprint_edge_m": round(edge, 3)}
+            for key, dist in (("zone_edge", limit - 0.03), ("footprint", edge + 0.05)):
+                h = analysis.lowest_true(lambda hh, a=angle, d=dist: seen(a, d, hh), 0.01, 0.8, 0.01)
+                row[key + "_dist_m"] = round(dist, 3)
+                row[key + "_min_height_m"] = None if h is None else round(h, 3)
+            out.append(row)
+            log("lowest box seen on the %s: %s m just inside the zone (%.2f m from the LiDAR), %s m 5 cm from the "
+                "footprint (%.2f m)" % (name, row["zone_edge_min_height_m"], row["zone_edge_dist_m"],
+                                        row["footprint_min_height_m"], row["footprint_dist_m"]))
+        place(name="probe", remove=True)
+        return {"threshold": threshold, "sides": out,
+                "floor_clearance_m": float(rospy.get_param("/rbd_lidar/floor_clearance", 0.1))}
+    finally:
+        watch.close()
+
+
+def exp_stopping(ctx):
+    """How close to the walking robot a box may land and still be stopped for: the stopping distance.
+
+    The robot walks at full speed towards a goal 2.2 m away (position controller, e-stop released,
+    avoidance off so that it stays where it stopped); a 0.4 m box lands ``gap`` ahead of its
+    footprint; measured on ground truth: the clearance left when it stands, so the distance it
+    needed to stop (gap - clearance) and whether it touched the box. A box landing closer than that
+    distance cannot be avoided by any controller; the demo, the soak and the box experiment drop
+    theirs 0.5 m ahead (outside the stop zone, which reaches 0.37 m ahead of the footprint).
+    """
+    import rospy
+    from geometry_msgs.msg import Pose
+
+    from rbd_bringup.metrics import box_ahead
+    from rbd_msgs.srv import SetPosition
+
+    watch = Watch()
+    op = Operator(watch)
+    set_position = rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)
+    out = {"runs": []}
+    try:
+        op.switch("avoidance", False)
+        op.release()
+        for gap in (0.3, 0.2, 0.15, 0.1, 0.05):
+            op.goto(1.0, 0.0, math.pi)
+            goal = Pose()
+            goal.position.x = -1.2
+            goal.orientation.z, goal.orientation.w = 1.0, 0.0
+            set_position(pose=goal)
+            if not wait_for(lambda: _speed(watch) >= 0.25, 10.0, 0.01):
+                raise RuntimeError("the robot never reached walking speed")
+            x, y, yaw = watch.pose()
+            speed = _speed(watch)
+            bx, by, byaw = box_ahead((x, y, yaw), gap, (BOX, BOX))
+            op.place_box(name="stop_box", x=bx, y=by, yaw=byaw, size_x=BOX, size_y=BOX, height=BOX, remove=False)
+            t_drop = time.monotonic()
+            time.sleep(3.0)
+            clearance, contacts = footprint_trace(watch.since(t_drop), [(bx, by, byaw, BOX, BOX)])
+            run = {"gap_m": gap, "speed_mps": round(speed, 3), "clearance_m": round(clearance, 3),
+                   "stopping_distance_m": round(gap - max(clearance, 0.0), 3), "contacts": contacts}
+            out["runs"].append(run)
+            log("box %.2f m ahead of the footprint at %.2f m/s: stopped with %.3f m left (stopping distance %.3f m), "
+                "contacts %d" % (gap, speed, clearance, run["stopping_distance_m"], contacts))
+            op.place_box(name="stop_box", remove=True)
+            watch.wait_state(("WAITING_FOR_GESTURE",), 10.0)
+        op.switch("avoidance", True)
+    finally:
+        watch.close()
+    safe = [r["gap_m"] for r in out["runs"] if r["contacts"] == 0]
+    out["smallest_gap_without_contact_m"] = min(safe) if safe else None
+    out["max_stopping_distance_m"] = max(r["stopping_distance_m"] for r in out["runs"] if r["contacts"] == 0) \
+        if safe else None
+    return out
 
 
 def exp_wall(ctx):
@@ -435,7 +554,10 @@ def exp_wall(ctx):
 
 
 def exp_visitor(ctx):
-    """A visitor walks at the idle robot (0.5 and 1.0 m/s), stops 0.55 m from its home, leaves."""
+    """Visitors walk at the idle robot: one at 0.5 and 1.0 m/s, then two (ahead, then behind it).
+
+    Short form (make test): the two-visitor run only.
+    """
     import rospy
 
     watch = Watch()
@@ -445,10 +567,9 @@ def exp_visitor(ctx):
         op.switch("dodge", True)
         op.release()
         dodge_max = float(rospy.get_param("/rbd_controller/dodge_max", 0.5))
-        speeds = (1.0,) if ctx.short else (0.5, 1.0)
-        for v in speeds:
-            run = visitor_run(watch, op, v, dodge_max)
-            out["runs"].append(run)
+        runs = [(1.0, True)] if ctx.short else [(0.5, False), (1.0, False), (1.0, True)]
+        for v, second in runs:
+            out["runs"].append(visitor_run(watch, op, v, dodge_max, second))
         op.switch("dodge", False)
     finally:
         watch.close()
@@ -456,62 +577,140 @@ def exp_visitor(ctx):
     return out
 
 
-def visitor_run(watch, op, v, dodge_max):
-    """One approach at v [m/s]: walk in from 2.2 m to 0.55 m, stand 3 s, walk away to 3 m."""
-    from rbd_bringup.metrics import outside_polygon
+class Visitors:
+    """Scripted visitors (cylinders through /rbd_sim/place_obstacle) on the home pose's axis, 20 Hz.
+
+    Positions are distances along the robot's heading at home (> 0 ahead, < 0 behind); every
+    update is recorded with each visitor's velocity, for contacts and for "never towards".
+    """
+
+    RADIUS = 0.22
+
+    def __init__(self, op, home):
+        self.op = op
+        self.home = home
+        self.at = {}  # name -> distance along the axis [m]
+        self.track = []  # (t, [(name, x, y, radius, vx, vy)])
+
+    def _xy(self, d):
+        x, y, yaw = self.home
+        return x + d * math.cos(yaw), y + d * math.sin(yaw)
+
+    def _record(self, velocity):
+        t = time.monotonic()
+        c, s = math.cos(self.home[2]), math.sin(self.home[2])
+        people = []
+        for name, d in self.at.items():
+            x, y = self._xy(d)
+            v = velocity.get(name, 0.0)
+            people.append((name, x, y, self.RADIUS, v * c, v * s))
+        self.track.append((t, people))
+
+    def move(self, moves, speed):
+        """Walk each (name, from, to) at speed [m/s], together; blocks until all arrived."""
+        n = max(1, int(max(abs(b - a) for _, a, b in moves) / speed * 20))
+        velocity = {name: math.copysign(speed, b - a) for name, a, b in moves}
+        for i in range(n + 1):
+            for name, a, b in moves:
+                self.at[name] = a + (b - a) * i / n
+                x, y = self._xy(self.at[name])
+                self.op.place_cylinder(name=name, x=x, y=y, radius=self.RADIUS, height=1.7, remove=False)
+            self._record(velocity if i < n else {})
+            time.sleep(0.05)
+
+    def stand(self, seconds):
+        """Everybody stands still for seconds."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self._record({})
+            time.sleep(0.05)
+
+    def leave(self):
+        """Take every visitor away."""
+        for name in list(self.at):
+            self.op.place_cylinder(name=name, remove=True)
+        self.at = {}
+        self._record({})
+
+    def people(self, t):
+        """The visitors at time t (nearest record within 0.2 s)."""
+        if not self.track:
+            return []
+        best = min(self.track, key=lambda r: abs(r[0] - t))
+        return best[1] if abs(best[0] - t) < 0.2 else []
+
+
+def visitor_run(watch, op, v, dodge_max, second=False):
+    """One approach at v [m/s]: a visitor walks in from 2.2 m to 0.55 m, stands 3 s and leaves.
+
+    With ``second``, a second visitor walks at the robot from behind at 0.8 m/s as soon as it steps
+    back from the first (DODGING, moving), up to 1.1 m behind home: the robot must not back into
+    them (``never towards a moving person``, on ground truth).
+    """
+    from rbd_bringup.metrics import TowardsMonitor, footprint_clearance, outside_polygon
 
     watch.wait_state(("WAITING_FOR_GESTURE",), 30.0)
     time.sleep(1.0)
     home = watch.pose()
     x, y, yaw = home
-    c, s = math.cos(yaw), math.sin(yaw)
-    radius = 0.22
-    track = []
+    crowd = Visitors(op, home)
     t0 = time.monotonic()
-
-    def walk(d0, d1, speed):
-        n = max(1, int(abs(d1 - d0) / speed * 20))
-        for i in range(n + 1):
-            d = d0 + (d1 - d0) * i / n
-            px, py = x + d * c, y + d * s
-            op.place_cylinder(name="visitor", x=px, y=py, radius=radius, height=1.7, remove=False)
-            track.append((time.monotonic(), px, py, radius))
-            time.sleep(0.05)
-
-    walk(2.2, 0.55, v)
-    hold_until = time.monotonic() + 3.0
-    while time.monotonic() < hold_until:
-        track.append((time.monotonic(), x + 0.55 * c, y + 0.55 * s, radius))
-        time.sleep(0.05)
-    walk(0.55, 3.0, v)
-    op.place_cylinder(name="visitor", remove=True)
+    crowd.move([("visitor", 2.2, 0.55)], v)
+    second_started = None
+    if second:
+        moving_back = wait_for(lambda: watch.state == "DODGING" and _speed(watch) > 0.05, 5.0, 0.02)
+        second_started = watch.state if moving_back else None
+        crowd.move([("visitor2", -2.0, -1.1)], 0.8)
+    crowd.stand(3.0)
+    crowd.move([(n, d, math.copysign(3.0, d)) for n, d in crowd.at.items()], v)
+    crowd.leave()
     back = wait_for(lambda: watch.state == "WAITING_FOR_GESTURE" and _near(watch.pose(), home, 0.06), 40.0)
     time.sleep(0.5)
     t1 = time.monotonic()
     samples = watch.since(t0)
-
-    def people(t):
-        best = min(track, key=lambda p: abs(p[0] - t))
-        return [best[1:]] if abs(best[0] - t) < 0.2 else []
-
-    min_c, contacts = footprint_trace(samples, [], people)
-    offsets = [math.hypot(q[1] - x, q[2] - y) for q in samples]
+    towards = TowardsMonitor()
+    min_c, contacts, touching = math.inf, 0, False
+    behind_while_dodging = False
     with watch.lock:
+        states = [(t, st) for t, st in watch.states if t0 <= t <= t1]
         arena = watch.arena
-        states = [st for t, st in watch.states if t0 <= t <= t1]
         events = [e for t, e in watch.events if t0 <= t <= t1]
+    for t, rx, ry, ryaw, _, vx, vy in samples:
+        people = crowd.people(t)
+        d = min([footprint_clearance((rx, ry), ryaw, (p[1], p[2]), p[3]) for p in people] or [math.inf])
+        min_c = min(min_c, d)
+        contacts += d <= 0.0 and not touching
+        touching = d <= 0.0
+        towards.update(t, (rx, ry), ryaw, (vx, vy), people)
+        state = next((st for ts, st in reversed(states) if ts <= t), "")
+        if state == "DODGING" and any(p[0] == "visitor2" and footprint_clearance((rx, ry), ryaw, (p[1], p[2]), p[3])
+                                      < towards.band for p in people):
+            behind_while_dodging = True
+    offsets = [math.hypot(q[1] - x, q[2] - y) for q in samples]
     exits = sum(1 for q in samples if arena and outside_polygon((q[1], q[2]), arena))
     end = watch.pose()
-    run = {"speed_mps": v, "home": list(home), "min_clearance_m": min_c, "contacts": contacts,
-           "max_offset_m": max(offsets) if offsets else 0.0, "dodge_max_m": dodge_max,
+    run = {"speed_mps": v, "second_visitor": bool(second), "home": list(home), "min_clearance_m": min_c,
+           "contacts": contacts, "max_offset_m": max(offsets) if offsets else 0.0, "dodge_max_m": dodge_max,
            "returned": bool(back), "final_offset_m": math.hypot(end[0] - x, end[1] - y),
-           "arena_exit_samples": exits, "arena": arena, "states": states, "events": events,
-           "dodged": "DODGING" in states, "path": [(q[1], q[2]) for q in samples[::3]],
-           "visitor": [(p[1], p[2]) for p in track[::4]]}
-    log("visitor %.1f m/s: dodged %s, max offset %.3f m, min clearance %.3f m, contacts %d, back home %s "
-        "(%.3f m), arena exits %d" % (v, run["dodged"], run["max_offset_m"], min_c, contacts, back,
-                                     run["final_offset_m"], exits))
+           "arena_exit_samples": exits, "arena": arena, "states": [st for _, st in states], "events": events,
+           "dodged": any(st == "DODGING" for _, st in states), "path": [(q[1], q[2]) for q in samples[::3]],
+           "visitor": [(p[1], p[2]) for _, ps in crowd.track[::4] for p in ps if p[0] == "visitor"],
+           "visitor2": [(p[1], p[2]) for _, ps in crowd.track[::4] for p in ps if p[0] == "visitor2"],
+           "towards_checked": towards.checked,
+           "max_towards_moving_person_mps": None if towards.checked == 0 else towards.max_towards,
+           "towards_violations": [[round(t - t0, 2), n, round(vt, 3)] for t, n, vt in towards.violations],
+           "second_visitor_started_in": second_started, "second_visitor_near_while_dodging": behind_while_dodging}
+    log("visitor %.1f m/s%s: dodged %s, max offset %.3f m, min clearance %.3f m, contacts %d, back home %s "
+        "(%.3f m), arena exits %d; towards a moving person: %d samples checked, max %s m/s, %d violations"
+        % (v, " + a second one from behind" if second else "", run["dodged"], run["max_offset_m"], min_c, contacts,
+           back, run["final_offset_m"], exits, towards.checked, run["max_towards_moving_person_mps"],
+           len(towards.violations)))
     return run
+
+
+def _speed(watch):
+    with watch.lock:
+        return watch.truth[-1][4] if watch.truth else 0.0
 
 
 def _near(pose, home, tol):
@@ -580,11 +779,17 @@ def plot_visitor(ctx, runs):
         ax.add_patch(plt.Circle((hx, hy), r["dodge_max_m"], fill=False, ls="--", color="0.5", label="dodge_max"))
         ax.plot([p[0] for p in r["visitor"]], [p[1] for p in r["visitor"]], ".", color="tab:orange", ms=3,
                 label="visitor centre")
+        if r.get("visitor2"):
+            ax.plot([p[0] for p in r["visitor2"]], [p[1] for p in r["visitor2"]], ".", color="tab:red", ms=3,
+                    label="second visitor (from behind)")
         ax.plot([p[0] for p in r["path"]], [p[1] for p in r["path"]], color="tab:blue", lw=1.5,
                 label="robot (ground truth)")
         ax.plot(hx, hy, "go", label="home")
-        ax.set_title("visitor at %.1f m/s: max offset %.2f m, min clearance %.2f m" % (
-            r["speed_mps"], r["max_offset_m"], r["min_clearance_m"]), fontsize=8)
+        towards = r.get("max_towards_moving_person_mps")
+        ax.set_title("%s at %.1f m/s: max offset %.2f m, min clearance %.2f m%s" % (
+            "two visitors" if r.get("second_visitor") else "visitor", r["speed_mps"], r["max_offset_m"],
+            r["min_clearance_m"], "" if towards is None else "\nmax speed towards a moving person %.2f m/s" % towards),
+            fontsize=8)
         ax.set_aspect("equal", adjustable="datalim")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=6)

@@ -95,6 +95,20 @@ def test_find_flip_bisects_and_refuses_a_bad_bracket():
     assert analysis.find_flip(lambda d: False, 0.4, 1.0, 0.01) is None  # never trips
 
 
+def test_lowest_true_bisects_up_and_refuses_a_bad_bracket():
+    calls = []
+
+    def taller_than(h):
+        calls.append(h)
+        return h >= 0.137
+
+    h = analysis.lowest_true(taller_than, 0.0, 0.6, 0.01)
+    assert 0.137 <= h < 0.147 and taller_than(h)
+    assert len(calls) <= 2 + 7 + 1
+    assert analysis.lowest_true(lambda h: False, 0.0, 0.6, 0.01) is None  # never seen
+    assert analysis.lowest_true(lambda h: True, 0.0, 0.6, 0.01) is None  # seen even at 0: bad bracket
+
+
 def test_rows_pass_and_fail_on_the_thesis_bounds():
     good = {"path": {"max_deviation_m": 0.05, "total_time_s": 25.0, "final_position_error_m": 0.01, "full": True},
             "boundary": {"sides": [{"side": "front", "target_m": 0.7, "measured_m": 0.75}]},

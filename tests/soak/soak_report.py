@@ -179,6 +179,8 @@ class BoxWatch:
     def on_clearance(self, t: float, name: str, clearance: float) -> None:
         """Footprint-box clearance [m] of box ``name`` at t: the smallest per drop, with the state then."""
         drop = self.drops[-1] if self.drops and self.drops[-1]["name"] == name else None
+        if drop is not None and t - drop["t"] <= 3.0 and clearance < drop.get("clearance_3s_m", math.inf):
+            drop["clearance_3s_m"] = round(clearance, 3)  # the stop for the box: gap - this = stopping distance
         if drop is not None and clearance < drop.get("min_clearance_m", math.inf):
             drop["min_clearance_m"] = round(clearance, 3)
             drop["min_clearance_after_s"] = round(t - drop["t"], 2)

@@ -84,3 +84,25 @@ def test_box_ahead_rejects_bad_input():
                 (float("nan"), (0.4, 0.4), 0.0), (0.3, (0.4, 0.4), 1.0)):  # the last: 1 m beside the robot
         with pytest.raises(ValueError):
             box_ahead((0.0, 0.0, 0.0), bad[0], bad[1], lateral=bad[2])
+
+
+def test_towards_monitor_flags_motion_towards_a_moving_person_after_the_reaction_time():
+    from rbd_bringup.metrics import TowardsMonitor
+
+    m = TowardsMonitor(band=0.5, reaction=0.5)
+    # A person walks at 0.5 m/s towards the front of a robot that backs away: never a violation.
+    for i in range(20):
+        t = 0.1 * i
+        m.update(t, (0.0, 0.0), 0.0, (-0.1, 0.0), [("p", 1.0 - 0.05 * i, 0.0, 0.2, -0.5, 0.0)])
+    assert m.violations == [] and m.checked > 0 and m.max_towards < 0.0
+    # Walking into a person who walks across its way 0.3 m ahead: allowed for the reaction time only.
+    m = TowardsMonitor(band=0.5, reaction=0.5)
+    for i in range(10):
+        m.update(0.1 * i, (0.0, 0.0), 0.0, (0.2, 0.0), [("p", 0.75, 0.5 - 0.1 * i, 0.2, 0.0, -1.0)])
+    assert [round(t, 1) for t, _, _ in m.violations] == [0.5, 0.6, 0.7, 0.8, 0.9]
+    assert m.max_towards == pytest.approx(0.2, abs=0.05)
+    # A person standing still (or far away) is not a moving person: nothing is checked.
+    m = TowardsMonitor()
+    m.update(0.0, (0.0, 0.0), 0.0, (0.2, 0.0), [("p", 0.7, 0.0, 0.2, 0.0, 0.0), ("q", 3.0, 0.0, 0.2, -1.0, 0.0)])
+    m.update(1.0, (0.0, 0.0), 0.0, (0.2, 0.0), [("p", 0.7, 0.0, 0.2, 0.0, 0.0), ("q", 3.0, 0.0, 0.2, -1.0, 0.0)])
+    assert m.checked == 0 and m.violations == []

@@ -6,7 +6,7 @@ cylinder's surface; a clearance <= 0 is a contact.
 """
 
 import math
-from typing import Iterable, List, Optional, Tuple
+from typing import Dict, Iterable, List, Optional, Tuple
 
 #: Unitree A1 footprint [m]: the feet span about 0.50 m x 0.30 m (body 0.267 x 0.194).
 A1_FOOTPRINT_LENGTH = 0.50
@@ -206,3 +206,69 @@ class ContactMonitor:
             self.min_clearance = sample_min
             self.min_clearance_at = stamp
         return sample_min
+
+
+class TowardsMonitor:
+    """The rule "never move towards a moving person" (issue 17), measured on ground truth.
+
+    For every sample, each person who moves (faster than ``person_speed``) and is within ``band``
+    of the footprint is checked: the robot's velocity component towards the person's axis must
+    not exceed ``tolerance``. A person who has just come that close is given ``reaction`` seconds:
+    the zone can only stop a motion that is already under way after it saw the person (the
+    thesis measured 0.44 ± 0.09 s from intrusion to standing still).
+
+    Args:
+        band: footprint-person clearance within which the rule applies [m].
+        reaction: grace time after a moving person came within the band [s].
+        person_speed: a person faster than this is moving [m/s].
+        tolerance: largest allowed velocity towards such a person [m/s] (ground-truth noise).
+        length: footprint length [m].
+        width: footprint width [m].
+    """
+
+    def __init__(self, band: float = 0.5, reaction: float = 0.55, person_speed: float = 0.1,
+                 tolerance: float = 0.03, length: float = A1_FOOTPRINT_LENGTH,
+                 width: float = A1_FOOTPRINT_WIDTH) -> None:
+        self.band = band
+        self.reaction = reaction
+        self.person_speed = person_speed
+        self.tolerance = tolerance
+        self.length = length
+        self.width = width
+        self.max_towards = -math.inf  # largest velocity towards a moving person after the grace time [m/s]
+        self.checked = 0  # samples with a moving person within the band after the grace time
+        self.violations: List[Tuple[float, str, float]] = []  # (time, person, velocity towards)
+        self._since: Dict[str, float] = {}
+
+    def update(self, stamp: float, robot_xy: Tuple[float, float], robot_yaw: float,
+               robot_velocity: Tuple[float, float],
+               people: Iterable[Tuple[str, float, float, float, float, float]]) -> None:
+        """Add one ground-truth sample.
+
+        Args:
+            stamp: time of the sample [s].
+            robot_xy: footprint centre [m].
+            robot_yaw: heading [rad].
+            robot_velocity: the robot's velocity in the world frame (vx, vy) [m/s].
+            people: (name, x, y, radius, vx, vy) of every person, velocities in the world frame.
+        """
+        near = set()
+        for name, x, y, radius, pvx, pvy in people:
+            if math.hypot(pvx, pvy) <= self.person_speed:
+                continue
+            if footprint_clearance(robot_xy, robot_yaw, (x, y), radius, self.length, self.width) >= self.band:
+                continue
+            near.add(name)
+            since = self._since.setdefault(name, stamp)
+            if stamp - since < self.reaction:
+                continue
+            dx, dy = x - robot_xy[0], y - robot_xy[1]
+            dist = math.hypot(dx, dy)
+            towards = (robot_velocity[0] * dx + robot_velocity[1] * dy) / dist if dist > 1e-9 else 0.0
+            self.checked += 1
+            self.max_towards = max(self.max_towards, towards)
+            if towards > self.tolerance:
+                self.violations.append((stamp, name, towards))
+        for name in list(self._since):
+            if name not in near:
+                del self._since[name]
