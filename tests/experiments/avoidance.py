@@ -145,8 +145,8 @@ class Operator:
         self.place_cylinder = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
         self.String = String
 
-    def goto(self, x, y, yaw):
-        """Walk the waiting robot to a world pose (the position controller directly)."""
+    def goto(self, x, y, yaw, rehome=True):
+        """Walk the waiting robot to a world pose (the position controller directly); home is there then."""
         import rospy
         from geometry_msgs.msg import Pose
 
@@ -163,6 +163,11 @@ class Operator:
 
         wait_for(there, 40.0)
         time.sleep(1.0)
+        if rehome and self.watch.state == "WAITING_FOR_GESTURE":
+            # Like an operator who puts the robot somewhere new: e-stop, release there = its new home.
+            self.em_stop(True)
+            self.watch.wait_state(("EMERGENCY_STOP",), 5.0)
+            self.release()
 
     def release(self):
         """E-stop off, waiting for gestures."""
