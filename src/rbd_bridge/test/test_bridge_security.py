@@ -7,11 +7,12 @@ import time
 
 import pytest
 import roslibpy
-from rbd_bridge_testing import ROOTCONF, master_of, start_bridge, wait_until
+from rbd_bridge_testing import master_of, start_bridge, wait_until
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 from rbd_bridge.security import make_mac
+from rbd_testkit import RosEnv
 
 SECRET = "0123456789abcdef"
 
@@ -19,7 +20,7 @@ SECRET = "0123456789abcdef"
 @pytest.fixture(scope="module")
 def robodog():
     """Master + the bridge exactly as rbd_bridge.launch starts it (RoboDog allow-list)."""
-    env = ROOTCONF.RosEnv()
+    env = RosEnv()
     try:
         port, _ = start_bridge(env, launch="rbd_bridge.launch")
         secret_file = os.path.join(env.home, "secret")
