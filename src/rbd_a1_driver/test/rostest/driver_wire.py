@@ -11,7 +11,6 @@ import unittest
 
 import lcm
 import rospy
-import rostest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
@@ -20,6 +19,8 @@ from std_msgs.msg import Bool
 
 from rbd_a1_driver import unitree_layout as ul
 from rbd_msgs.srv import SetBodyPose
+from rbd_testkit import wait_for
+from rbd_testkit.ros import run_rostest
 
 PKG = "rbd_a1_driver"
 
@@ -40,9 +41,12 @@ class DriverWire(unittest.TestCase):
         cls.state = ul.HighState()
         cls.state_on = True
         cls.running = True
+        cls.estop_value = None  # last e-stop flag sent
+        cls.estop_periodic = False  # a periodic e-stop source (10 Hz, like rbd_controller) is running
+        cls.estop_last = 0.0  # monotonic time of the last e-stop message
         cls.lc = lcm.LCM(rospy.get_param("~lcm_url"))
         cls.lc.subscribe(ul.CHANNEL_HIGH_CMD, cls._on_cmd)
-        for target in (cls._rx, cls._tx):
+        for target in (cls._rx, cls._tx, cls._estop_source):
             th = threading.Thread(target=target)
             th.daemon = True
             th.start()
@@ -51,9 +55,31 @@ class DriverWire(unittest.TestCase):
         cls.diag = []
         rospy.Subscriber("/diagnostics", DiagnosticArray, cls.diag.append)
         rospy.wait_for_message("/rbd_a1_driver/odom", Odometry, timeout=60.0)
-        deadline = time.monotonic() + 30.0
-        while cls.pub.get_num_connections() == 0 and time.monotonic() < deadline:
-            time.sleep(0.05)
+        wait_for(lambda: cls.pub.get_num_connections() > 0, 30.0)
+
+    def setUp(self):
+        """Known state, whatever ran before: default fresh HighState, e-stop released, the driver walking."""
+        with self.lock:
+            DriverWire.state = ul.HighState()
+        DriverWire.state_on = True
+        if self.estop_value is not False:
+            self.set_estop(False)  # only when needed: two one-shot messages < 0.5 s apart would arm the watchdog
+        wait_for(lambda: self.send(twist(0.3), 0.1) and abs(self.last().velocity[0] - 0.3) < 1e-5, 5.0,
+                 what="the driver walking on cmd_vel")
+
+    @classmethod
+    def set_estop(cls, value):
+        """Send one e-stop message (and make it the value a running periodic source repeats)."""
+        cls.estop_value = value
+        cls.estop_last = time.monotonic()
+        cls.estop.publish(Bool(value))
+
+    @classmethod
+    def _estop_source(cls):
+        while cls.running:
+            if cls.estop_periodic and cls.estop_value is not None:
+                cls.set_estop(cls.estop_value)
+            time.sleep(0.1)
 
     @classmethod
     def tearDownClass(cls):
@@ -100,13 +126,13 @@ class DriverWire(unittest.TestCase):
             time.sleep(1.0 / rate)
         return t_pub
 
-    def test_0_every_packet_is_a_valid_v33_high_cmd(self):
+    def test_every_packet_is_a_valid_v33_high_cmd(self):
         time.sleep(0.5)
         self.assertEqual(self.bad, [])
         with self.lock:
             self.assertGreater(len(self.cmds), 20)
 
-    def test_1_cmd_vel_to_velocity_walk(self):
+    def test_cmd_vel_to_velocity_walk(self):
         self.send(twist(0.3, 0.1, 0.2), 0.5)
         c = self.last()
         self.assertEqual((c.mode, c.gait_type), (ul.MODE_VELOCITY_WALK, ul.GAIT_TROT))
@@ -114,14 +140,14 @@ class DriverWire(unittest.TestCase):
         self.assertAlmostEqual(c.velocity[1], 0.1, places=5)
         self.assertAlmostEqual(c.yaw_speed, 0.2, places=5)
 
-    def test_2_clamped(self):
+    def test_clamped(self):
         self.send(twist(5.0, -5.0, 9.0), 0.5)
         c = self.last()
         self.assertAlmostEqual(c.velocity[0], 0.5, places=5)
         self.assertAlmostEqual(c.velocity[1], -0.3, places=5)
         self.assertAlmostEqual(c.yaw_speed, 1.0, places=5)
 
-    def test_3_zero_after_025s_without_cmd_vel(self):
+    def test_zero_after_025s_without_cmd_vel(self):
         t_last = self.send(twist(0.3), 0.5)
         time.sleep(0.8)
         cmds = self.since(t_last)
@@ -132,7 +158,7 @@ class DriverWire(unittest.TestCase):
         self.assertLess(delay, 0.45)
         self.assertTrue(all(c.velocity == (0.0, 0.0) for t, c in cmds if t > first_zero))
 
-    def test_4_nan_gives_zero(self):
+    def test_nan_gives_zero(self):
         self.send(twist(0.3), 0.3)
         t0 = time.monotonic()
         self.send(twist(float("nan")), 0.3)
@@ -140,25 +166,25 @@ class DriverWire(unittest.TestCase):
         self.assertTrue(late)
         self.assertTrue(all(c.velocity == (0.0, 0.0) for c in late))
 
-    def test_5_estop(self):
+    def test_estop(self):
         released = False
         try:
             self.send(twist(0.3), 0.3)
-            self.estop.publish(Bool(True))
+            self.set_estop(True)
             t0 = time.monotonic()
             self.send(twist(0.3), 0.5)
             late = [c for t, c in self.since(t0 + 0.1)]
             self.assertTrue(all(c.velocity == (0.0, 0.0) for c in late))
             time.sleep(0.3)  # one-shot messages > estop_timeout apart: the signal watchdog stays unarmed
-            self.estop.publish(Bool(False))
+            self.set_estop(False)
             released = True
             self.send(twist(0.3), 0.3)
             self.assertAlmostEqual(self.last().velocity[0], 0.3, places=5)
         finally:
             if not released:
-                self.estop.publish(Bool(False))
+                self.set_estop(False)
 
-    def test_6_stale_high_state_gives_zero_and_error(self):
+    def test_stale_high_state_gives_zero_and_error(self):
         try:
             self.send(twist(0.3), 0.3)
             DriverWire.state_on = False
@@ -180,7 +206,7 @@ class DriverWire(unittest.TestCase):
         self.send(twist(0.3), 0.3)
         self.assertAlmostEqual(self.last().velocity[0], 0.3, places=5)
 
-    def test_7_body_pose_force_stand(self):
+    def test_body_pose_force_stand(self):
         call = rospy.ServiceProxy("/set_body_pose", SetBodyPose)
         rospy.wait_for_service("/set_body_pose", timeout=10.0)
         self.assertTrue(call(0.2, -0.3, 0.1, -0.1).success)
@@ -193,7 +219,7 @@ class DriverWire(unittest.TestCase):
             self.assertAlmostEqual(got, want, places=5)
         self.assertTrue(call(0.0, 0.0, 0.0, 0.0).success)
 
-    def test_8_odom_and_imu_from_high_state(self):
+    def test_odom_and_imu_from_high_state(self):
         s = ul.HighState()
         s.position = (1.5, -0.5, 0.0)
         s.quaternion = (math.cos(0.25), 0.0, 0.0, math.sin(0.25))  # yaw 0.5 rad
@@ -217,15 +243,20 @@ class DriverWire(unittest.TestCase):
         self.assertAlmostEqual(imu.linear_acceleration.z, 9.8, places=5)
         self.assertAlmostEqual(imu.orientation.z, math.sin(0.25), places=5)
 
-    def test_9_estop_signal_lost_engages_until_fresh_false(self):
-        """A periodic e-stop source that goes silent (controller killed) engages the gate."""
-        period = 0.1
-        t_last = time.monotonic()
+    def test_estop_signal_lost_engages_until_fresh_false(self):
+        """A periodic e-stop source that goes silent (controller killed) engages the gate.
+
+        The watchdog stays armed for the rest of the run: the periodic source is left running for
+        the tests that follow (as rbd_controller runs beside the driver).
+        """
         try:
-            for _ in range(15):  # 1.5 s: periodic false (armed) while walking
-                self.estop.publish(Bool(False))
-                t_last = self.send(twist(0.3), period)
+            DriverWire.estop_value = False
+            DriverWire.estop_periodic = True
+            self.send(twist(0.3), 1.5)  # periodic false (armed) while walking
             self.assertAlmostEqual(self.last().velocity[0], 0.3, places=5, msg="not walking while armed")
+            DriverWire.estop_periodic = False
+            time.sleep(0.15)  # the source thread's last message
+            t_last = self.estop_last
             self.send(twist(0.3), 1.5)  # e-stop messages stop; cmd_vel keeps coming
             late = [c for t, c in self.since(t_last + 0.5 + 0.3)]
             self.assertTrue(late)
@@ -240,12 +271,13 @@ class DriverWire(unittest.TestCase):
                 time.sleep(0.05)
             self.assertIn("e-stop signal lost", self.diag[-1].status[0].message)
             self.assertEqual(self.last().velocity, (0.0, 0.0))
-            self.estop.publish(Bool(False))  # a fresh false releases
+            self.set_estop(False)  # a fresh false releases
             self.send(twist(0.3), 0.3)
             self.assertAlmostEqual(self.last().velocity[0], 0.3, places=5, msg="no motion after a fresh false")
         finally:
-            self.estop.publish(Bool(False))
+            DriverWire.estop_value = False
+            DriverWire.estop_periodic = True
 
 
 if __name__ == "__main__":
-    rostest.rosrun(PKG, "driver_wire", DriverWire)
+    run_rostest(PKG, "driver_wire", DriverWire)

@@ -13,7 +13,6 @@ import unittest
 
 import dynamic_reconfigure.client
 import rospy
-import rostest
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Log
@@ -22,7 +21,9 @@ from std_msgs.msg import Float32
 from std_srvs.srv import SetBool, SetBoolResponse
 from visualization_msgs.msg import Marker
 
+import rbd_testkit
 from rbd_msgs.msg import CollisionState
+from rbd_testkit.ros import run_rostest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import synthetic_cloud  # noqa: E402
@@ -138,13 +139,11 @@ class SyntheticLidarTest(unittest.TestCase):
             return len(self.published), len(self.states), len(self.calls)
 
     def wait_for(self, predicate, timeout, what):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not rospy.is_shutdown():
+        def locked():
             with self.lock:
-                if predicate():
-                    return
-            time.sleep(0.02)
-        self.fail("timed out waiting for " + what)
+                return predicate()
+
+        rbd_testkit.wait_for(locked, timeout, 0.02, what=what, abort=rospy.is_shutdown)
 
     def state_for(self, stamp, timeout=3.0):
         found = []
@@ -166,7 +165,7 @@ class SyntheticLidarTest(unittest.TestCase):
             self.skipTest("odom attitude run only")
         self.run_wiring()
 
-    def test_zz_imu_attitude(self):
+    def test_imu_attitude(self):
         """attitude_source imu: the tilted floor is rejected once the LiDAR's IMU reports the tilt."""
         if rospy.get_param("~attitude", "odom") != "imu":
             self.skipTest("imu attitude run only")
@@ -313,4 +312,4 @@ class SyntheticLidarTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_lidar", "synthetic_lidar", SyntheticLidarTest)
+    run_rostest("rbd_lidar", "synthetic_lidar", SyntheticLidarTest)
