@@ -8,6 +8,7 @@ as one ``FAULT_RESULT {json}`` line (and appended to $RBD_FAULT_LOG if set) for 
 """
 
 import copy
+import functools
 import math
 import os
 import signal
@@ -17,14 +18,15 @@ import unittest
 
 import rosgraph
 import rospy
-import rostest
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import Header, String
 from std_srvs.srv import SetBool
 
+import rbd_testkit
 from rbd_bringup import a1_monitor
+from rbd_testkit.ros import run_rostest
 
 TRUTH_STILL = 0.02  # ground-truth speed below this is "stopped" [m/s, rad/s]
 MOVING = 0.08  # ground-truth speed above this is "walking"
@@ -34,8 +36,8 @@ def speed_of_twist(t):
     return max(math.hypot(t.linear.x, t.linear.y), abs(t.angular.z))
 
 
-def wait_for(predicate, timeout, step=0.05):
-    return a1_monitor.wait_for(predicate, timeout, step, abort=rospy.is_shutdown)
+# The kit's wait_for, ending early when ROS shuts down.
+wait_for = functools.partial(rbd_testkit.wait_for, abort=rospy.is_shutdown)
 
 
 def node_pid(name):
@@ -464,4 +466,4 @@ class Faults(unittest.TestCase):
 
 if __name__ == "__main__":
     rospy.init_node("test_faults")
-    rostest.rosrun("rbd_bringup", "faults_" + rospy.get_param("~fault"), Faults)
+    run_rostest("rbd_bringup", "faults_" + rospy.get_param("~fault"), Faults)

@@ -1,21 +1,22 @@
 #!/usr/bin/env python3
 """rostest: sim.launch brings up the whole simulated system; e-stop first, then a trick."""
 
+import functools
 import math
 import time
 import unittest
 
 import rosnode
 import rospy
-import rostest
 import tf2_ros
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
 
-from rbd_bringup import a1_monitor
+import rbd_testkit
 from rbd_bringup.a1_monitor import yaw_of
+from rbd_testkit.ros import run_rostest
 
 EXPECTED_NODES = [
     "/mock_a1", "/rbd_a1_driver", "/os1_sim", "/zed2_sim", "/world", "/robot_state_publisher",
@@ -23,8 +24,8 @@ EXPECTED_NODES = [
 ]
 
 
-def wait_for(predicate, timeout, step=0.05):
-    return a1_monitor.wait_for(predicate, timeout, step, abort=rospy.is_shutdown)
+# The kit's wait_for, ending early when ROS shuts down.
+wait_for = functools.partial(rbd_testkit.wait_for, abort=rospy.is_shutdown)
 
 
 class SimSmoke(unittest.TestCase):
@@ -105,4 +106,4 @@ class SimSmoke(unittest.TestCase):
 
 if __name__ == "__main__":
     rospy.init_node("test_sim_smoke")
-    rostest.rosrun("rbd_bringup", "sim_smoke", SimSmoke)
+    run_rostest("rbd_bringup", "sim_smoke", SimSmoke)
