@@ -97,8 +97,8 @@ class RosEnv:
         Args:
             cmd: the command line.
             name: log file name (``<log_dir>/<name>.log``); default ``proc-<n>``.
-            capture: give the caller the output as a text pipe (``proc.stdout``) instead of a log
-                file; the caller must keep reading it.
+            capture: give the caller the output as a text pipe (``proc.stdout``, undecodable bytes
+                replaced) instead of a log file; the caller must keep reading it.
             **popen_kwargs: passed to ``subprocess.Popen`` (e.g. ``cwd``, ``env``).
 
         Returns:
@@ -108,7 +108,8 @@ class RosEnv:
         path = os.path.join(self.log_dir, "%s.log" % (name or "proc-%d" % len(self.procs)))
         if capture:
             proc = subprocess.Popen(list(cmd), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                    universal_newlines=True, start_new_session=True, **popen_kwargs)
+                                    universal_newlines=True, errors="replace", start_new_session=True,
+                                    **popen_kwargs)
             self._logs[proc.pid] = (path, None)
         else:
             log = open(path, "w")
