@@ -63,7 +63,7 @@ def timings(path):
                 continue
     name = os.path.basename(path)
     whole = None
-    if name.startswith("rostest-"):  # catkin's result of one .test file: its suite time is the whole run
+    if name.startswith("rostest-"):  # catkin's result of one .test file
         try:
             whole = (sum(float(s.get("time", 0.0)) for s in suites), "%s/%s" % (os.path.basename(os.path.dirname(path)),
                                                                                 name[len("rostest-"):-len(".xml")]))
@@ -86,7 +86,7 @@ def print_report(phases, slowest, seed, cases, rostests):
         for seconds, label in sorted(cases, reverse=True)[:slowest]:
             print("  %7.1f s  %s" % (seconds, label))
         if rostests:
-            print("slowest %d rostest files (whole run incl. launch):" % slowest)
+            print("slowest %d rostest files (time rostest reports for the file):" % slowest)
             for seconds, label in sorted(rostests, reverse=True)[:slowest]:
                 print("  %7.1f s  %s" % (seconds, label))
     if seed:

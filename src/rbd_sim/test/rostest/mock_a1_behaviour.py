@@ -130,10 +130,13 @@ class MockA1Behaviour(unittest.TestCase):
         self.send(twist(0.3), 3.0)
         self.send(twist(), 0.5)
         end = self.settle()
-        moved = end[0] - start[0]
+        # Along and across the heading at the start (an earlier test may have turned the robot).
+        dx, dy, yaw = end[0] - start[0], end[1] - start[1], start[5]
+        moved = dx * math.cos(yaw) + dy * math.sin(yaw)
+        sideways = -dx * math.sin(yaw) + dy * math.cos(yaw)
         rospy.loginfo("MEASURED forward 0.3 m/s x 3 s: %.3f m", moved)
         self.assertAlmostEqual(moved, 0.9, delta=0.045, msg="moved %.3f m" % moved)
-        self.assertLess(abs(end[1] - start[1]), 0.01)
+        self.assertLess(abs(sideways), 0.01)
 
     def test_no_cmd_vel_for_025s_stops(self):
         self.settle()
