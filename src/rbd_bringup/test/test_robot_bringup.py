@@ -36,6 +36,9 @@ from rbd_testkit import RosEnv, free_port, stop_process, wait_for, wait_for_port
 PKG = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MOUNTS = os.path.join(PKG, "config", "mounts.yaml")
 NAMES = ["%s_%s_joint" % (leg, j) for leg in ("FR", "FL", "RR", "RL") for j in ("hip", "thigh", "calf")]
+EXPECTED_NODES = {"/rbd_a1_driver", "/rbd_lidar", "/ekf_localization", "/map_correction", "/robot_state_publisher",
+                  "/joint_state_fallback", "/cloud_decimator", "/rbd_controller", "/rbd_pos_controller",
+                  "/rbd_navigation", "/rbd_gestrec", "/rbd_bridge", "/zed2/zed_node"}
 
 
 def free_udp_port():
@@ -138,16 +141,17 @@ def robot(standin_path):
                    "lcm_url:=" + lcm_url, "bridge_port:=%d" % bridge_port])
         env.use_in_this_process()
         rospy.init_node("bringup_test", anonymous=True, disable_signals=True)
-        yield Robot(env, bridge_port)
+        robot = Robot(env, bridge_port)
+        # Every test starts with the whole robot side up, whichever runs first (Python nodes take
+        # tens of seconds to start on a loaded 2-core machine).
+        assert wait_for(lambda: EXPECTED_NODES <= robot.nodes(), 90.0, 0.5), EXPECTED_NODES - robot.nodes()
+        yield robot
     finally:
         env.close()
 
 
 def test_robot_launch_comes_up_in_emergency_stop_with_its_inputs_flowing(robot):
-    expected = {"/rbd_a1_driver", "/rbd_lidar", "/ekf_localization", "/map_correction", "/robot_state_publisher",
-                "/joint_state_fallback", "/cloud_decimator", "/rbd_controller", "/rbd_pos_controller",
-                "/rbd_navigation", "/rbd_gestrec", "/rbd_bridge", "/zed2/zed_node"}
-    assert wait_for(lambda: expected <= robot.nodes(), 90.0, 0.5), expected - robot.nodes()
+    assert EXPECTED_NODES <= robot.nodes(), EXPECTED_NODES - robot.nodes()
     assert wait_for(lambda: robot.states, 30.0)
     assert robot.states[0] == "EMERGENCY_STOP"
     # The driver hears the (mock) A1; the zone sees the (simulated) OS1 and is not stale.
