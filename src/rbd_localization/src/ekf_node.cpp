@@ -39,6 +39,15 @@ bool anyOf(const std::array<bool, STATE_SIZE>& v, int first, int count) {
 // Measurements older than the filter by more than this are dropped rather than fused.
 constexpr double kMaxMeasurementAge = 1.0;
 
+// Messages a subscriber holds at least (2 s of a 500 Hz IMU): inputs are handled once per cycle,
+// and a cycle that runs late (load, simulated time) must not lose any. r_l drops what exceeds
+// <sensor>_queue_size per cycle; this node fuses more, never less.
+constexpr int kMinSubscriberQueue = 1000;
+
+uint32_t subscriberQueue(int queue_size) {
+  return queue_size == 0 ? 0u : static_cast<uint32_t>(std::max(queue_size, kMinSubscriberQueue));
+}
+
 }  // namespace
 
 EkfNode::EkfNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh), pnh_(pnh) {}
@@ -47,7 +56,7 @@ template <class M>
 ros::Subscriber EkfNode::subscribeSensor(const SensorConfig& cfg,
                                          const boost::function<void(const boost::shared_ptr<M const>&)>& cb) {
   ros::SubscribeOptions ops;
-  ops.template init<M>(cfg.topic, static_cast<uint32_t>(cfg.queue_size), cb);
+  ops.template init<M>(cfg.topic, subscriberQueue(cfg.queue_size), cb);
   ops.transport_hints = ros::TransportHints().tcpNoDelay(cfg.nodelay);
   ops.callback_queue = &sensor_queue_;
   return nh_.subscribe(ops);
@@ -123,8 +132,7 @@ bool EkfNode::init(std::string* error) {
     }
     diagnostics_->add(s.cfg.name + " (" + s.sub.getTopic() + ")",
                       [this, i](diagnostic_updater::DiagnosticStatusWrapper& st) { diagnoseSensor(i, st); });
-    ROS_INFO("ekf: %s %s <- %s (queue %d)", sensorTypeName(s.cfg.type), s.cfg.name.c_str(),
-             s.sub.getTopic().c_str(), s.cfg.queue_size);
+    ROS_INFO("ekf: %s %s <- %s", sensorTypeName(s.cfg.type), s.cfg.name.c_str(), s.sub.getTopic().c_str());
   }
   std_msgs::String config;
   config.data =
@@ -373,15 +381,15 @@ void EkfNode::drainSensorQueue() {
   for (SensorState& s : sensors_) s.cycle_received = 0;
   sensor_queue_.callAvailable(ros::WallDuration(0));
   for (SensorState& s : sensors_) {
-    // A full subscriber queue drops its oldest messages (roscpp), as in robot_localization.
-    if (s.cfg.queue_size > 0 && s.cycle_received >= static_cast<uint64_t>(s.cfg.queue_size) &&
-        s.cfg.queue_size > 1) {
+    // A full subscriber queue drops its oldest messages (roscpp).
+    const uint32_t queue = subscriberQueue(s.cfg.queue_size);
+    if (queue > 0 && s.cycle_received >= queue) {
       ++s.full_queue_cycles;
       ROS_WARN_THROTTLE(
           10.0,
-          "ekf: %s delivered %d messages (its whole _queue_size) in one filter cycle: older ones "
-          "may have been dropped; raise %s_queue_size above its rate / frequency",
-          s.cfg.name.c_str(), s.cfg.queue_size, s.cfg.name.c_str());
+          "ekf: %s delivered %u messages (its whole subscriber queue) in one filter cycle: older "
+          "ones may have been dropped (the filter cycle ran seconds late)",
+          s.cfg.name.c_str(), queue);
     }
   }
 }

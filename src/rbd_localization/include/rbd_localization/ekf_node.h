@@ -4,7 +4,7 @@
 // Sensor messages are handled in batches, once per filter cycle (as robot_localization's
 // spinOnce loop does): the subscriptions use a callback queue of their own that the cycle drains
 // before fusing, so a 500 Hz IMU wakes only the receiving thread, not the filter thread too.
-// `<sensor>_queue_size` therefore bounds the messages held between two cycles (r_l semantics).
+// The subscriber queues hold at least 1000 messages, so a cycle that runs late loses none.
 #ifndef RBD_LOCALIZATION_EKF_NODE_H
 #define RBD_LOCALIZATION_EKF_NODE_H
 
