@@ -1,11 +1,14 @@
 // Load generator for the EKF node benchmark: an IMU at 500 Hz and a pose at 15 Hz (every 33rd
 // IMU message), plus the static base_link -> <imu frame> transform. The robot drives a circle
-// (0.3 m/s, 0.2 rad/s) and the data are exact, so nothing is gated away.
+// (0.3 m/s, 0.2 rad/s) and the data are exact, so nothing is gated away. The publisher queues
+// hold seconds of data, so a subscriber slowed down by callgrind still gets every message.
 //
 //   bench_feeder DURATION [--orientation] [--imu TOPIC] [--pose TOPIC] [--pose-frame FRAME]
+//                         [--imu-rate HZ]
 //
 // --orientation  the IMU carries an orientation with a valid covariance (robot_localization's
 //                template fuses it); without it orientation_covariance[0] = -1 (as ouster-ros).
+// --imu-rate     IMU rate (default 500 Hz); the pose stays at every 33rd IMU message.
 // Prints one JSON line with the rates and message counts.
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/TransformStamped.h>
@@ -21,7 +24,6 @@
 
 namespace {
 
-constexpr double kImuRate = 500.0;
 constexpr int kImuPerPose = 33;   // 500 / 33 = 15.2 Hz
 constexpr double kSpeed = 0.3;    // m/s
 constexpr double kYawRate = 0.2;  // rad/s
@@ -32,6 +34,7 @@ struct Options {
   std::string imu_topic = "/ouster/imu";
   std::string pose_topic = "/zed2/zed_node/pose_with_covariance";
   std::string pose_frame = "map";
+  double imu_rate = 500.0;
 };
 
 bool parse(int argc, char** argv, Options* o) {
@@ -48,12 +51,14 @@ bool parse(int argc, char** argv, Options* o) {
       o->pose_topic = argv[++i];
     } else if (a == "--pose-frame" && has_value) {
       o->pose_frame = argv[++i];
+    } else if (a == "--imu-rate" && has_value) {
+      o->imu_rate = std::atof(argv[++i]);
     } else {
       std::fprintf(stderr, "bench_feeder: unknown argument %s\n", a.c_str());
       return false;
     }
   }
-  return o->duration > 0.0;
+  return o->duration > 0.0 && o->imu_rate > 0.0;
 }
 
 }  // namespace
@@ -64,8 +69,8 @@ int main(int argc, char** argv) {
   if (!parse(argc, argv, &opt)) return 2;
   ros::NodeHandle nh;
 
-  ros::Publisher imu_pub = nh.advertise<sensor_msgs::Imu>(opt.imu_topic, 100);
-  ros::Publisher pose_pub = nh.advertise<geometry_msgs::PoseWithCovarianceStamped>(opt.pose_topic, 10);
+  ros::Publisher imu_pub = nh.advertise<sensor_msgs::Imu>(opt.imu_topic, 5000);
+  ros::Publisher pose_pub = nh.advertise<geometry_msgs::PoseWithCovarianceStamped>(opt.pose_topic, 500);
   tf2_ros::StaticTransformBroadcaster static_tf;
   geometry_msgs::TransformStamped mount;
   mount.header.stamp = ros::Time::now();
@@ -93,7 +98,7 @@ int main(int argc, char** argv) {
   for (int i : {0, 7, 14, 21, 28, 35}) pose.pose.covariance[i] = 1e-4;
 
   const ros::Time start = ros::Time::now();
-  const ros::WallDuration period(1.0 / kImuRate);
+  const ros::WallDuration period(1.0 / opt.imu_rate);
   ros::WallTime next = ros::WallTime::now();
   long imu_count = 0, pose_count = 0;
   const ros::WallTime wall_start = ros::WallTime::now();
