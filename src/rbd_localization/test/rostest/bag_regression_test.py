@@ -11,9 +11,10 @@ import unittest
 
 import rosbag
 import rospy
-import rostest
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
+
+from rbd_testkit.ros import run_rostest
 
 
 class BagRegressionTest(unittest.TestCase):
@@ -68,4 +69,4 @@ class BagRegressionTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_localization", "bag_regression", BagRegressionTest)
+    run_rostest("rbd_localization", "bag_regression", BagRegressionTest)
