@@ -14,14 +14,15 @@ publishes anything.
 import json
 import os
 import subprocess
-import threading
 import time
 import unittest
 
 import rospy
-import rostest
 from nav_msgs.msg import Odometry
 from std_msgs.msg import String
+
+from rbd_testkit import wait_for
+from rbd_testkit.ros import run_rostest
 
 PKG_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 CONFIG_DIR = os.path.join(PKG_DIR, "test", "config")
@@ -43,16 +44,9 @@ def config(ones):
 def wait_latched(topic, timeout=30.0):
     """Return the parsed JSON of the first (latched) message on a std_msgs/String topic."""
     got = []
-    event = threading.Event()
-
-    def on_msg(msg):
-        got.append(msg.data)
-        event.set()
-
-    sub = rospy.Subscriber(topic, String, on_msg)
+    sub = rospy.Subscriber(topic, String, lambda msg: got.append(msg.data))
     try:
-        if not event.wait(timeout):
-            raise AssertionError("nothing on %s within %.0f s" % (topic, timeout))
+        wait_for(lambda: got, timeout, what="a message on %s" % topic)
     finally:
         sub.unregister()
     return json.loads(got[0])
@@ -170,4 +164,4 @@ class RlConfigTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_localization", "rl_config", RlConfigTest)
+    run_rostest("rbd_localization", "rl_config", RlConfigTest)
