@@ -244,9 +244,9 @@ class Collector:
         t_end = time.monotonic() + self.duration
         while time.monotonic() < t_end and not rospy.is_shutdown():
             time.sleep(0.05)
+        obs.now = rospy.get_time()  # the end of the window (unregistering may take a while)
         for sub in subs:
             sub.unregister()
-        obs.now = rospy.get_time()
         if self._tap is not None:
             obs.wire = self._tap.stop()
         for t in side:
