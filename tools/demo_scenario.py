@@ -8,7 +8,8 @@ from a real hand photo for `walk` and `lie_down`; recorded key-point sequences f
 steps into the robot's way and leaves again. Everything safety-related is measured on the
 simulator's ground truth and on the command stream the A1 receives over LCM.
 
-Writes OUT/report.txt, OUT/report.json, OUT/run.png and OUT/demo.bag.
+Writes OUT/report.txt, OUT/report.json, OUT/run.png, OUT/demo.bag and OUT/recording (the robot's
+inputs of the first seconds: `roslaunch rbd_bringup robot.launch replay:=OUT/recording`).
 """
 
 import argparse
@@ -193,6 +194,8 @@ def main():
     ap.add_argument("--intrude", default="walk", help="trick during which a person steps in ('' = none)")
     ap.add_argument("--columns", type=int, default=1024)
     ap.add_argument("--visual", action="store_true", help="open RViz (audience view) and the GUI")
+    ap.add_argument("--record-seconds", type=float, default=6.0,
+                    help="length of OUT/recording, the inputs for robot.launch replay:= (0 = none)")
     ap.add_argument("--trick-timeout", type=float, default=90.0)
     ap.add_argument("launch_args", nargs="*", help="extra sim.launch arguments, e.g. follow_localization:=true")
     args = ap.parse_args()
@@ -226,6 +229,12 @@ def main():
         if not monitor.wait_state(("EMERGENCY_STOP",), 60.0):
             raise RuntimeError("controller did not come up in EMERGENCY_STOP")
         wait_for(lambda: monitor.pose is not None, 30.0, 0.1)
+        # The robot's real inputs of the first seconds, for `robot.launch replay:=OUT/recording`
+        # (rbd_bringup README "Replay"; ~9 MB/s with 1024 columns after LZ4).
+        recorder = None
+        if args.record_seconds > 0:
+            recorder = env.start(["rosrun", "rbd_bringup", "record", os.path.join(args.out, "recording"),
+                                  "--duration", str(args.record_seconds)], name="record")
         audience = Audience(link, os.path.join(ROOT, "rbd_local", ".cache"))
 
         say("operator releases the e-stop (GUI path: bridge -> /rbd_controller/em_stop)")
@@ -256,6 +265,8 @@ def main():
                 say("trick %s did not complete" % trick)
         duration = time.monotonic() - t_start
         time.sleep(1.0)
+        if recorder is not None and recorder.wait(timeout=60.0) != 0:
+            say("the recording failed: see %s/record.log" % args.out)
     finally:
         if link is not None:
             link.stop()
