@@ -9,7 +9,8 @@ steps into the robot's way and leaves again. Everything safety-related is measur
 simulator's ground truth and on the command stream the A1 receives over LCM.
 
 Writes OUT/report.txt, OUT/report.json, OUT/run.png, OUT/demo.bag and OUT/recording (the robot's
-inputs of the first seconds: `roslaunch rbd_bringup robot.launch replay:=OUT/recording`).
+inputs while it stands ready, before the release: `roslaunch rbd_bringup robot.launch
+replay:=OUT/recording`).
 """
 
 import argparse
@@ -229,12 +230,13 @@ def main():
         if not monitor.wait_state(("EMERGENCY_STOP",), 60.0):
             raise RuntimeError("controller did not come up in EMERGENCY_STOP")
         wait_for(lambda: monitor.pose is not None, 30.0, 0.1)
-        # The robot's real inputs of the first seconds, for `robot.launch replay:=OUT/recording`
-        # (rbd_bringup README "Replay"; ~9 MB/s with 1024 columns after LZ4).
-        recorder = None
+        # The robot's real inputs while it stands ready (as for a preflight), for
+        # `robot.launch replay:=OUT/recording` (rbd_bringup README "Replay"; ~8 MB/s at 1024 columns).
         if args.record_seconds > 0:
-            recorder = env.start(["rosrun", "rbd_bringup", "record", os.path.join(args.out, "recording"),
-                                  "--duration", str(args.record_seconds)], name="record")
+            say("recording %.0f s of the robot's inputs (OUT/recording)" % args.record_seconds)
+            code, out = env.run_to_exit(["rosrun", "rbd_bringup", "record", os.path.join(args.out, "recording"),
+                                         "--duration", str(args.record_seconds)], timeout=args.record_seconds + 60.0)
+            say(out.strip().splitlines()[-1] if code == 0 and out.strip() else "the recording failed: %s" % out[-500:])
         audience = Audience(link, os.path.join(ROOT, "rbd_local", ".cache"))
 
         say("operator releases the e-stop (GUI path: bridge -> /rbd_controller/em_stop)")
@@ -265,8 +267,6 @@ def main():
                 say("trick %s did not complete" % trick)
         duration = time.monotonic() - t_start
         time.sleep(1.0)
-        if recorder is not None and recorder.wait(timeout=60.0) != 0:
-            say("the recording failed: see %s/record.log" % args.out)
     finally:
         if link is not None:
             link.stop()
