@@ -290,6 +290,8 @@ class Collector:
             except Exception as exc:  # an older bridge: count only
                 rospy.logdebug("preflight: bridge stats: %s", exc)
             error = websocket_handshake(host, port)
+            if error is not None and "timed out" in error:  # a busy robot: one more, longer try
+                error = websocket_handshake(host, port, timeout=5.0)
             info.update(listening=error is None, error=error)
         except (OSError, rosgraph.MasterError, ValueError) as exc:
             info["error"] = str(exc)
