@@ -8,7 +8,9 @@ from a real hand photo for `walk` and `lie_down`; recorded key-point sequences f
 steps into the robot's way and leaves again. Everything safety-related is measured on the
 simulator's ground truth and on the command stream the A1 receives over LCM.
 
-Writes OUT/report.txt, OUT/report.json, OUT/run.png and OUT/demo.bag.
+Writes OUT/report.txt, OUT/report.json, OUT/run.png, OUT/demo.bag and OUT/recording (the robot's
+inputs while it stands ready, before the release: `roslaunch rbd_bringup robot.launch
+replay:=OUT/recording`).
 """
 
 import argparse
@@ -193,6 +195,8 @@ def main():
     ap.add_argument("--intrude", default="walk", help="trick during which a person steps in ('' = none)")
     ap.add_argument("--columns", type=int, default=1024)
     ap.add_argument("--visual", action="store_true", help="open RViz (audience view) and the GUI")
+    ap.add_argument("--record-seconds", type=float, default=6.0,
+                    help="length of OUT/recording, the inputs for robot.launch replay:= (0 = none)")
     ap.add_argument("--trick-timeout", type=float, default=90.0)
     ap.add_argument("launch_args", nargs="*", help="extra sim.launch arguments, e.g. follow_localization:=true")
     args = ap.parse_args()
@@ -226,6 +230,13 @@ def main():
         if not monitor.wait_state(("EMERGENCY_STOP",), 60.0):
             raise RuntimeError("controller did not come up in EMERGENCY_STOP")
         wait_for(lambda: monitor.pose is not None, 30.0, 0.1)
+        # The robot's real inputs while it stands ready (as for a preflight), for
+        # `robot.launch replay:=OUT/recording` (rbd_bringup README "Replay"; ~8 MB/s at 1024 columns).
+        if args.record_seconds > 0:
+            say("recording %.0f s of the robot's inputs (OUT/recording)" % args.record_seconds)
+            code, out = env.run_to_exit(["rosrun", "rbd_bringup", "record", os.path.join(args.out, "recording"),
+                                         "--duration", str(args.record_seconds)], timeout=args.record_seconds + 60.0)
+            say(out.strip().splitlines()[-1] if code == 0 and out.strip() else "the recording failed: %s" % out[-500:])
         audience = Audience(link, os.path.join(ROOT, "rbd_local", ".cache"))
 
         say("operator releases the e-stop (GUI path: bridge -> /rbd_controller/em_stop)")
