@@ -1,8 +1,11 @@
 """Test setup: import this checkout's rbd_local (not an installed copy) and share fixtures."""
 
+import atexit
 import os
+import shutil
 import signal
 import sys
+import tempfile
 
 import pytest
 
@@ -22,6 +25,12 @@ for _name in [m for m in sys.modules if m == "rbd_local" or m.startswith("rbd_lo
     del sys.modules[_name]
 
 CACHE = os.path.join(PKG_ROOT, ".cache")
+
+# Teach mode keeps taught gestures in $XDG_DATA_HOME/rbd_local; the tests must neither read
+# nor write the user's own file.
+_DATA_HOME = tempfile.mkdtemp(prefix="rbd-local-test-data.")
+os.environ["XDG_DATA_HOME"] = _DATA_HOME
+atexit.register(shutil.rmtree, _DATA_HOME, True)
 
 
 @pytest.fixture(scope="session")
@@ -47,3 +56,11 @@ def fake_bridge():
     bridge = FakeBridge().start()
     yield bridge
     bridge.stop()
+
+
+@pytest.fixture(scope="session")
+def hand_sprites(hand_photos):
+    """Hand sprites of both real photos (for real-photo clips)."""
+    from rbd_local.evaluation import load_sprites
+
+    return load_sprites([hand_photos["handSrc.jpg"], hand_photos["handDst.jpg"]])

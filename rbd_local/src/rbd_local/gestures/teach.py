@@ -19,21 +19,23 @@ import numpy as np
 from rbd_local.gestures import features
 from rbd_local.gestures.hand import MIDDLE_MCP, PALM, WRIST
 
-MIN_SHOW_PATH = 0.8  # hand sizes: less palm travel than this in the best window is "no gesture"
+MIN_SHOW_EXTENT = 0.6  # hand sizes: a palm that stays within this in the best window made no gesture
 MAX_GAP_S = 0.25
 
 
-def _path_stats(window: np.ndarray) -> tuple[float, float]:
-    """(palm path length [hand sizes], time centre of the motion as a share of the window)."""
+def _path_stats(window: np.ndarray) -> tuple[float, float, float]:
+    """(palm path length, palm extent (largest side of its bounding box) [hand sizes],
+    time centre of the motion as a share of the window)."""
     xy = window[:, :, :2]
     size = float(np.median(np.linalg.norm(xy[:, MIDDLE_MCP] - xy[:, WRIST], axis=1)))
     centre = xy[:, list(PALM)].mean(axis=1)
     steps = np.linalg.norm(np.diff(centre, axis=0), axis=1) / max(size, 1e-6)
     total = float(steps.sum())
+    extent = float(np.ptp(centre, axis=0).max()) / max(size, 1e-6)
     if total <= 0:
-        return 0.0, 0.5
+        return 0.0, extent, 0.5
     mid = (np.arange(len(steps)) + 0.5) / len(steps)
-    return total, float((steps * mid).sum() / total)
+    return total, extent, float((steps * mid).sum() / total)
 
 
 def extract_show(times: np.ndarray, keypoints: np.ndarray, window_s: float, samples: int) -> np.ndarray | None:
@@ -52,7 +54,7 @@ def extract_show(times: np.ndarray, keypoints: np.ndarray, window_s: float, samp
 
     Returns:
         (samples, 21, 3) window, or None when no window qualifies or the hand hardly moved
-        (less than :data:`MIN_SHOW_PATH` hand sizes).
+        (its palm stayed within :data:`MIN_SHOW_EXTENT` hand sizes).
     """
     times = np.asarray(times, dtype=np.float64)
     kp = np.asarray(keypoints, dtype=np.float64)
@@ -74,15 +76,14 @@ def extract_show(times: np.ndarray, keypoints: np.ndarray, window_s: float, samp
             w = features.resample(t[start:end + 1], k[start:end + 1], samples)
         except ValueError:
             continue
-        length, centre = _path_stats(w)
-        candidates.append((length, abs(centre - 0.5), w))
+        length, extent, centre = _path_stats(w)
+        candidates.append((length, abs(centre - 0.5), w, extent))
     if not candidates:
         return None
     best = max(c[0] for c in candidates)
-    if best < MIN_SHOW_PATH:
-        return None
     near = [c for c in candidates if c[0] >= 0.97 * best]
-    return min(near, key=lambda c: c[1])[2]
+    chosen = min(near, key=lambda c: c[1])
+    return chosen[2] if chosen[3] >= MIN_SHOW_EXTENT else None
 
 
 class TeachSession:
