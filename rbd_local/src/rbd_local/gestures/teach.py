@@ -24,8 +24,10 @@ MAX_GAP_S = 0.25
 
 
 def _path_stats(window: np.ndarray) -> tuple[float, float, float]:
-    """(palm path length, palm extent (largest side of its bounding box) [hand sizes],
-    time centre of the motion as a share of the window)."""
+    """Palm path length, extent (largest side of its bounding box) and motion centre.
+
+    Lengths in hand sizes; the centre is the time of the motion's middle as a share of the window.
+    """
     xy = window[:, :, :2]
     size = float(np.median(np.linalg.norm(xy[:, MIDDLE_MCP] - xy[:, WRIST], axis=1)))
     centre = xy[:, list(PALM)].mean(axis=1)

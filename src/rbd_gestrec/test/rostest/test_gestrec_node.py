@@ -40,6 +40,18 @@ class TestGestrec(unittest.TestCase):
         time.sleep(0.3)
         self.assertEqual(self.srv().command, "")
 
+    def test_a_trick_name_of_rbd_navigation_is_accepted(self):
+        # launch/rbd_gestrec.launch loads rbd_navigation's tricks.yaml: "bow" has no mapping
+        # entry in gestures.yaml, but it is a trick, so a taught gesture's "bow" is understood;
+        # "dance" is neither and is dropped (proved by the "spin" behind it coming through alone)
+        self.pub.publish(String("dance"))
+        self.pub.publish(String("bow"))
+        self.assertEqual(self.wait_command(), "bow")
+        self.pub.publish(String("dance"))
+        self.pub.publish(String("spin"))
+        self.assertEqual(self.wait_command(), "spin")
+        self.assertEqual(self.srv().command, "")
+
 
 if __name__ == "__main__":
     rostest.rosrun("rbd_gestrec", "gestrec_wiring", TestGestrec)
