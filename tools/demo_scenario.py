@@ -246,7 +246,8 @@ def main():
                       ROS_LOG_DIR=os.path.join(home, "log"), ROS_IP="127.0.0.1")
     launch_log = open(os.path.join(args.out, "roslaunch.log"), "w")
     cmd = ["roslaunch", "-p", str(port), "rbd_bringup", "sim.launch", "lidar_columns:=%d" % args.columns,
-           "bridge_port:=%d" % bridge_port, "rviz:=%s" % str(args.visual).lower()] + args.launch_args
+           "bridge_port:=%d" % bridge_port, "rviz:=%s" % str(args.visual).lower(),
+           "gui:=%s" % str(args.visual).lower()] + args.launch_args
     say("starting the simulated system: %s" % " ".join(cmd))
     launch = subprocess.Popen(cmd, stdout=launch_log, stderr=subprocess.STDOUT, start_new_session=True)
     procs = [launch]
@@ -271,8 +272,6 @@ def main():
         bag = subprocess.Popen(["rosbag", "record", "-q", "-O", os.path.join(args.out, "demo.bag")] + BAG_TOPICS,
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         procs.append(bag)
-        if args.visual:
-            procs.append(subprocess.Popen(["rbd-gui", "--port", str(bridge_port)], start_new_session=True))
 
         from rbd_local.link import RobotLink
 
