@@ -3,11 +3,13 @@
 
 - `rviz_audience.png`: RViz's audience view on the running simulated system, with a visitor
   standing in the collision zone (intruding points in red);
+- `rviz_a1.png`: the same view close to the robot: the A1 model (rbd_bringup's URDF) with its
+  legs from /joint_states, the OS1 on its back mount and the ZED2, from config/mounts.yaml;
 - `gui_sim.png`: the laptop app's operator window (rbd_local's `rbd-gui`) connected through the
   bridge to the running simulated system while the robot executes the `walk` trick (state
   colour, controller state, next moves).
 
-Usage: tools/screenshots.py [OUT_DIR] [--only rviz|gui] (default docs/, both). Needs Xvfb and
+Usage: tools/screenshots.py [OUT_DIR] [--only rviz|a1|gui] (default docs/, all). Needs Xvfb and
 ImageMagick's `import`.
 """
 
@@ -38,7 +40,22 @@ def free_display():
     raise RuntimeError("no free X display")
 
 
-def shoot_rviz(out):
+def closeup_config(home):
+    """audience_sim.rviz with the camera 1.6 m from base_link (the robot fills the view)."""
+    with open(os.path.join(ROOT, "src", "rbd_bringup", "rviz", "audience_sim.rviz")) as fh:
+        text = fh.read()
+    for old, new in (("      Distance: 7.5\n", "      Distance: 1.6\n"), ("      Pitch: 0.75\n", "      Pitch: 0.35\n"),
+                     ("      Yaw: 3.6\n", "      Yaw: 2.5\n"), ("        X: 0.3\n", "        X: 0\n")):
+        if old not in text:
+            raise RuntimeError("audience_sim.rviz changed: %r not found" % old)
+        text = text.replace(old, new)
+    path = os.path.join(home, "a1_closeup.rviz")
+    with open(path, "w") as fh:
+        fh.write(text)
+    return path
+
+
+def shoot_rviz(out, closeup=False):
     """Start Xvfb, the simulated system with RViz, place a visitor, capture the screen."""
     disp = free_display()
     home = tempfile.mkdtemp(prefix="rbd-shot-home.")
@@ -50,15 +67,17 @@ def shoot_rviz(out):
     try:
         time.sleep(1.5)
         log = open(os.path.join(home, "launch.log"), "w")
+        view = ["rviz_config:=" + closeup_config(home)] if closeup else []
         procs.append(subprocess.Popen(
             ["roslaunch", "-p", str(port), "rbd_bringup", "sim.launch", "rviz:=true", "lidar_columns:=1024",
-             "bridge_port:=%d" % free_port()], env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True))
+             "bridge_port:=%d" % free_port()] + view, env=env, stdout=log, stderr=subprocess.STDOUT,
+            start_new_session=True))
         time.sleep(20)
         call = ["rosservice", "call", "/rbd_sim/place_obstacle"]
         subprocess.run(call + ["{name: visitor, x: 0.55, y: 0.1, radius: 0.2, height: 1.7, remove: false}"], env=env,
                        check=True, stdout=subprocess.DEVNULL, timeout=30)
         time.sleep(8)
-        png = os.path.join(out, "rviz_audience.png")
+        png = os.path.join(out, "rviz_a1.png" if closeup else "rviz_audience.png")
         subprocess.run(["import", "-display", ":%d" % disp, "-window", "root", png], env=env, check=True, timeout=60)
         print("written", png)
     finally:
@@ -144,11 +163,13 @@ def main():
         signal.signal(signal.SIGINT, signal.default_int_handler)
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out", nargs="?", default=os.path.join(ROOT, "docs"))
-    ap.add_argument("--only", choices=["rviz", "gui"])
+    ap.add_argument("--only", choices=["rviz", "a1", "gui"])
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     if args.only in (None, "rviz"):
         shoot_rviz(args.out)
+    if args.only in (None, "a1"):
+        shoot_rviz(args.out, closeup=True)
     if args.only in (None, "gui"):
         shoot_gui(args.out)
 

@@ -187,7 +187,7 @@ def start_pos_controller(ctx):
     if ctx.pos_started:
         return
     ctx.stack.launch("pos_controller", "rbd_pos_controller", "rbd_pos_controller.launch",
-                     "pose_topic:=/rbd_sim/ground_truth_pose")
+                     "pose_topic:=/rbd_sim/ground_truth_pose", "profile:=sim_tuned")
     rospy.wait_for_service("/rbd_pos_controller/set_position", timeout=60.0)
     ctx.pos_started = True
 
@@ -297,9 +297,14 @@ def exp_path(ctx):
 # Fig. 22/23 and the reaction time: the LiDAR zone on the full simulated system
 # --------------------------------------------------------------------------------------------
 class Zone:
-    """Places a cylinder around the LiDAR and reads whether the scans after it trip the zone."""
+    """Places a cylinder around a frame (default the LiDAR) and reads whether the scans after it trip the zone.
 
-    def __init__(self):
+    Args:
+        frame: the TF frame distances and angles are measured from: ``os_sensor`` (the LiDAR, as the
+            thesis measured) or a body frame such as ``collision_zone`` (the zone's origin).
+    """
+
+    def __init__(self, frame="os_sensor"):
         import rospy
         import tf2_ros
 
@@ -317,7 +322,7 @@ class Zone:
         self.scan_period = 1.0 / float(rospy.get_param("/rbd_lidar/scan_rate", 10.0))
         buf = tf2_ros.Buffer()
         self._listener = tf2_ros.TransformListener(buf)
-        tf = buf.lookup_transform("world", "os_sensor", rospy.Time(0), rospy.Duration(30.0)).transform
+        tf = buf.lookup_transform("world", frame, rospy.Time(0), rospy.Duration(30.0)).transform
         self.origin = (tf.translation.x, tf.translation.y)
         self.yaw = yaw_of(tf.rotation)
         if not wait_for(lambda: self.states, 30.0):
@@ -329,7 +334,7 @@ class Zone:
             del self.states[:-200]
 
     def world(self, dist, angle):
-        """World position of a point at dist [m], angle [rad] in the LiDAR's frame."""
+        """World position of a point at dist [m], angle [rad] from the frame's origin."""
         a = self.yaw + angle
         return self.origin[0] + dist * math.cos(a), self.origin[1] + dist * math.sin(a)
 

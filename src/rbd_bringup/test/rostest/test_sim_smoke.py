@@ -2,13 +2,16 @@
 """rostest: sim.launch brings up the whole simulated system; e-stop first, then a trick."""
 
 import math
+import os
 import time
 import unittest
 
 import rosnode
+import rospkg
 import rospy
 import rostest
 import tf2_ros
+import yaml
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
@@ -20,6 +23,7 @@ from rbd_bringup.a1_monitor import yaw_of
 EXPECTED_NODES = [
     "/mock_a1", "/rbd_a1_driver", "/os1_sim", "/zed2_sim", "/world", "/robot_state_publisher",
     "/rbd_controller", "/rbd_pos_controller", "/rbd_navigation", "/rbd_gestrec", "/rbd_bridge", "/rbd_lidar",
+    "/joint_state_fallback", "/cloud_decimator",
 ]
 
 
@@ -66,8 +70,12 @@ class SimSmoke(unittest.TestCase):
 
         buf = tf2_ros.Buffer()
         tf2_ros.TransformListener(buf)
-        mount = buf.lookup_transform("base_link", "os_sensor", rospy.Time(0), rospy.Duration(10.0))
-        self.assertAlmostEqual(mount.transform.translation.z, 0.07, places=3)
+        mount = buf.lookup_transform("base_link", "os_sensor", rospy.Time(0), rospy.Duration(10.0)).transform
+        with open(os.path.join(rospkg.RosPack().get_path("rbd_bringup"), "config", "mounts.yaml")) as fh:
+            xyz = yaml.safe_load(fh)["os_sensor"]["xyz"]
+        t = mount.translation
+        for got, want in zip((t.x, t.y, t.z), xyz):
+            self.assertAlmostEqual(got, want, places=6)
 
         # A gesture while the e-stop is engaged must not move the robot.
         start = self.truth.pose.pose.position
