@@ -135,9 +135,11 @@ def robot(standin_path):
                        "launch")
     try:
         # Stand-in inputs: the A1 behind its LCM server, the OS1 and the ZED2 where mounts.yaml says.
+        # The A1 speaks SDK v3.3 (265 B HighState, no motor states): nobody sends joint angles, the
+        # case the standing-pose fallback is for (with 3.3.4 the driver publishes the mock's).
         env.start(["roslaunch", os.path.join(sim, "mock_a1.launch"), os.path.join(sim, "sensors.launch"),
                    "driver:=false", "lcm_url:=" + lcm_url, "mounts:=" + MOUNTS, "publish_mount_tf:=false",
-                   "lidar_columns:=512", "world:=lab"])
+                   "lidar_columns:=512", "world:=lab", "sdk_layout:=3.3"])
         # A second roslaunch must find the first one's /run_id, or one of them refuses to run.
         master = rosgraph.Master("/bringup_test", master_uri=env.env["ROS_MASTER_URI"])
         assert wait_for(lambda: master.hasParam("/run_id"), 60.0, 0.1), "the input roslaunch did not start"

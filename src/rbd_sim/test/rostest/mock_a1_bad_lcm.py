@@ -16,18 +16,19 @@ import rospy
 import rostest
 from nav_msgs.msg import Odometry
 
-from rbd_a1_driver import unitree_layout as ul
+from rbd_wire_oracle import unitree as vendor
 
 PKG = "rbd_sim"
 PERIOD = 0.004  # 250 Hz, like the driver
+HIGH_CMD, HIGH_STATE = "LCM_High_Cmd", "LCM_High_State"
 
 
 def walk(vx=0.0, wz=0.0, **fields):
-    c = ul.HighCmd()
-    c.mode, c.gait_type, c.velocity, c.yaw_speed = ul.MODE_VELOCITY_WALK, ul.GAIT_TROT, (vx, 0.0), wz
-    for k, v in fields.items():
-        setattr(c, k, v)
-    return c.pack()
+    """A HighCmd assembled from the vendor's offsets; ``fields`` (SDK names) override."""
+    values = {"mode": vendor.MODE_VELOCITY_WALK, "gaitType": vendor.GAIT_TROT, "velocity": (vx, 0.0),
+              "yawSpeed": wz}
+    values.update(fields)
+    return vendor.pack(vendor.HIGH_CMD, values)
 
 
 class MockA1BadLcm(unittest.TestCase):
@@ -39,7 +40,7 @@ class MockA1BadLcm(unittest.TestCase):
         cls.lock = threading.Lock()
         rospy.Subscriber("/rbd_sim/ground_truth", Odometry, cls._gt, queue_size=5)
         cls.lc = lcm.LCM(rospy.get_param("~lcm_url"))
-        cls.lc.subscribe(ul.CHANNEL_HIGH_STATE, cls._state)
+        cls.lc.subscribe(HIGH_STATE, cls._state)
         cls.running = True
         cls.rx = threading.Thread(target=cls._rx)
         cls.rx.daemon = True
@@ -78,17 +79,18 @@ class MockA1BadLcm(unittest.TestCase):
         t0 = time.monotonic()
         i = 0
         while time.monotonic() - t0 < duration:
-            self.lc.publish(ul.CHANNEL_HIGH_CMD, packets[i % len(packets)])
+            self.lc.publish(HIGH_CMD, packets[i % len(packets)])
             i += 1
             time.sleep(PERIOD)
 
     def moved(self, a, b):
         return math.hypot(a[0] - b[0], a[1] - b[1]), abs(a[2] - b[2])
 
-    def test_1_high_state_is_sdk_v33(self):
+    def test_1_high_state_has_the_layouts_size(self):
+        layout = rospy.get_param("~sdk_layout", "3.3.4")
         self.assertTrue(self.states, "no LCM_High_State received")
         with self.lock:
-            self.assertEqual(set(self.states), {ul.HIGH_STATE_SIZE})
+            self.assertEqual(set(self.states), {vendor.HIGH_STATES[layout].size})
 
     def test_2_malformed_packets_hold_still(self):
         rng = random.Random(11)
@@ -102,10 +104,10 @@ class MockA1BadLcm(unittest.TestCase):
             walk(nan),
             walk(0.5, wz=inf),
             walk(0.5, mode=42),
-            walk(0.5, gait_type=9),
-            walk(0.5, level_flag=0xEE),
+            walk(0.5, gaitType=9),
+            walk(0.5, levelFlag=0xEE),
         ]
-        bad += [bytes(rng.getrandbits(8) for _ in range(ul.HIGH_CMD_SIZE)) for _ in range(40)]
+        bad += [bytes(rng.getrandbits(8) for _ in range(vendor.HIGH_CMD.size)) for _ in range(40)]
         bad += [bytes(rng.getrandbits(8) for _ in range(rng.randint(1, 300))) for _ in range(20)]
         start = self.get()
         self.send(bad, 2.0)
