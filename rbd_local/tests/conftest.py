@@ -64,3 +64,21 @@ def hand_sprites(hand_photos):
     from rbd_local.evaluation import load_sprites
 
     return load_sprites([hand_photos["handSrc.jpg"], hand_photos["handDst.jpg"]])
+
+
+@pytest.fixture(scope="module")
+def display():
+    """A private Xvfb for the module's windows; DISPLAY points at it meanwhile."""
+    if shutil.which("Xvfb") is None:
+        pytest.skip("Xvfb not installed")
+    from xvfb import Xvfb
+
+    x = Xvfb("1280x800x24").start()
+    old = os.environ.get("DISPLAY")
+    os.environ["DISPLAY"] = x.display
+    yield x.display
+    if old is None:
+        os.environ.pop("DISPLAY", None)
+    else:
+        os.environ["DISPLAY"] = old
+    x.stop()

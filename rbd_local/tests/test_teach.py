@@ -225,3 +225,89 @@ def test_pipeline_sends_nothing_while_teaching(shipped_model, tmp_path):
     for i in range(n, n + 150):
         pipe.process(i / 30.0, frame)
     assert sent, "after teaching, recognition resumes"
+
+
+class _StreamDetector:
+    """Stands in for MediaPipe: hands out the key points of a synthetic stream, one per frame."""
+
+    def __init__(self, kinds, seed):
+        self.frames = iter(synthetic.stream(kinds, seed=seed))
+
+    def detect(self, _frame):
+        return next(self.frames)[1], 1.0
+
+    def close(self):
+        pass
+
+
+def _desk_pipeline(shipped_model, tmp_path, kinds, sent):
+    from rbd_local.gestures.pipeline import GesturePipeline
+    from rbd_local.gestures.teach import TeachDesk
+
+    path = str(tmp_path / "user.npz")
+    shipped_model.save(path)
+    pipe = GesturePipeline(GestureModel.load(path), {"swipe_right": "walk"}, send=sent.append,
+                           detector=_StreamDetector(kinds, seed=3))
+    return TeachDesk(path, ready_s=0.5, show_s=2.0), pipe, path
+
+
+def _run(desk, pipe, frames, start=0):
+    frame = np.zeros((4, 4, 3), np.uint8)
+    for i in range(start, start + frames):
+        desk.step(pipe)
+        pipe.process(i / 30.0, frame)
+    return start + frames
+
+
+def test_teach_desk_teaches_saves_forgets_and_undoes(shipped_model, tmp_path):
+    sent = []
+    kinds = ["static", "static"] + ["swipe_up", "static"] * 8
+    desk, pipe, path = _desk_pipeline(shipped_model, tmp_path, kinds, sent)
+    desk.step(pipe)
+    assert desk.status()["phase"] == "idle" and desk.status()["taught"] == []
+    desk.start("swipe_up", "sit", 3)
+    with pytest.raises(ValueError, match="already running"):
+        desk.start("other", "bow", 3)
+    n = 0
+    while desk.status()["phase"] in ("starting", "ready", "show") and n < 1500:
+        n = _run(desk, pipe, 1, n)
+    st = desk.status()
+    assert st["phase"] == "done" and "saved" in st["message"], st
+    assert st["good"] == 3 and st["taught"] == [("swipe_up", "sit", 3)]
+    assert sent == [] and n > 3 * 2.5 * 30, "shows went through the pipeline and nothing was sent"
+    saved = GestureModel.load(path)
+    assert saved.taught_commands() == {"swipe_up": "sit"} and saved.revision == 1
+    # forget: saved at once, the pipeline's model no longer knows it
+    desk.forget("swipe_up")
+    n = _run(desk, pipe, 1, n)
+    assert GestureModel.load(path).taught.names == [] and pipe.model.taught.names == []
+    assert desk.status()["taught"] == [] and GestureModel.load(path).revision == 2
+    # undo: the file and the pipeline's model are back to revision 1
+    desk.undo()
+    n = _run(desk, pipe, 1, n)
+    assert GestureModel.load(path).taught.names == ["swipe_up"] and pipe.model.taught.names == ["swipe_up"]
+    assert pipe.recognizer.model is pipe.model
+    assert desk.status()["taught"] == [("swipe_up", "sit", 3)]
+    desk.undo()  # only one step of undo: a clear message, no crash
+    n = _run(desk, pipe, 1, n)
+    assert desk.status()["phase"] == "failed" and "nothing to undo" in desk.status()["message"]
+    desk.forget("never_taught")
+    _run(desk, pipe, 1, n)
+    assert desk.status()["phase"] == "failed" and "never_taught" in desk.status()["message"]
+
+
+def test_teach_desk_cancel_teaches_nothing_and_recognition_resumes(shipped_model, tmp_path):
+    sent = []
+    desk, pipe, path = _desk_pipeline(shipped_model, tmp_path, ["static"] + ["swipe_right", "static"] * 6, sent)
+    for bad in (("", "bow"), ("x", ""), ("two words", "bow")):
+        with pytest.raises(ValueError):
+            desk.start(*bad, 3)
+    desk.start("anything", "bow", 5)
+    n = _run(desk, pipe, 60)
+    assert desk.status()["phase"] in ("ready", "show")
+    desk.cancel()
+    n = _run(desk, pipe, 1, n)
+    assert desk.status()["phase"] == "failed" and "cancelled" in desk.status()["message"]
+    assert sent == [] and GestureModel.load(path).taught.names == []
+    _run(desk, pipe, 300, n)
+    assert "walk" in sent, "after the session, gestures are recognised and sent again"

@@ -17,7 +17,6 @@ import argparse
 import json
 import logging
 import os
-import shutil
 import sys
 
 import numpy as np
@@ -124,11 +123,13 @@ def main(argv: list[str] = None) -> int:
         print("model %s, revision %d" % (source_model, model.revision))
         return 0
     if args.undo:
-        if not os.path.isfile(path + ".prev"):
-            print("rbd-teach: nothing to undo (%s.prev missing)" % path, file=sys.stderr)
+        from rbd_local.gestures.teach import restore_previous
+
+        try:
+            restore_previous(path)
+        except FileNotFoundError as exc:
+            print("rbd-teach: %s" % exc, file=sys.stderr)
             return 2
-        shutil.copyfile(path + ".prev", path)
-        os.remove(path + ".prev")
         print("restored %s to revision %d" % (path, GestureModel.load(path).revision))
         return 0
     if args.forget:

@@ -69,6 +69,7 @@ class GesturePipeline:
         self.teach = None
         self.send = send
         self.detector = detector if detector is not None else HandDetector(model_complexity=model_complexity)
+        self.recognizer_args = (threshold, min_consecutive, cooldown_s)
         self.recognizer = GestureRecognizer(model, threshold, min_consecutive, cooldown_s)
         self.last_sent = ""
         self.last_gesture = ("", 0.0)
@@ -117,6 +118,16 @@ class GesturePipeline:
         """Run a :class:`~rbd_local.gestures.teach.TeachSession` on the next frames (sending pauses)."""
         self.teach = session
         self.recognizer.reset()
+
+    def replace_model(self, model: GestureModel) -> None:
+        """Use another model from the next frame on (e.g. the model file after an undo).
+
+        Raises:
+            ValueError: if the mapping names classes the new model lacks.
+        """
+        self.unmapped = check_mapping(self.mapping, model.classes + model.taught.names)
+        self.model = model
+        self.recognizer = GestureRecognizer(model, *self.recognizer_args)
 
     def annotate(self, frame: np.ndarray, result: FrameResult) -> np.ndarray:
         """The audience view of ``frame``: skeleton, class and confidence, taught gestures, last command sent."""

@@ -12,12 +12,20 @@ run, fed frame by frame with the detector's key points:
 
 While a session runs the caller must not send gestures to the robot (the shows would be
 recognised as whatever they resemble); the GUI pauses sending.
+
+:class:`TeachDesk` runs sessions for an app whose pipeline has a thread of its own (the
+GUI's Teach panel) and keeps the model file: saved after each change with the previous file
+kept (:func:`restore_previous` undoes one step).
 """
+
+import os
+import threading
 
 import numpy as np
 
 from rbd_local.gestures import features
 from rbd_local.gestures.hand import MIDDLE_MCP, PALM, WRIST
+from rbd_local.gestures.model import GestureModel
 
 MIN_SHOW_EXTENT = 0.6  # hand sizes: a palm that stays within this in the best window made no gesture
 MAX_GAP_S = 0.25
@@ -194,3 +202,154 @@ class TeachSession:
             return
         self.phase, self._phase_t = "ready", t
         self.message = "%s; get ready: show %d of %d" % (note, len(self.windows) + 1, self.shows)
+
+
+def restore_previous(path: str) -> None:
+    """Put the model file back as it was before its last change (one step of undo).
+
+    ``GestureModel.save(path, keep_previous=True)`` keeps the replaced file as ``path.prev``;
+    this moves it back.
+
+    Raises:
+        FileNotFoundError: when there is nothing to undo (no ``path.prev``).
+    """
+    prev = path + ".prev"
+    if not os.path.isfile(prev):
+        raise FileNotFoundError("nothing to undo (%s missing)" % prev)
+    os.replace(prev, path)
+
+
+class TeachDesk:
+    """Teach mode for an app whose gesture pipeline runs in a thread of its own (the GUI).
+
+    The UI thread calls :meth:`start`, :meth:`cancel`, :meth:`forget`, :meth:`undo` and reads
+    :meth:`status`; they only leave requests. The gesture thread calls :meth:`step` with its
+    :class:`~rbd_local.gestures.pipeline.GesturePipeline` before every frame; there the
+    requests are carried out: a session is handed to the pipeline (which then sends nothing
+    until the session ends), a finished session's gesture is saved to the model file (the old
+    file kept for :meth:`undo`), a forgotten gesture is removed, an undone file is loaded.
+
+    Args:
+        model_path: the model file teach mode writes (``cfg["teach_model"]``).
+        session_kwargs: extra arguments of every :class:`TeachSession` (e.g. ``ready_s``).
+    """
+
+    def __init__(self, model_path: str, **session_kwargs: object) -> None:
+        """Create the desk (no session yet)."""
+        if not model_path:
+            raise ValueError("model_path must be a file name")
+        self.model_path = model_path
+        self.session_kwargs = session_kwargs
+        self._lock = threading.Lock()
+        self._requests: list = []
+        self._session = None
+        self._status = {"phase": "idle", "message": "", "name": "", "trick": "", "good": 0, "shows": 0,
+                        "revision": 0, "taught": []}
+        self.errors: list[str] = []
+
+    # ------------------------------------------------------------- UI thread
+    def start(self, name: str, trick: str, shows: int = 5) -> None:
+        """Ask for a teach session (it begins with the next frame).
+
+        Raises:
+            ValueError: on an empty name or trick, fewer than 3 shows, or while a session runs.
+        """
+        name, trick = (name or "").strip(), (trick or "").strip()
+        if not name or not trick:
+            raise ValueError("a gesture name and a trick are needed")
+        if not name.replace("_", "").isalnum():
+            raise ValueError("gesture names use letters, digits and _ only: %r" % name)
+        if int(shows) < 3:
+            raise ValueError("a gesture needs at least 3 shows")
+        with self._lock:
+            if self._status["phase"] in ("starting", "ready", "show"):
+                raise ValueError("a teach session is already running")
+            self._status.update(phase="starting", message="starting…", name=name, trick=trick, good=0,
+                                shows=int(shows))
+            self._requests.append(("start", (name, trick, int(shows))))
+
+    def cancel(self) -> None:
+        """Stop a running session without teaching anything."""
+        with self._lock:
+            self._requests.append(("cancel", None))
+
+    def forget(self, name: str) -> None:
+        """Ask to remove a taught gesture (saved; undo brings it back)."""
+        with self._lock:
+            self._requests.append(("forget", name))
+
+    def undo(self) -> None:
+        """Ask to restore the model file before its last change."""
+        with self._lock:
+            self._requests.append(("undo", None))
+
+    def status(self) -> dict:
+        """A copy of the current state.
+
+        Returns:
+            {"phase": idle | starting | ready | show | done | failed, "message", "name",
+            "trick", "good" (good shows so far), "shows" (wanted), "revision",
+            "taught": [(gesture, trick, shows)]}.
+        """
+        with self._lock:
+            out = dict(self._status)
+            out["taught"] = list(out["taught"])
+            return out
+
+    # -------------------------------------------------------- gesture thread
+    def step(self, pipeline: object) -> None:
+        """Carry out pending requests and follow the session; call before each frame.
+
+        Args:
+            pipeline: the app's :class:`~rbd_local.gestures.pipeline.GesturePipeline`.
+        """
+        with self._lock:
+            requests, self._requests = self._requests, []
+        for kind, arg in requests:
+            try:
+                self._do(pipeline, kind, arg)
+            except (OSError, ValueError, KeyError) as exc:
+                text = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
+                self.errors.append(text)
+                self._set(phase="failed", message=str(text))
+        session = self._session
+        if session is not None and not session.active:
+            self._session = None
+            self._set(good=len(session.windows))
+            if session.phase == "done":
+                try:
+                    pipeline.model.save(self.model_path, keep_previous=True)
+                    self._set(phase="done", message=session.message + "; saved")
+                except OSError as exc:  # taught for this run, but it will not survive a restart
+                    self._set(phase="failed", message="%s, but NOT saved: %s" % (session.message, exc))
+            else:
+                self._set(phase="failed", message=session.message)
+        elif session is not None:
+            self._set(phase=session.phase, message=session.message, good=len(session.windows))
+        self._set(revision=pipeline.model.revision, taught=[
+            (n, pipeline.model.taught.commands[n], len(pipeline.model.taught.windows[n]))
+            for n in pipeline.model.taught.names])
+
+    def _do(self, pipeline: object, kind: str, arg: object) -> None:
+        if kind == "start":
+            name, trick, shows = arg
+            session = TeachSession(pipeline.model, name, trick, shows=shows, **self.session_kwargs)
+            self._session = session
+            pipeline.start_teach(session)
+            self._set(phase=session.phase, message=session.message, good=0)
+        elif kind == "cancel":
+            if self._session is not None:
+                self._session.phase = "failed"
+                self._session.message = "cancelled: nothing taught"
+        elif kind == "forget":
+            pipeline.model.forget(arg)
+            pipeline.model.save(self.model_path, keep_previous=True)
+            self._set(phase="idle", message="forgot %r; saved" % arg)
+        elif kind == "undo":
+            restore_previous(self.model_path)
+            pipeline.replace_model(GestureModel.load(self.model_path))
+            self._set(phase="idle", message="undone: model revision %d" % pipeline.model.revision)
+
+    def _set(self, **values: object) -> None:
+        with self._lock:
+            self._status.update(values)
