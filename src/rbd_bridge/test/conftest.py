@@ -1,7 +1,7 @@
 """Fixtures for rbd_bridge integration tests: a private master, the echo peer, real bridges.
 
 One master + echo node + bridge per test module (starting them costs seconds); every
-process is stopped by PID by the repo-root RosEnv helper.
+process is stopped by PID by the test kit's RosEnv.
 """
 
 import os
@@ -12,13 +12,15 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from rbd_bridge_testing import OPEN, ROOTCONF, start_bridge, start_echo  # noqa: E402
+from rbd_bridge_testing import OPEN, start_bridge, start_echo  # noqa: E402
+
+from rbd_testkit import RosEnv  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def open_bridge():
     """Master + echo peer (50 Hz tick) + a bridge with everything allowed."""
-    env = ROOTCONF.RosEnv()
+    env = RosEnv()
     try:
         start_echo(env, tick_rate=50.0)
         port, proc = start_bridge(env, **OPEN)

@@ -12,6 +12,7 @@ which tells a stall of the machine from a pause of the driver. A 10 Hz e-stop fl
 rbd_controller (as in the real system, the driver's e-stop watchdog is armed).
 """
 
+import functools
 import math
 import os
 import signal
@@ -27,14 +28,15 @@ import lcm
 import rosgraph
 import rosnode
 import rospy
-import rostest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import Bool, String
 
+import rbd_testkit
 from rbd_msgs.srv import SetBodyPose
+from rbd_testkit.ros import run_rostest
 from rbd_wire_oracle import unitree as vendor
 
 PKG = "rbd_a1_driver"
@@ -78,13 +80,8 @@ def still(c):
     return tuple(c["velocity"]) == (0.0, 0.0) and c["yawSpeed"] == 0.0
 
 
-def wait_for(predicate, timeout, step=0.02):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline and not rospy.is_shutdown():
-        if predicate():
-            return True
-        time.sleep(step)
-    return bool(predicate())
+# The test kit's wait_for at 50 Hz, ending early when ROS shuts down.
+wait_for = functools.partial(rbd_testkit.wait_for, step=0.02, abort=rospy.is_shutdown)
 
 
 def read_log(path):
@@ -598,4 +595,4 @@ def machine_stalled(ref, a, b, slack=0.010):
 
 
 if __name__ == "__main__":
-    rostest.rosrun(PKG, "driver_wire", DriverWire)
+    run_rostest(PKG, "driver_wire", DriverWire)
