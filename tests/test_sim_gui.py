@@ -14,43 +14,27 @@ Run it under the shared lock (it starts a simulated stack):
 ``flock /tmp/rbd-sim.lock python3 -m pytest -q tests/test_sim_gui.py``.
 """
 
-import importlib.util
 import os
 import shutil
 import subprocess
 import sys
-import time
 
 import pytest
 import yaml
+
+from rbd_testkit import RosEnv, free_port, wait_for, wait_for_port
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LOCAL = os.path.join(ROOT, "rbd_local")
 NEW_TRICKS = ("bow", "look_around", "sit", "shake")
 
-
-
-def _root_conftest():
-    spec = importlib.util.spec_from_file_location("rbd_root_conftest", os.path.join(ROOT, "conftest.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-ROOTCONF = _root_conftest()
 pytestmark = pytest.mark.skipif(shutil.which("Xvfb") is None or shutil.which("xdotool") is None,
                                 reason="Xvfb and xdotool are needed")
 
 
-def _until(pred, timeout, step=0.1, pump=None):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if pump is not None:
-            pump()
-        if pred():
-            return True
-        time.sleep(step)
-    return pred()
+def _pumped(root, pred):
+    """``pred`` checked after the Tk events of ``root`` were handled (for ``wait_for``)."""
+    return lambda: root.update() or pred()
 
 
 @pytest.fixture(scope="module")
@@ -68,19 +52,19 @@ def stack(tmp_path_factory):
     clip = str(out / "swipe_right.avi")
     write_clip(moving_photo_frames(cv2.imread(photo), "right", distance=0.4, hold_s=1.0), clip)
     x = Xvfb("1280x800x24").start()
-    ros = ROOTCONF.RosEnv()
+    ros = RosEnv()
     ros.env["DISPLAY"] = x.display
     ros.env["PYTHONPATH"] = os.path.join(LOCAL, "src") + os.pathsep + ros.env.get("PYTHONPATH", "")
     ros.env["XDG_DATA_HOME"] = str(out / "xdg")  # never the user's taught gestures
     ros.env["XDG_RUNTIME_DIR"] = str(out)
-    port = ROOTCONF.free_port()
-    launch = ros.start(["roslaunch", "rbd_bringup", "sim.launch", "gui:=true", "gesture_video:=" + clip,
-                        "bridge_port:=%d" % port, "lidar_columns:=512", "localization:=false"])
+    port = free_port()
+    launch = ros.launch("rbd_bringup", "sim.launch", "gui:=true", "gesture_video:=" + clip,
+                        "bridge_port:=%d" % port, "lidar_columns:=512", "localization:=false", name="roslaunch")
     old_display = os.environ.get("DISPLAY")
     os.environ["DISPLAY"] = x.display
     ros.use_in_this_process()
     try:
-        ROOTCONF.wait_for_port(port, timeout=120)
+        wait_for_port(port, timeout=120, proc=launch)
         yield {"ros": ros, "port": port, "display": x.display, "launch": launch, "out": out}
     finally:
         if old_display is None:
@@ -107,8 +91,8 @@ def test_sim_launch_gui_true_opens_the_operator_window_that_sends_gestures(stack
                               text=True, timeout=10)
         return proc.stdout.split()
 
-    assert _until(window, 120, 0.5), "no operator window on the display (sim.launch gui:=true)"
-    assert _until(lambda: len(beats) >= 2, 60), "the operator GUI's heartbeat does not reach ROS"
+    assert wait_for(window, 120, 0.5), "no operator window on the display (sim.launch gui:=true)"
+    assert wait_for(lambda: len(beats) >= 2, 60), "the operator GUI's heartbeat does not reach ROS"
     assert beats[-1].frame_id == "rbd_local"
     shot = stack["out"] / "sim_gui.png"
     subprocess.run(["import", "-window", window()[0], str(shot)], env=env, check=True, timeout=30)
@@ -119,7 +103,7 @@ def test_sim_launch_gui_true_opens_the_operator_window_that_sends_gestures(stack
     # e-stop, so the controller does not take it; taking it here keeps it from later tests)
     rospy.wait_for_service("/rbd_gestrec/get_last_gesture", timeout=60)
     last = rospy.ServiceProxy("/rbd_gestrec/get_last_gesture", GetLastGesture)
-    assert _until(lambda: last().command == "walk", 60, 0.3), "the GUI's gesture from the video never arrived"
+    assert wait_for(lambda: last().command == "walk", 60, 0.3), "the GUI's gesture from the video never arrived"
     assert stack["launch"].poll() is None
 
 
@@ -152,21 +136,21 @@ def test_next_five_moves_of_the_new_tricks_in_the_gui(stack):
     last = rospy.ServiceProxy("/rbd_gestrec/get_last_gesture", GetLastGesture)
     link.start()
     try:
-        assert _until(lambda: link.connected, 30, pump=root.update)
+        assert wait_for(_pumped(root, lambda: link.connected), 30)
         ok, msg = link.em_stop(False, timeout=10)
         assert ok, msg
         for trick in NEW_TRICKS:
-            assert _until(lambda: gui.state == "WAITING_FOR_GESTURE", 60, pump=root.update), (trick, gui.state)
+            assert wait_for(_pumped(root, lambda: gui.state == "WAITING_FOR_GESTURE"), 60), (trick, gui.state)
             expected = ["%d. %s" % (i + 1, s["name"]) for i, s in enumerate(tricks[trick][:5])]
             expected += [""] * (5 - len(expected))
             for _attempt in range(3):  # the bridge's first message on a new publisher may be lost
                 last()  # nothing left over in rbd_gestrec
                 link.send_gesture(trick)  # as the laptop does for a taught gesture of this trick
-                if _until(lambda: gui.state == "EXECUTING", 10, pump=root.update):
+                if wait_for(_pumped(root, lambda: gui.state == "EXECUTING"), 10):
                     break
             assert gui.state == "EXECUTING", (trick, gui.state)
-            assert _until(lambda: gui.state == "WAITING_FOR_GESTURE", 90, pump=root.update), (trick, gui.state)
-            assert _until(lambda: shown[-1][0] == "(no moves queued)", 10, pump=root.update), shown[-3:]
+            assert wait_for(_pumped(root, lambda: gui.state == "WAITING_FOR_GESTURE"), 90), (trick, gui.state)
+            assert wait_for(_pumped(root, lambda: shown[-1][0] == "(no moves queued)"), 10), shown[-3:]
             # the window showed the trick's first five moves, then each reached move dropped off
             history = shown[:]
             del shown[:]

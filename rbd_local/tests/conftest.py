@@ -67,9 +67,13 @@ def hand_sprites(hand_photos):
     return load_sprites([hand_photos["handSrc.jpg"], hand_photos["handDst.jpg"]])
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def display():
-    """A private Xvfb for the module's windows; DISPLAY points at it meanwhile."""
+    """A private Xvfb for the session's windows; DISPLAY points at it meanwhile.
+
+    One for the whole session: Tk ends the process when the X server of a window it still
+    knows goes away, so a display must outlive every Tk interpreter of the session.
+    """
     if shutil.which("Xvfb") is None:
         pytest.skip("Xvfb not installed")
     from xvfb import Xvfb

@@ -343,13 +343,13 @@ def test_camera_frames_arrive_throttled_newest_only_and_decoded(fake_bridge):
         assert op["throttle_rate"] == 33 and op["queue_length"] == 1  # the bridge keeps only the newest
         now = int(time.time())
         fake_bridge.push(CAMERA_TOPIC, _jpeg_msg(40, now, 0))
-        assert _wait(lambda: source.received == 1)
+        assert wait_for(lambda: source.received == 1)
         t, frame = next(iter(source))
         assert t == 0.0 and frame.shape == (48, 64, 3) and abs(float(frame.mean()) - 40) < 3
         # two frames arrive while the loop is busy: only the newer one is shown
         fake_bridge.push(CAMERA_TOPIC, _jpeg_msg(80, now, 100_000_000))
         fake_bridge.push(CAMERA_TOPIC, _jpeg_msg(120, now, 200_000_000))
-        assert _wait(lambda: source.received == 3)
+        assert wait_for(lambda: source.received == 3)
         t, frame = next(source)
         assert t == pytest.approx(0.2) and abs(float(frame.mean()) - 120) < 3
         assert source.dropped == 1
@@ -361,7 +361,7 @@ def test_camera_frames_arrive_throttled_newest_only_and_decoded(fake_bridge):
             source.push(bad)
             reader = threading.Thread(target=lambda out=got: out.append(next(source, None)), daemon=True)
             reader.start()
-            assert _wait(lambda n=i + 1: source.bad == n), "the bad frame was not seen and skipped"
+            assert wait_for(lambda n=i + 1: source.bad == n), "the bad frame was not seen and skipped"
             fake_bridge.push(CAMERA_TOPIC, _jpeg_msg(200, now + 1 + i, 0))
             reader.join(10)
             assert got and got[0] is not None, "the source stalled after a bad frame"
