@@ -66,11 +66,11 @@ class TestGestrec(unittest.TestCase):
         # launch/rbd_gestrec.launch loads rbd_navigation's tricks.yaml: "bow" has no mapping
         # entry in gestures.yaml, but it is a trick, so a taught gesture's "bow" is understood;
         # "dance" is neither and is dropped (proved by the "spin" behind it coming through alone)
-        self.pub.publish(String("dance"))
-        self.pub.publish(String("bow"))
+        self.pubs[GESTURE_TOPIC].publish(String("dance"))
+        self.pubs[GESTURE_TOPIC].publish(String("bow"))
         self.assertEqual(self.wait_command(), "bow")
-        self.pub.publish(String("dance"))
-        self.pub.publish(String("spin"))
+        self.pubs[GESTURE_TOPIC].publish(String("dance"))
+        self.pubs[GESTURE_TOPIC].publish(String("spin"))
         self.assertEqual(self.wait_command(), "spin")
         self.assertEqual(self.srv().command, "")
 
