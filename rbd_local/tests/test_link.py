@@ -60,11 +60,12 @@ def test_em_stop_calls_the_service_and_reports_the_answer(fake_bridge):
     link, _ = _link(fake_bridge)
     try:
         assert link.wait_connected(10)
-        assert link.em_stop(True) == (True, "ok")
+        # (answers are under test here, not speed: a generous timeout for a loaded machine)
+        assert link.em_stop(True, timeout=10) == (True, "ok")
         fake_bridge.service_handler = lambda s, a: (True, {"success": False, "message": "refused"})
-        assert link.em_stop(False) == (False, "refused")
+        assert link.em_stop(False, timeout=10) == (False, "refused")
         fake_bridge.service_handler = lambda s, a: (False, "service not available")
-        ok, msg = link.em_stop(True)
+        ok, msg = link.em_stop(True, timeout=10)
         assert not ok and msg
         assert [c for c in fake_bridge.service_calls] == [
             (EM_STOP_SERVICE, {"data": True}), (EM_STOP_SERVICE, {"data": False}), (EM_STOP_SERVICE, {"data": True}),
