@@ -35,7 +35,7 @@ t_all=$(date +%s)
 
 # pytest files that start a simulated stack: the serial lane runs them after the rostests.
 serial_pytest=(tests/test_demo.py tests/test_soak.py tests/test_two_hosts.py tests/experiments
-               src/rbd_bringup/test/test_robot_bringup.py src/rbd_bringup/test/test_replay.py)
+               tests/test_sim_gui.py src/rbd_bringup/test/test_robot_bringup.py src/rbd_bringup/test/test_replay.py)
 # A rostest file starts a simulated stack when it includes one of these launch files or plays a bag.
 sim_pattern='launch/(sim|mock_a1|sensors)\.launch|pkg="rosbag"'
 
