@@ -7,8 +7,9 @@ and C++ is built unoptimised:
 `make test` compiles and runs them once in the main build.
 
 Every tool builds every package. The three workspaces have the same layout (src/<pkg>,
-build/<pkg>) and the same flags, so with ccache (CCACHE_BASEDIR = the workspace) the C++ is
-compiled once, by whichever of the three runs first; the other two get it from the cache.
+build/<pkg>) and the same flags, so with ccache (CCACHE_BASEDIR = the workspace) most of the C++
+compiled by whichever of the three runs first is a cache hit for the other two (not the files
+that include generated message headers: their include path differs per tool).
 """
 
 import os
