@@ -235,7 +235,7 @@ def test_forget_and_undo_from_the_panel(teach_window):
     revision = GestureModel.load(w["path"]).revision
     panel.taught_rows["swipe_up"][2].invoke()  # its ✕ button
     rest = [n for n in before if n != "swipe_up"]
-    assert pump(root, lambda: panel.taught_names() == rest, 10), (panel.taught_names(), desk.status(), panel._taught_shown)
+    assert pump(root, lambda: panel.taught_names() == rest, 10), (panel.taught_names(), desk.status())
     assert GestureModel.load(w["path"]).taught.names == rest
     assert GestureModel.load(w["path"]).revision == revision + 1
     click(panel.undo_button)
