@@ -6,6 +6,7 @@ reports on the latched ``/preflight/report`` when the window subscribes.
 """
 
 import io
+import os
 import shutil
 import subprocess
 
@@ -17,6 +18,7 @@ from rbd_local.link import PREFLIGHT_SERVICE, PREFLIGHT_TOPIC, RobotLink
 
 pytestmark = pytest.mark.skipif(shutil.which("Xvfb") is None, reason="Xvfb not installed")
 
+PKG_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RED = "#c62828"
 GREEN = "#2e7d32"
 GREY = "#757575"
@@ -117,6 +119,7 @@ def test_preflight_panel_latched_report_run_click_and_link_loss(window):
     for widget in (panel.rows[1][0], panel.ready_label):
         shown = screen_pixel(widget)
         assert max(abs(a - b) for a, b in zip(shown, hex_rgb(RED), strict=True)) < 30, shown
+    save_screenshot(root)
 
     # the link goes down: the panel says so, keeps the last report and Run is off
     bridge.stop()
@@ -136,3 +139,16 @@ def test_a_failed_run_says_why_and_keeps_the_window_alive(window):
     assert pump(root, lambda: panel.message_label.cget("text").startswith("preflight failed"), 10)
     assert "does not exist" in panel.message_label.cget("text")
     assert panel.run_button.cget("state") == "normal" and panel.summary() == "no report yet"
+
+
+def save_screenshot(root):
+    """``.cache/gui_preflight.png``; ``docs/preflight.png`` (the README's) when missing or RBD_UPDATE_DOCS=1."""
+    from rbd_local.gui.screenshot import save_window
+
+    cache = os.path.join(PKG_ROOT, ".cache")
+    os.makedirs(cache, exist_ok=True)
+    path = os.path.join(cache, "gui_preflight.png")
+    save_window(root, path)
+    docs_png = os.path.join(PKG_ROOT, "docs", "preflight.png")
+    if os.environ.get("RBD_UPDATE_DOCS") == "1" or not os.path.exists(docs_png):
+        shutil.copyfile(path, docs_png)
