@@ -374,3 +374,87 @@ def test_camera_frames_arrive_throttled_newest_only_and_decoded(fake_bridge):
         source.close()
         link.stop()
     assert next(source, "end") == "end"  # a closed source ends the iteration
+
+
+# ------------------------------------------------------------------------- the robot's preflight
+def test_preflight_test_reports_have_the_robots_message_fields():
+    import preflight_reports as pr
+
+    assert list(pr.report()) == pr.msg_fields("PreflightReport")
+    assert list(pr.report()["checks"][0]) == pr.msg_fields("PreflightCheck")
+    assert pr.msg_fields("PreflightCheck") == ["key", "name", "status", "value", "hint"]
+
+
+def test_run_preflight_calls_the_service_and_returns_the_report(fake_bridge):
+    import preflight_reports as pr
+
+    from rbd_local.link import PREFLIGHT_SERVICE
+
+    answers = {"report": pr.report()}
+
+    def handler(service, args):
+        if service == PREFLIGHT_SERVICE:
+            return (True, answers) if isinstance(answers, dict) else (False, answers)
+        return True, {}
+
+    fake_bridge.service_handler = handler
+    link, _got = _link(fake_bridge)
+    try:
+        assert link.wait_connected(10)
+        rep = link.run_preflight(5.0)
+        assert (PREFLIGHT_SERVICE, {"duration": 0.0}) in fake_bridge.service_calls
+        assert rep["ready"] is False and rep["duration"] == 3.0
+        assert abs(rep["stamp"] - 1764084662.25) < 1e-6
+        assert [(c["name"], c["status"]) for c in rep["checks"]] == [
+            ("A1 HighState", "PASS"), ("LiDAR /ouster/points", "FAIL"), ("LiDAR cloud layout", "SKIP")]
+        assert rep["checks"][1]["value"] == "no message in 3.0 s"
+        assert rep["checks"][1]["hint"].startswith("is ouster-ros running")
+        assert rep["mounts_file"] == "/opt/robodog/mounts.yaml"
+        link.run_preflight(5.0, duration=6.0)
+        assert fake_bridge.service_calls[-1] == (PREFLIGHT_SERVICE, {"duration": 6.0})
+        with pytest.raises(ValueError):
+            link.run_preflight(5.0, duration=11.0)  # refused before anything is sent
+        assert fake_bridge.service_calls[-1] == (PREFLIGHT_SERVICE, {"duration": 6.0})
+        # the robot without preflight_server: rbd_bridge answers result false with its reason
+        answers = "service /preflight/run does not exist"
+        with pytest.raises(ValueError, match="does not exist.*preflight_server"):
+            link.run_preflight(5.0)
+        answers = {"report": dict(pr.report(), checks=[pr.check("x", "X", "MAYBE", "")])}
+        with pytest.raises(ValueError, match="malformed"):
+            link.run_preflight(5.0)
+    finally:
+        link.stop()
+    with pytest.raises(ConnectionError, match="no connection"):
+        link.run_preflight(1.0)
+
+
+def test_run_preflight_without_a_bridge_fails_at_once():
+    link = RobotLink("127.0.0.1", 9, retry_s=0.2, connect_timeout_s=0.3).start()
+    try:
+        t0 = time.monotonic()
+        with pytest.raises(ConnectionError, match="no connection"):
+            link.run_preflight(5.0)
+        assert time.monotonic() - t0 < 1.0
+    finally:
+        link.stop()
+
+
+def test_latched_preflight_report_reaches_the_callback(fake_bridge):
+    import preflight_reports as pr
+
+    from rbd_local.link import PREFLIGHT_TOPIC
+
+    reports = []
+    link, _got = _link(fake_bridge, on_preflight=reports.append)
+    try:
+        assert link.wait_connected(10)
+        assert fake_bridge.wait_for(lambda: PREFLIGHT_TOPIC in fake_bridge.subscribed)
+        assert fake_bridge.subscribed[PREFLIGHT_TOPIC] == "rbd_msgs/PreflightReport"
+        fake_bridge.push(PREFLIGHT_TOPIC, pr.report())
+        fake_bridge.push(PREFLIGHT_TOPIC, {"ready": "yes"})  # malformed: ignored, no crash
+        fake_bridge.push(PREFLIGHT_TOPIC, pr.all_pass())
+        assert wait_for(lambda: len(reports) == 2)
+        assert [r["ready"] for r in reports] == [False, True]
+        assert [c["status"] for c in reports[0]["checks"]] == ["PASS", "FAIL", "SKIP"]
+    finally:
+        link.stop()

@@ -118,6 +118,7 @@ def main(argv: list[str] = None) -> int:
             on_state=lambda s: holder["gui"].post_state(s),
             on_path_queue=lambda n: holder["gui"].post_path_queue(n),
             on_connection=lambda up: holder["gui"].post_connection(up),
+            on_preflight=lambda r: holder["gui"].post_preflight(r),
             **camera,
         )
     except ValueError as exc:

@@ -1,16 +1,18 @@
-"""The operator window: e-stop, state colour, next five moves, last gesture, connection, teach mode.
+"""The operator window: e-stop, state colour, next five moves, last gesture, connection, teach mode, preflight.
 
 The window never touches the network itself. It is given a *backend* with
 
 - ``em_stop(engage: bool, timeout: float) -> (bool, str)`` (may block; run off the UI thread),
 - ``connected`` (bool property) and ``address`` (str),
 - optionally ``get_tricks(timeout) -> {trick: [step names]}`` (may block) for the Teach panel,
+- optionally ``run_preflight(timeout) -> report`` (may block) for the Preflight panel,
 
 which is :class:`rbd_local.link.RobotLink` in the app and a fake in tests. The Teach panel
 (:mod:`rbd_local.gui.teach_panel`) also gets the app's
 :class:`~rbd_local.gestures.teach.TeachDesk` when gestures are recognised in the same process. Robot data arrives
 through the thread-safe ``post_*`` methods (called from the link's thread) and is applied on
-the Tk thread by a periodic poll.
+the Tk thread by a periodic poll. The Teach and Preflight panels (:mod:`rbd_local.gui.preflight_panel`)
+share the third column as tabs ("Teach" shown first).
 """
 
 import queue
@@ -59,7 +61,7 @@ class OperatorGui:
         self.state = ""
         self.moves: list[str] = []
         root.title("RoboDog operator")
-        root.geometry("1150x470")
+        root.geometry("1150x520")
         root.grid_columnconfigure(0, weight=1)
         root.grid_columnconfigure(1, weight=1)
         root.grid_columnconfigure(2, weight=1)
@@ -105,12 +107,18 @@ class OperatorGui:
             self.move_labels.append(lab)
         self._show_moves([])
 
+        from rbd_local.gui.preflight_panel import PreflightPanel
         from rbd_local.gui.teach_panel import TeachPanel
 
-        teach = ctk.CTkFrame(root)
-        teach.grid(row=0, column=2, sticky="nsew", padx=8, pady=8)
+        self.tabs = ctk.CTkTabview(root)
+        self.tabs.grid(row=0, column=2, sticky="nsew", padx=8, pady=(0, 8))
+        teach = self.tabs.add("Teach")
+        preflight = self.tabs.add("Preflight")
+        # "Teach" is shown first (the first tab added). No tabs.set() here: its delayed clean-up would
+        # hide a tab chosen right after the window is built.
         self.teach_panel = TeachPanel(teach, getattr(backend, "get_tricks", None), teach_desk, mapped_tricks,
                                       no_camera_hint)
+        self.preflight_panel = PreflightPanel(preflight, getattr(backend, "run_preflight", None))
         self._set_connected(bool(getattr(backend, "connected", False)))
         self.root.after(POLL_MS, self._poll)
 
@@ -130,6 +138,10 @@ class OperatorGui:
     def post_gesture(self, gesture: str, command: str, confidence: float) -> None:
         """A gesture was recognised and its command sent."""
         self._events.put(("gesture", (gesture, command, confidence)))
+
+    def post_preflight(self, report: dict) -> None:
+        """A preflight report (the robot's latched ``/preflight/report``)."""
+        self.preflight_panel.post_report(report)
 
     def post_connection(self, up: bool) -> None:
         """The link came up or went down."""
@@ -165,6 +177,7 @@ class OperatorGui:
         if self._release_armed_until and time.monotonic() > self._release_armed_until:
             self._disarm_release()
         self.teach_panel.apply_pending()
+        self.preflight_panel.apply_pending()
 
     def _poll(self) -> None:
         try:
@@ -196,6 +209,7 @@ class OperatorGui:
         if up and not getattr(self, "_connected", False):
             self.teach_panel.reload_tricks()  # the robot's tricks, at every (re)connection
         self._connected = up
+        self.preflight_panel.set_connected(up)
         address = getattr(self.backend, "address", "")
         if up:
             self.connection_label.configure(text="● CONNECTED %s" % address, fg_color=CONNECTED_COLOUR)
