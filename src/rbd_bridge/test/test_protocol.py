@@ -396,10 +396,14 @@ def test_auth_required_before_anything_else():
     secret = "0123456789abcdef"
     policy = Policy(None, None, None, None, secret=secret)
     wall = 1000.0
+    # as rosbridge: any op but auth on an unauthenticated connection closes it
+    for first in ('{"op": "set_level", "level": "error"}', '{"op": "subscribe", "topic": "/t"}'):
+        session, backend, out, _, closed = make(policy, wall=lambda: wall)
+        session.receive(first)
+        session.receive('{"op": "subscribe", "topic": "/t"}')
+        assert closed == [(1008, "authentication required")] and drain(out) == []
+        assert backend.calls == [("closed", 1)]  # released at once, nothing done in ROS
     session, backend, out, _, closed = make(policy, wall=lambda: wall)
-    session.receive('{"op": "set_level", "level": "error"}')
-    session.receive('{"op": "subscribe", "topic": "/t"}')
-    assert backend.calls == [] and "not authenticated" in drain(out)[0]["msg"]
     mac = make_mac(secret, "client", "dest", "rand", 1000, "admin", 2000)
     good = {
         "op": "auth",
@@ -420,7 +424,7 @@ def test_auth_required_before_anything_else():
         s2, b2, _, _, closed2 = make(policy, wall=lambda: wall)
         s2.receive(json.dumps(bad))
         s2.receive('{"op": "subscribe", "topic": "/t"}')
-        assert not s2.authenticated and closed2 and b2.calls == []
+        assert not s2.authenticated and closed2 and b2.calls == [("closed", 1)]
 
 
 @pytest.mark.parametrize("level", ["info"])

@@ -281,7 +281,10 @@ def _png_chunk(kind: str, payload: Any) -> Any:
 
 
 def png_encode(text: str) -> Any:
-    """Pack the UTF-8 bytes of text into an 8-bit RGB PNG (zero padded) and base64 it.
+    """Pack the UTF-8 bytes of text into an 8-bit RGB PNG (padded with newlines) and base64 it.
+
+    The padding is ``\\n`` as rosbridge's: a client decodes the pixels to text and parses
+    it as JSON, where trailing newlines are whitespace (NUL bytes make ``JSON.parse`` throw).
 
     Args:
         text: The JSON string of a frame.
@@ -293,7 +296,7 @@ def png_encode(text: str) -> Any:
     pixels = max(1, (len(raw) + 2) // 3)
     width = max(1, int(math.ceil(math.sqrt(pixels))))
     height = (pixels + width - 1) // width
-    raw = raw + b"\x00" * (width * height * 3 - len(raw))
+    raw = raw + b"\n" * (width * height * 3 - len(raw))
     stride = width * 3
     rows = b"".join(b"\x00" + raw[y * stride : (y + 1) * stride] for y in range(height))
     png = b"".join(
@@ -314,7 +317,7 @@ def png_decode(data: Any) -> Any:
         data: base64 text of the PNG.
 
     Returns:
-        str: The embedded text with the zero padding removed.
+        str: The embedded text with the padding removed.
     """
     png = base64.b64decode(data)
     if png[:8] != b"\x89PNG\r\n\x1a\n":
@@ -332,7 +335,7 @@ def png_decode(data: Any) -> Any:
     rows = zlib.decompress(b"".join(idat))
     stride = width * 3 + 1
     raw = b"".join(rows[i + 1 : i + stride] for i in range(0, len(rows), stride))
-    return raw.rstrip(b"\x00").decode("utf-8")
+    return raw.rstrip(b"\n\x00").decode("utf-8")
 
 
 # --------------------------------------------------------------------------- fragments

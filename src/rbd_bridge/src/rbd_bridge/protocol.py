@@ -434,8 +434,13 @@ class Session:
         handler = self._handlers.get(op)
         if handler is None:
             raise BridgeError("unsupported op %r" % op[:40])
-        if not self.authenticated and op not in ("auth", "set_level", "fragment"):
-            raise BridgeError("%s: not authenticated (send an auth op first)" % op)
+        if not self.authenticated and op != "auth":
+            # as rosbridge: anything but auth on an unauthenticated connection ends it
+            _log.warning("client %s (%s) sent %r before authenticating: closing", self.client_id, self.peer, op[:40])
+            if self.close_cb is not None:
+                self.close_cb(1008, "authentication required")
+            self.close()
+            return
         try:
             if op == "fragment":
                 handler(frame, depth)
@@ -776,6 +781,8 @@ class Session:
             raise BridgeError("service_response: missing 'id'")
         values = frame.get("values")
         result = frame.get("result", True)
+        # result: false still hands the values to the ROS caller when they are an object (as
+        # rosbridge, which ignores the flag); the backend logs it
         self.backend.service_response(self, service, call_id, values, result is not False)
 
     # ----------------------------------------------------------------- teardown

@@ -134,7 +134,12 @@ class RosApi:
     # ------------------------------------------------------------ graph helpers
 
     def _topic_types(self) -> Any:
-        return [(t, ty) for t, ty in self.graph.getTopicTypes() if self.policy.may_see_topic(t)]
+        # as rosapi: the master's topic types keep topics whose publishers are all gone, so
+        # only topics that have a publisher or subscriber now count (unknown type: "")
+        pubs, subs, _ = self._state()
+        live = set(t for t, nodes in pubs + subs if nodes and self.policy.may_see_topic(t))
+        types = dict((t, ty) for t, ty in self.graph.getTopicTypes() if t in live)
+        return [(t, types.get(t, "")) for t in live]
 
     def _state(self) -> Any:
         return self.graph.getSystemState()

@@ -202,7 +202,9 @@ def policy_from_params(get: Callable[..., Any], secret: str = None) -> Any:
 
     ``topics_glob`` (rosbridge) sets both directions; ``publish_topics_glob`` /
     ``subscribe_topics_glob`` override one direction. A list not given at all keeps the
-    RoboDog default; ``"[*]"`` opens it; ``"[]"`` closes it.
+    RoboDog default; ``"[*]"`` opens it; ``"[]"`` closes it. As rosbridge does, a given
+    non-empty ``services_glob`` gets ``/rosapi/*`` added, and a given ``params_glob`` is
+    writable unless ``params_writable`` is false (the RoboDog default has no parameters).
 
     Args:
         get: Callable(name, default) reading a private parameter.
@@ -222,13 +224,20 @@ def policy_from_params(get: Callable[..., Any], secret: str = None) -> Any:
         subscribe = topics if topics is not None else ROBODOG_SUBSCRIBE
     if services is None:
         services = ROBODOG_SERVICES
+    elif services and "/rosapi/*" not in services:
+        services = services + ("/rosapi/*",)  # as rosbridge: rosapi stays reachable
+    writable = get("params_writable", None)
+    if writable is None or writable == "":
+        writable = params is not None  # as rosbridge: a given params_glob is readable and writable
+    elif isinstance(writable, str):
+        writable = writable.strip().lower() in ("true", "1", "yes")
     if params is None:
         params = ROBODOG_PARAMS
     return Policy(
         publish_globs=None if publish == ("*",) else publish,
         subscribe_globs=None if subscribe == ("*",) else subscribe,
-        service_globs=None if services == ("*",) else services,
+        service_globs=None if "*" in services else services,
         param_globs=None if params == ("*",) else params,
-        params_writable=bool(get("params_writable", False)),
+        params_writable=bool(writable),
         secret=secret,
     )
