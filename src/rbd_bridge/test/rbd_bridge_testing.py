@@ -14,7 +14,7 @@ import zlib
 import rosgraph
 from websockets.sync.client import connect
 
-from rbd_bridge import encoding
+from rbd_bridge.core import encoding
 
 PKG = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ROOT = os.path.dirname(os.path.dirname(PKG))

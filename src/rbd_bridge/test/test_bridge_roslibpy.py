@@ -9,7 +9,7 @@ import pytest
 import roslibpy
 from rbd_bridge_testing import master_of, png_text, start_echo, wait_until
 
-from rbd_bridge.rosapi import ROSAPI_TYPES
+from rbd_bridge.core.rosapi import ROSAPI_TYPES
 
 BRIDGE = "/rbd_bridge"
 

@@ -12,7 +12,7 @@ from rbd_bridge_testing import ROOTCONF, master_of, start_bridge, wait_until
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
-from rbd_bridge.security import make_mac
+from rbd_bridge.core.security import make_mac
 
 SECRET = "0123456789abcdef"
 

@@ -11,7 +11,7 @@ import time
 import pytest
 from rospy.exceptions import TransportTerminated
 
-from rbd_bridge.ros_backend import _Cork, _DirectConnection
+from rbd_bridge.ros.fastpath import _Cork, _DirectConnection
 
 
 class FakeTransport:

@@ -5,10 +5,10 @@ import math
 import struct
 
 import pytest
+from rbd_bridge_testing import png_text
 
-from rbd_bridge import encoding
-from rbd_bridge.msgconv import TypedArray
-from rbd_bridge.security import (
+from rbd_bridge.core import encoding
+from rbd_bridge.core.security import (
     ROBODOG_PUBLISH,
     AuthError,
     Policy,
@@ -17,6 +17,7 @@ from rbd_bridge.security import (
     parse_glob_list,
     policy_from_params,
 )
+from rbd_bridge.core.types import TypedArray
 
 cbor2 = pytest.importorskip("cbor2")
 
@@ -62,12 +63,12 @@ def test_cbor_decoder_rejects_garbage(garbage):
 
 def test_png_roundtrip_and_fragments():
     text = json.dumps({"op": "publish", "topic": "/t", "msg": {"data": "x" * 1000}})
-    data = encoding.png_encode(text)
-    assert encoding.png_decode(data) == text
+    decoded = png_text(encoding.png_encode(text))
+    assert decoded.rstrip("\n") == text and json.loads(decoded) == json.loads(text)  # newline padding
     parts = encoding.fragment(text, 100, "id1")
     assert len(parts) == (len(text) + 99) // 100
     assert "".join(json.loads(p)["data"] for p in parts) == text
-    assert encoding.fragment("short", 100, "x") == ["short"]
+    assert [json.loads(p)["total"] for p in encoding.fragment("short", 100, "x")] == [1]
     assert json.loads(encoding.json_dumps({"v": [math.inf, 1.0]})) == {"v": [None, 1.0]}
 
 

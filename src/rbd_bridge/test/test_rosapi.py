@@ -4,8 +4,8 @@ import json
 
 import pytest
 
-from rbd_bridge.rosapi import RosApi, RosApiError
-from rbd_bridge.security import Policy
+from rbd_bridge.core.rosapi import RosApi, RosApiError
+from rbd_bridge.core.security import Policy
 
 ACTION = ["/goal", "/cancel", "/status", "/feedback", "/result"]
 

@@ -5,16 +5,19 @@ rosapi node; request and response field names are rosapi's (ROS 1). The services
 registered with the ROS master: only WebSocket clients can reach them. Results are
 filtered through the bridge's allow-lists. Parameter values travel as JSON strings.
 
-``RosApi`` needs a *graph* object with rosgraph.Master's XML-RPC methods
-(``getTopicTypes``, ``getSystemState``, ``lookupService``) and a *params* object with
+ROS-free: ``RosApi`` needs a *graph* object with rosgraph.Master's XML-RPC methods
+(``getTopicTypes``, ``getSystemState``, ``lookupService``), a *params* object with
 ``get(name)``, ``set(name, value)``, ``has(name)``, ``delete(name)``, ``search(name)``,
-``names()``; the node passes ROS-backed ones, tests may pass fakes.
+``names()``, and a *types* object with ``typedefs(type_name, part)`` (rosapi ``TypeDef``
+dicts of a message, or of a service's ``"request"``/``"response"``) and
+``full_text(type_name)``, both raising ``ConversionError``; the node passes ROS-backed
+ones (:mod:`rbd_bridge.ros.graph`), tests may pass fakes.
 """
 
 import json
 from typing import Any, Callable
 
-from rbd_bridge.msgconv import ConversionError, get_message_class, get_service_class, message_typedefs
+from rbd_bridge.core.types import ConversionError
 
 __all__ = ["RosApi", "ROSAPI_TYPES", "RosApiError"]
 
@@ -71,13 +74,17 @@ class RosApi:
         params: Parameter store adapter (see module doc).
         now: Callable returning (secs, nsecs) of ROS time.
         service_type: Callable(service) -> type name of a ROS service (may raise).
+        types: Message definitions adapter (see module doc).
     """
 
-    def __init__(self, policy: Any, graph: Any, params: Any, now: Callable[..., Any], service_type: Any) -> None:
+    def __init__(
+        self, policy: Any, graph: Any, params: Any, now: Callable[..., Any], service_type: Any, types: Any = None
+    ) -> None:
         """Keep the adapters."""
         self.policy = policy
         self.graph = graph
         self.params = params
+        self.types = types
         self.now = now
         self.lookup_service_type = service_type
 
@@ -182,8 +189,7 @@ class RosApi:
         texts = []
         for _, ty in pairs:
             try:
-                cls = get_message_class(ty)
-                texts.append(cls._full_text)
+                texts.append(self.types.full_text(ty))
             except ConversionError:
                 texts.append("")
         return {"topics": [t for t, _ in pairs], "types": [ty for _, ty in pairs], "typedefs_full_text": texts}
@@ -276,24 +282,20 @@ class RosApi:
 
     # ------------------------------------------------------------ types
 
-    def _message_details(self, args: Any) -> Any:
+    def _details(self, args: Any, part: str = "") -> Any:
         try:
-            return {"typedefs": message_typedefs(get_message_class(_str_arg(args, "type")))}
+            return {"typedefs": self.types.typedefs(_str_arg(args, "type"), part)}
         except ConversionError as exc:
             raise RosApiError(str(exc)) from None
 
-    def _srv_details(self, args: Any, part: Any) -> Any:
-        try:
-            cls = get_service_class(_str_arg(args, "type"))
-        except ConversionError as exc:
-            raise RosApiError(str(exc)) from None
-        return {"typedefs": message_typedefs(getattr(cls, part))}
+    def _message_details(self, args: Any) -> Any:
+        return self._details(args)
 
     def _service_request_details(self, args: Any) -> Any:
-        return self._srv_details(args, "_request_class")
+        return self._details(args, "request")
 
     def _service_response_details(self, args: Any) -> Any:
-        return self._srv_details(args, "_response_class")
+        return self._details(args, "response")
 
     # ------------------------------------------------------------ params
 

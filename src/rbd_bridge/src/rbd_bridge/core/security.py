@@ -72,17 +72,38 @@ def parse_glob_list(text: str) -> Any:
     return tuple(out)
 
 
-def _matches(name: str, globs: Any) -> bool:
-    if globs is None:
-        return True
-    for pattern in globs:
-        if fnmatch.fnmatchcase(name, pattern):
-            return True
-    return False
+class _Globs:
+    """A glob list (None = everything) whose answers are cached (at most 4096 names)."""
+
+    def __init__(self, globs: Any) -> None:
+        self.globs = globs
+        self.cache = {}
+
+    def __call__(self, name: str) -> bool:
+        hit = self.cache.get(name)
+        if hit is None:
+            hit = self.globs is None or any(fnmatch.fnmatchcase(name, p) for p in self.globs)
+            if len(self.cache) >= 4096:
+                self.cache.clear()
+            self.cache[name] = hit
+        return hit
 
 
 class Policy:
-    """What a client may do. ``None`` for a glob list means "everything"."""
+    """What a client may do.
+
+    ``may_publish`` (into ROS), ``may_subscribe``, ``may_call`` (call or advertise a service;
+    rosapi's are ``/rosapi/*``) and ``may_read_param`` (rosapi) are ``(name) -> bool``. A glob
+    list of ``None`` allows everything.
+
+    Args:
+        publish_globs: Topics a client may advertise/publish.
+        subscribe_globs: Topics a client may subscribe to.
+        service_globs: Services a client may call or advertise.
+        param_globs: Parameters rosapi may read (and write when params_writable).
+        params_writable: Allow rosapi set_param / delete_param within param_globs.
+        secret: Shared secret; when set, clients must ``auth`` first.
+    """
 
     def __init__(
         self,
@@ -93,52 +114,26 @@ class Policy:
         params_writable: bool = False,
         secret: str = None,
     ) -> None:
-        """Build a policy.
-
-        Args:
-            publish_globs: Topics a client may advertise/publish (into ROS).
-            subscribe_globs: Topics a client may subscribe to (out of ROS).
-            service_globs: Services a client may call or advertise (rosapi's are
-                ``/rosapi/*``).
-            param_globs: Parameters rosapi may read (and write when params_writable).
-            params_writable: Allow rosapi set_param / delete_param.
-            secret: Shared secret; when set, clients must ``auth`` first.
-        """
-        self.publish_globs = publish_globs
-        self.subscribe_globs = subscribe_globs
-        self.service_globs = service_globs
-        self.param_globs = param_globs
+        """Build a policy."""
+        self.publish_globs, self.may_publish = publish_globs, _Globs(publish_globs)
+        self.subscribe_globs, self.may_subscribe = subscribe_globs, _Globs(subscribe_globs)
+        self.service_globs, self.may_call = service_globs, _Globs(service_globs)
+        self.param_globs, self.may_read_param = param_globs, _Globs(param_globs)
         self.params_writable = params_writable
         self.secret = secret
 
     @property
-    def authenticate(self) -> Any:
+    def authenticate(self) -> bool:
         """True when clients must authenticate."""
         return bool(self.secret)
 
-    def may_publish(self, topic: str) -> Any:
-        """Return True if a client may publish topic into ROS."""
-        return _matches(topic, self.publish_globs)
-
-    def may_subscribe(self, topic: str) -> Any:
-        """Return True if a client may receive topic."""
-        return _matches(topic, self.subscribe_globs)
-
-    def may_see_topic(self, topic: str) -> Any:
+    def may_see_topic(self, topic: str) -> bool:
         """Return True if rosapi may list topic (allowed in either direction)."""
         return self.may_publish(topic) or self.may_subscribe(topic)
 
-    def may_call(self, service: str) -> Any:
-        """Return True if a client may call or advertise service."""
-        return _matches(service, self.service_globs)
-
-    def may_read_param(self, name: str) -> Any:
-        """Return True if rosapi may reveal parameter name."""
-        return _matches(name, self.param_globs)
-
-    def may_write_param(self, name: str) -> Any:
+    def may_write_param(self, name: str) -> bool:
         """Return True if rosapi may set or delete parameter name."""
-        return self.params_writable and _matches(name, self.param_globs)
+        return bool(self.params_writable) and self.may_read_param(name)
 
 
 def _secs(value: Any, field: str) -> Any:
