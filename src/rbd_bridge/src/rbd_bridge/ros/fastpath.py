@@ -40,10 +40,11 @@ __all__ = ["FastPath"]
 
 _log = logging.getLogger("rbd_bridge")
 _ADOPT_TIMEOUT = 5.0  # a ROS thread waits this long for the loop to take a connection [s]
-# At most this many publishes leave in one write to a ROS subscriber: rospy keeps only the
-# newest queue_size messages of each read, so one big write of a client's burst made a
-# queue-1000 subscriber drop what arrived beyond 1000 (measured: 4755 of 5000 delivered).
-_CORK_MESSAGES = 32
+# A write to a ROS subscriber holds at most min(the client's queue_size, this) publishes;
+# the rest of a bigger burst is written message by message, as rospy would. rospy keeps
+# only the newest queue_size messages of each socket read: one write of a whole WebSocket
+# read (~1200 short publishes) made a queue-1000 subscriber drop 245 of 5000.
+_CORK_MESSAGES = 256
 
 
 class _Cork:
@@ -75,8 +76,9 @@ class _DirectConnection:
     def __init__(self, connection: Any, queue_size: int, cork: Any = None) -> None:
         self._connection = connection
         self._cork = cork
-        self._parts = None  # writes held by the cork
+        self._parts = None  # writes held by the cork (False: write through until uncork)
         self._queue_size = max(1, queue_size)
+        self._cork_limit = min(self._queue_size, _CORK_MESSAGES)
         self._lock = threading.RLock()  # conn.close() calls _closed with it held
         self._wake = threading.Condition(self._lock)
         self._backlog = collections.deque()
@@ -98,8 +100,9 @@ class _DirectConnection:
     def write_data(self, data: bytes) -> bool:
         """Send data now if the socket takes it; else queue it for the writer thread.
 
-        While the cork is set by the calling thread, data is held until :meth:`uncork`, or
-        until ``_CORK_MESSAGES`` messages are held (then they leave together).
+        While the cork is set by the calling thread, data is held until :meth:`uncork`; once
+        the held messages reach the limit they leave together and the rest of the batch is
+        written one by one.
         """
         cork = self._cork
         if cork is not None and cork.thread == threading.get_ident():
@@ -109,15 +112,17 @@ class _DirectConnection:
                     raise error
                 if self._connection.done:
                     raise TransportTerminated("connection closed")
-                if self._parts is None:
+                parts = self._parts
+                if parts is None:
                     self._parts = [data]
                     cork.pending.append(self)
                     return True
-                self._parts.append(data)
-                if len(self._parts) < _CORK_MESSAGES:
-                    return True
-                parts, self._parts = self._parts, []
-            return self._write(b"".join(parts))
+                if parts is not False:
+                    if len(parts) < self._cork_limit:
+                        parts.append(data)
+                        return True
+                    self._parts = False  # the limit: what is held leaves now, the rest writes through
+                    self._write(b"".join(parts))
         return self._write(data)
 
     def uncork(self) -> None:
