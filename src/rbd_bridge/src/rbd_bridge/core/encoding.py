@@ -42,14 +42,7 @@ def _sanitize(value: Any) -> Any:
 
 
 def json_dumps(obj: Any) -> str:
-    """Serialize obj compactly; non-finite floats become null (never the NaN literal).
-
-    Args:
-        obj: JSON-ready object.
-
-    Returns:
-        str: The JSON text.
-    """
+    """Serialize obj compactly; non-finite floats become null (never the NaN literal)."""
     try:
         return _json_encoder.encode(obj)
     except ValueError:
@@ -57,20 +50,9 @@ def json_dumps(obj: Any) -> str:
 
 
 # RFC 8746 typed arrays, little-endian: ROS element type -> (tag, struct format)
-_TYPED_TAGS = {
-    "uint8": (64, "B"),
-    "char": (64, "B"),
-    "int8": (72, "b"),
-    "byte": (72, "b"),
-    "uint16": (69, "H"),
-    "uint32": (70, "I"),
-    "uint64": (71, "Q"),
-    "int16": (77, "h"),
-    "int32": (78, "i"),
-    "int64": (79, "q"),
-    "float32": (85, "f"),
-    "float64": (86, "d"),
-}
+_TYPED_TAGS = {"uint8": (64, "B"), "char": (64, "B"), "int8": (72, "b"), "byte": (72, "b"), "uint16": (69, "H")}
+_TYPED_TAGS.update(uint32=(70, "I"), uint64=(71, "Q"), int16=(77, "h"), int32=(78, "i"), int64=(79, "q"))
+_TYPED_TAGS.update(float32=(85, "f"), float64=(86, "d"))
 _TAG_FORMATS = {tag: fmt for tag, fmt in _TYPED_TAGS.values()}
 
 
@@ -86,14 +68,7 @@ def _typed_array(encoder: Any, value: Any) -> None:
 
 
 def cbor_dumps(obj: Any) -> bytes:
-    """Encode obj as CBOR (:class:`TypedArray` values as RFC 8746 typed-array tags).
-
-    Args:
-        obj: dict/list/str/bytes/int/float/bool/None/TypedArray tree.
-
-    Returns:
-        bytes: The CBOR encoding.
-    """
+    """Encode obj as CBOR (:class:`TypedArray` values as RFC 8746 typed-array tags)."""
     return cbor2.dumps(obj, default=_typed_array)
 
 
@@ -118,13 +93,7 @@ def _untag(value: Any) -> Any:
 
 
 def cbor_loads(data: Any) -> Any:
-    """Decode one CBOR item that fills the whole buffer.
-
-    Args:
-        data: bytes.
-
-    Returns:
-        The decoded object (typed arrays become lists, uint8 typed arrays bytes).
+    """Decode one CBOR item that fills the whole buffer (typed arrays to lists, uint8 ones to bytes).
 
     Raises:
         DecodeError: On malformed, too deeply nested or trailing data.
@@ -150,14 +119,9 @@ def _png_chunk(kind: bytes, payload: bytes) -> bytes:
 def png_encode(text: str) -> str:
     """Pack the UTF-8 bytes of text into an 8-bit RGB PNG (padded with newlines) and base64 it.
 
-    The padding is newlines as rosbridge's: a client decodes the pixels to text and parses
-    it as JSON, where trailing newlines are whitespace (NUL bytes make ``JSON.parse`` throw).
-
-    Args:
-        text: The JSON string of a frame.
-
-    Returns:
-        str: base64 of the PNG file (the ``data`` of a ``png`` op).
+    The padding is newlines, as rosbridge's: clients parse the pixels as JSON text, where
+    trailing newlines are whitespace (NUL bytes make ``JSON.parse`` throw). Returns the
+    ``data`` of a ``png`` op.
     """
     raw = text.encode("utf-8")
     pixels = max(1, (len(raw) + 2) // 3)
@@ -178,17 +142,7 @@ def png_encode(text: str) -> str:
 
 
 def fragment(text: str, size: int, frag_id: Any, op: str = "fragment") -> List[str]:
-    """Split a frame's text into ``fragment`` (or ``png``) op frames of at most size characters of data.
-
-    Args:
-        text: The JSON text of the whole frame (or a png op's base64 data).
-        size: Maximum characters of data per fragment (>= 1).
-        frag_id: The id shared by all fragments.
-        op: The op of the pieces.
-
-    Returns:
-        list: JSON texts of the fragment frames.
-    """
+    """Split text into ``fragment`` (or ``png``) op frames (JSON texts) of at most size characters of data."""
     size = max(1, int(size))
     total = (len(text) + size - 1) // size
     return [
@@ -198,13 +152,7 @@ def fragment(text: str, size: int, frag_id: Any, op: str = "fragment") -> List[s
 
 
 class Reassembler:
-    """Joins incoming ``fragment`` ops (any order; bounded in sets, size and age).
-
-    Args:
-        max_sets: Incomplete sets kept (the oldest is dropped beyond).
-        ttl: Seconds an incomplete set lives.
-        max_fragments: Largest ``total`` accepted.
-    """
+    """Joins incoming ``fragment`` ops (any order; at most max_sets open sets, ttl s each, total <= max_fragments)."""
 
     def __init__(self, max_sets: int = 32, ttl: float = 30.0, max_fragments: int = 100000) -> None:
         """Start with no sets."""

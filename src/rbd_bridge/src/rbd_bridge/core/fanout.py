@@ -23,11 +23,8 @@ _log = logging.getLogger("rbd_bridge")
 class TopicMessage:
     """One ROS message on its way to clients, encoded at most once per compression.
 
-    Args:
-        topic: Topic name.
-        to_dict: Callable(binary) returning the message as a JSON-ready dict (binary=True for CBOR).
-        raw: Callable returning (serialized bytes, secs, nsecs) for ``cbor-raw``.
-        latched: True if it came from a latched publisher.
+    ``to_dict(binary)`` gives the message as a JSON-ready dict (binary=True: for CBOR);
+    ``raw()`` gives (serialized bytes, secs, nsecs) for ``cbor-raw``.
     """
 
     __slots__ = ("topic", "_to_dict", "_raw", "_frames", "latched", "_wire")
@@ -73,11 +70,7 @@ class TopicMessage:
 
 
 def prepare(message: TopicMessage, sessions: Iterable[Any]) -> bool:
-    """Encode message once per compression the sessions' subscriptions want (png is made from none).
-
-    Returns:
-        bool: False (logged) if the message cannot be decoded or encoded.
-    """
+    """Encode message once per compression the sessions want (png is made from none); False (logged) if it cannot."""
     wanted = set()
     for session in sessions:
         sub = session.subs.get(message.topic)
@@ -117,17 +110,11 @@ class ReplayWindow:
 
     A ROS subscriber connects only after the master told it about a new publisher, so a
     client that advertises and publishes at once would lose those messages (rosbridge keeps
-    them for 1 s). Messages published while the window is open (at most ``limit``, the
-    newest kept) are replayed to each subscriber connection made in the window, before
-    anything newer. The publishing thread holds ``lock`` around :meth:`record` and the
-    publish; the thread adding a connection holds it around adding and :meth:`replay`, so
-    nothing is lost, duplicated or reordered.
-
-    Args:
-        seconds: Window length (0 = off).
-        limit: Most messages kept.
-        latch: The publisher is latched (the latch itself resends the last message).
-        clock: Monotonic clock.
+    them for 1 s). Messages published while the window (``seconds``, 0 = off) is open, at
+    most ``limit`` (the newest), are replayed to each subscriber connection made in it,
+    before anything newer (for a latched publisher without the last: the latch resends it).
+    The publishing thread holds ``lock`` around :meth:`record` and the publish; the thread
+    adding a connection holds it around adding and :meth:`replay`.
     """
 
     def __init__(self, seconds: float, limit: int, latch: bool, clock: Callable[[], float] = time.monotonic) -> None:

@@ -15,40 +15,41 @@ ones (:mod:`rbd_bridge.ros.graph`), tests may pass fakes.
 """
 
 import json
-from typing import Any, Callable
+from typing import Any, Callable, Dict
 
 from rbd_bridge.core.types import ConversionError
 
 __all__ = ["RosApi", "ROSAPI_TYPES", "RosApiError"]
 
-ROSAPI_TYPES = {
-    "topics": "rosapi/Topics",
-    "topic_type": "rosapi/TopicType",
-    "topics_for_type": "rosapi/TopicsForType",
-    "topics_and_raw_types": "rosapi/TopicsAndRawTypes",
-    "services": "rosapi/Services",
-    "service_type": "rosapi/ServiceType",
-    "services_for_type": "rosapi/ServicesForType",
-    "service_providers": "rosapi/ServiceProviders",
-    "service_node": "rosapi/ServiceNode",
-    "service_host": "rosapi/ServiceHost",
-    "nodes": "rosapi/Nodes",
-    "node_details": "rosapi/NodeDetails",
-    "publishers": "rosapi/Publishers",
-    "subscribers": "rosapi/Subscribers",
-    "message_details": "rosapi/MessageDetails",
-    "service_request_details": "rosapi/ServiceRequestDetails",
-    "service_response_details": "rosapi/ServiceResponseDetails",
-    "get_param": "rosapi/GetParam",
-    "set_param": "rosapi/SetParam",
-    "has_param": "rosapi/HasParam",
-    "delete_param": "rosapi/DeleteParam",
-    "search_param": "rosapi/SearchParam",
-    "get_param_names": "rosapi/GetParamNames",
-    "get_time": "rosapi/GetTime",
-    "action_servers": "rosapi/GetActionServers",
+# name: (rosapi type, request fields in order: list args are mapped by position)
+_SERVICES = {
+    "topics": ("Topics", ()),
+    "topic_type": ("TopicType", ("topic",)),
+    "topics_for_type": ("TopicsForType", ("type",)),
+    "topics_and_raw_types": ("TopicsAndRawTypes", ()),
+    "services": ("Services", ()),
+    "service_type": ("ServiceType", ("service",)),
+    "services_for_type": ("ServicesForType", ("type",)),
+    "service_providers": ("ServiceProviders", ("service",)),
+    "service_node": ("ServiceNode", ("service",)),
+    "service_host": ("ServiceHost", ("service",)),
+    "nodes": ("Nodes", ()),
+    "node_details": ("NodeDetails", ("node",)),
+    "publishers": ("Publishers", ("topic",)),
+    "subscribers": ("Subscribers", ("topic",)),
+    "message_details": ("MessageDetails", ("type",)),
+    "service_request_details": ("ServiceRequestDetails", ("type",)),
+    "service_response_details": ("ServiceResponseDetails", ("type",)),
+    "get_param": ("GetParam", ("name", "default")),
+    "set_param": ("SetParam", ("name", "value")),
+    "has_param": ("HasParam", ("name",)),
+    "delete_param": ("DeleteParam", ("name",)),
+    "search_param": ("SearchParam", ("name",)),
+    "get_param_names": ("GetParamNames", ()),
+    "get_time": ("GetTime", ()),
+    "action_servers": ("GetActionServers", ()),
 }
-
+ROSAPI_TYPES = {name: "rosapi/" + spec[0] for name, spec in _SERVICES.items()}
 _ACTION_SUFFIXES = ("/goal", "/cancel", "/status", "/feedback", "/result")
 
 
@@ -56,25 +57,29 @@ class RosApiError(Exception):
     """A rosapi request that fails (sent back as ``result: false``)."""
 
 
-def _str_arg(args: Any, key: str, default: Any = "") -> Any:
-    value = args.get(key, default)
+def _str_arg(args: Dict[str, Any], key: str) -> str:
+    value = args.get(key)
     if value is None:
-        return default
+        return ""
     if not isinstance(value, str):
         raise RosApiError("rosapi: %r must be a string" % key)
     return value
+
+
+def _nodes_of(state_part: Any, name: str) -> Any:
+    return next((sorted(nodes) for n, nodes in state_part if n == name), [])
 
 
 class RosApi:
     """Dispatch ``/rosapi/*`` calls.
 
     Args:
-        policy: The bridge's :class:`rbd_bridge.security.Policy`.
+        policy: The bridge's :class:`rbd_bridge.core.security.Policy`.
         graph: rosgraph.Master-like object.
-        params: Parameter store adapter (see module doc).
+        params: Parameter store adapter (module doc).
         now: Callable returning (secs, nsecs) of ROS time.
         service_type: Callable(service) -> type name of a ROS service (may raise).
-        types: Message definitions adapter (see module doc).
+        types: Message definitions adapter (module doc).
     """
 
     def __init__(
@@ -89,196 +94,124 @@ class RosApi:
         self.lookup_service_type = service_type
 
     @staticmethod
-    def handles(service: str) -> Any:
+    def handles(service: str) -> bool:
         """Return True if service is one of ours."""
-        return service.startswith("/rosapi/") and service[len("/rosapi/") :] in ROSAPI_TYPES
+        return service.startswith("/rosapi/") and service[8:] in _SERVICES
 
-    def call(self, service: str, args: Any) -> Any:
-        """Serve one call.
-
-        Args:
-            service: ``/rosapi/<name>``.
-            args: Request dict (rosapi field names); a list is mapped by position.
-
-        Returns:
-            dict: Response fields.
+    def call(self, service: str, args: Any) -> Dict[str, Any]:
+        """Serve one call of ``/rosapi/<name>`` with a request dict (a list is mapped by position).
 
         Raises:
             RosApiError: On a bad request or a denied name.
         """
-        name = service[len("/rosapi/") :]
+        name = service[8:]
         if isinstance(args, list):
-            args = self._positional(name, args)
-        elif args is None:
-            args = {}
-        return getattr(self, "_" + name)(args)
+            order = _SERVICES[name][1]
+            if len(args) > len(order):
+                raise RosApiError("rosapi/%s: too many arguments" % name)
+            args = dict(zip(order, args))
+        return getattr(self, "_" + name)(args or {})
 
-    def _positional(self, name: str, args: Any) -> Any:
-        order = {
-            "topic_type": ["topic"],
-            "topics_for_type": ["type"],
-            "service_type": ["service"],
-            "services_for_type": ["type"],
-            "service_providers": ["service"],
-            "service_node": ["service"],
-            "service_host": ["service"],
-            "node_details": ["node"],
-            "publishers": ["topic"],
-            "subscribers": ["topic"],
-            "message_details": ["type"],
-            "service_request_details": ["type"],
-            "service_response_details": ["type"],
-            "get_param": ["name", "default"],
-            "set_param": ["name", "value"],
-            "has_param": ["name"],
-            "delete_param": ["name"],
-            "search_param": ["name"],
-        }.get(name, [])
-        if len(args) > len(order):
-            raise RosApiError("rosapi/%s: too many arguments" % name)
-        return dict(zip(order, args))
-
-    # ------------------------------------------------------------ graph helpers
+    # ------------------------------------------------------------ graph
 
     def _topic_types(self) -> Any:
         # as rosapi: the master's topic types keep topics whose publishers are all gone, so
-        # only topics that have a publisher or subscriber now count (unknown type: "")
-        pubs, subs, _ = self._state()
+        # only topics with a publisher or subscriber now count (unknown type: "")
+        pubs, subs, _ = self.graph.getSystemState()
         live = set(t for t, nodes in pubs + subs if nodes and self.policy.may_see_topic(t))
         types = dict((t, ty) for t, ty in self.graph.getTopicTypes() if t in live)
-        return [(t, types.get(t, "")) for t in live]
+        return sorted((t, types.get(t, "")) for t in live)
 
-    def _state(self) -> Any:
-        return self.graph.getSystemState()
+    def _service_names(self) -> Any:
+        names = set(s for s, _ in self.graph.getSystemState()[2]) | set("/rosapi/" + n for n in _SERVICES)
+        return sorted(s for s in names if self.policy.may_call(s))
 
-    def _ros_services(self) -> Any:
-        return sorted(s for s, _ in self._state()[2] if self.policy.may_call(s))
-
-    def _own_services(self) -> Any:
-        return sorted("/rosapi/" + n for n in ROSAPI_TYPES if self.policy.may_call("/rosapi/" + n))
-
-    def _service_type_of(self, service: str) -> Any:
+    def _service_type_of(self, service: str) -> str:
         if self.handles(service):
-            return ROSAPI_TYPES[service[len("/rosapi/") :]]
-        if not self.policy.may_call(service):
-            return ""
+            return ROSAPI_TYPES[service[8:]]
         try:
-            return self.lookup_service_type(service) or ""
+            return (self.policy.may_call(service) and self.lookup_service_type(service)) or ""
         except Exception:
             return ""
 
-    # ------------------------------------------------------------ topics
-
     def _topics(self, args: Any) -> Any:
-        pairs = sorted(self._topic_types())
+        pairs = self._topic_types()
         return {"topics": [t for t, _ in pairs], "types": [ty for _, ty in pairs]}
 
     def _topic_type(self, args: Any) -> Any:
-        topic = _str_arg(args, "topic")
-        for t, ty in self._topic_types():
-            if t == topic:
-                return {"type": ty}
-        return {"type": ""}
+        return {"type": dict(self._topic_types()).get(_str_arg(args, "topic"), "")}
 
     def _topics_for_type(self, args: Any) -> Any:
         wanted = _str_arg(args, "type")
-        return {"topics": sorted(t for t, ty in self._topic_types() if ty == wanted)}
+        return {"topics": [t for t, ty in self._topic_types() if ty == wanted]}
 
     def _topics_and_raw_types(self, args: Any) -> Any:
-        pairs = sorted(self._topic_types())
+        reply = self._topics(args)
         texts = []
-        for _, ty in pairs:
+        for type_name in reply["types"]:
             try:
-                texts.append(self.types.full_text(ty))
+                texts.append(self.types.full_text(type_name))
             except ConversionError:
                 texts.append("")
-        return {"topics": [t for t, _ in pairs], "types": [ty for _, ty in pairs], "typedefs_full_text": texts}
+        reply["typedefs_full_text"] = texts
+        return reply
+
+    def _nodes_on(self, args: Any, part: int) -> Any:
+        topic = _str_arg(args, "topic")
+        return _nodes_of(self.graph.getSystemState()[part], topic) if self.policy.may_see_topic(topic) else []
 
     def _publishers(self, args: Any) -> Any:
-        topic = _str_arg(args, "topic")
-        if not self.policy.may_see_topic(topic):
-            return {"publishers": []}
-        for t, nodes in self._state()[0]:
-            if t == topic:
-                return {"publishers": sorted(nodes)}
-        return {"publishers": []}
+        return {"publishers": self._nodes_on(args, 0)}
 
     def _subscribers(self, args: Any) -> Any:
-        topic = _str_arg(args, "topic")
-        if not self.policy.may_see_topic(topic):
-            return {"subscribers": []}
-        for t, nodes in self._state()[1]:
-            if t == topic:
-                return {"subscribers": sorted(nodes)}
-        return {"subscribers": []}
-
-    # ------------------------------------------------------------ services
+        return {"subscribers": self._nodes_on(args, 1)}
 
     def _services(self, args: Any) -> Any:
-        return {"services": sorted(set(self._ros_services()) | set(self._own_services()))}
+        return {"services": self._service_names()}
 
     def _service_type(self, args: Any) -> Any:
         return {"type": self._service_type_of(_str_arg(args, "service"))}
 
     def _services_for_type(self, args: Any) -> Any:
         wanted = _str_arg(args, "type")
-        names = self._ros_services() + self._own_services()
-        return {"services": sorted(s for s in names if self._service_type_of(s) == wanted)}
+        return {"services": [s for s in self._service_names() if self._service_type_of(s) == wanted]}
 
-    def _providers(self, service: str) -> Any:
-        if not self.policy.may_call(service):
-            return []
-        for s, nodes in self._state()[2]:
-            if s == service:
-                return sorted(nodes)
-        return []
+    def _providers(self, args: Any) -> Any:
+        service = _str_arg(args, "service")
+        return _nodes_of(self.graph.getSystemState()[2], service) if self.policy.may_call(service) else []
 
     def _service_providers(self, args: Any) -> Any:
-        return {"providers": self._providers(_str_arg(args, "service"))}
+        return {"providers": self._providers(args)}
 
     def _service_node(self, args: Any) -> Any:
-        nodes = self._providers(_str_arg(args, "service"))
-        return {"node": nodes[0] if nodes else ""}
+        return {"node": (self._providers(args) or [""])[0]}
 
     def _service_host(self, args: Any) -> Any:
         service = _str_arg(args, "service")
-        if not self.policy.may_call(service):
-            return {"host": ""}
         try:
-            uri = self.graph.lookupService(service)
+            uri = self.graph.lookupService(service) if self.policy.may_call(service) else ""
         except Exception:
-            return {"host": ""}
-        host = uri.split("//", 1)[-1].split(":", 1)[0] if isinstance(uri, str) else ""
-        return {"host": host}
-
-    # ------------------------------------------------------------ nodes
+            uri = ""
+        return {"host": uri.split("//", 1)[-1].split(":", 1)[0] if isinstance(uri, str) and uri else ""}
 
     def _nodes(self, args: Any) -> Any:
-        names = set()
-        for group in self._state():
-            for _, nodes in group:
-                names.update(nodes)
-        return {"nodes": sorted(names)}
+        return {"nodes": sorted(set(n for part in self.graph.getSystemState() for _, nodes in part for n in nodes))}
 
     def _node_details(self, args: Any) -> Any:
         node = _str_arg(args, "node")
-        pubs, subs, srvs = self._state()
+        pubs, subs, srvs = self.graph.getSystemState()
+        see, call = self.policy.may_see_topic, self.policy.may_call
         return {
-            "subscribing": sorted(t for t, n in subs if node in n and self.policy.may_see_topic(t)),
-            "publishing": sorted(t for t, n in pubs if node in n and self.policy.may_see_topic(t)),
-            "services": sorted(s for s, n in srvs if node in n and self.policy.may_call(s)),
+            "subscribing": sorted(t for t, n in subs if node in n and see(t)),
+            "publishing": sorted(t for t, n in pubs if node in n and see(t)),
+            "services": sorted(s for s, n in srvs if node in n and call(s)),
         }
 
     def _action_servers(self, args: Any) -> Any:
         # as rosapi (ROS 1): a namespace (not the root) with all five actionlib topics
         topics = set(t for t, _ in self._topic_types())
-        bases = set()
-        for t in topics:
-            if t.endswith("/goal"):
-                base = t[: -len("/goal")]
-                if base and all(base + s in topics for s in _ACTION_SUFFIXES):
-                    bases.add(base)
-        return {"action_servers": sorted(bases)}
+        bases = set(t[:-5] for t in topics if t.endswith("/goal") and len(t) > 5)
+        return {"action_servers": sorted(b for b in bases if all(b + s in topics for s in _ACTION_SUFFIXES))}
 
     # ------------------------------------------------------------ types
 
@@ -299,12 +232,11 @@ class RosApi:
 
     # ------------------------------------------------------------ params
 
-    def _param_name(self, args: Any, write: bool = False) -> Any:
+    def _param_name(self, args: Any, write: bool = False) -> str:
         name = _str_arg(args, "name")
         if not name:
             raise RosApiError("rosapi: parameter name missing")
-        if not name.startswith("/"):
-            name = "/" + name
+        name = name if name.startswith("/") else "/" + name
         if not self.policy.may_read_param(name):
             raise RosApiError("parameter %s is not allowed by this bridge's allow-list" % name)
         if write and not self.policy.may_write_param(name):
@@ -334,8 +266,7 @@ class RosApi:
         return {}
 
     def _has_param(self, args: Any) -> Any:
-        name = self._param_name(args)
-        return {"exists": bool(self.params.has(name))}
+        return {"exists": bool(self.params.has(self._param_name(args)))}
 
     def _delete_param(self, args: Any) -> Any:
         name = self._param_name(args, write=True)
@@ -344,11 +275,8 @@ class RosApi:
         return {}
 
     def _search_param(self, args: Any) -> Any:
-        name = _str_arg(args, "name")
-        found = self.params.search(name) or ""
-        if found and not self.policy.may_read_param(found):
-            found = ""
-        return {"global_name": found}
+        found = self.params.search(_str_arg(args, "name")) or ""
+        return {"global_name": found if found and self.policy.may_read_param(found) else ""}
 
     def _get_param_names(self, args: Any) -> Any:
         return {"names": sorted(n for n in self.params.names() if self.policy.may_read_param(n))}

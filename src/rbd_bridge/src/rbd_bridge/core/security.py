@@ -11,18 +11,7 @@ import hmac
 import math
 from typing import Any, Callable, Dict
 
-__all__ = [
-    "AuthError",
-    "Policy",
-    "parse_glob_list",
-    "check_mac",
-    "make_mac",
-    "policy_from_params",
-    "ROBODOG_PUBLISH",
-    "ROBODOG_SUBSCRIBE",
-    "ROBODOG_SERVICES",
-    "ROBODOG_PARAMS",
-]
+__all__ = ["AuthError", "Policy", "parse_glob_list", "check_mac", "make_mac", "policy_from_params"]
 
 ROBODOG_PUBLISH = ("/rbd_gestrec/gesture", "/rbd_local/heartbeat")
 ROBODOG_SUBSCRIBE = (
@@ -40,18 +29,11 @@ class AuthError(ValueError):
     """An ``auth`` op that does not authenticate the client."""
 
 
-def parse_glob_list(text: str) -> Any:
-    """Parse a rosbridge-style glob list parameter.
-
-    Accepts ``"[*]"``, ``"['/a', '/b/*']"``, ``"[/a, /b]"``, ``"/a /b"``, a Python list, or
-    an empty value.
-
-    Args:
-        text: The parameter value.
+def parse_glob_list(text: Any) -> Any:
+    """Parse a rosbridge-style glob list (``"[*]"``, ``"['/a', '/b/*']"``, ``"[/a, /b]"``, ``"/a /b"``, a list).
 
     Returns:
-        tuple: Glob strings (``()`` for an empty list), or ``None`` when text is ``None``
-        or ``""`` (meaning "not given").
+        tuple: The globs (``()`` for an empty list), or ``None`` for ``None`` / ``""`` (not given).
     """
     if text is None:
         return None
@@ -64,12 +46,7 @@ def parse_glob_list(text: str) -> Any:
         if text.startswith("[") and text.endswith("]"):
             text = text[1:-1]
         items = text.replace(",", " ").split()
-    out = []
-    for item in items:
-        item = item.strip().strip("'\"").strip()
-        if item:
-            out.append(item)
-    return tuple(out)
+    return tuple(i for i in (item.strip().strip("'\"").strip() for item in items) if i)
 
 
 class _Globs:
@@ -144,36 +121,17 @@ def _secs(value: Any, field: str) -> Any:
     return int(value)
 
 
-def make_mac(secret: str, client: str, dest: str, rand: str, t: Any, level: str, end: Any) -> Any:
-    """Compute the rosauth MAC: sha512 hex of secret+client+dest+rand+t.secs+level+end.secs.
-
-    Args:
-        secret: Shared secret.
-        client: Client address string.
-        dest: Server address string.
-        rand: Random string.
-        t: Request time in seconds (int).
-        level: User level string.
-        end: Session end time in seconds (int).
-
-    Returns:
-        str: 128 hex characters.
-    """
+def make_mac(secret: str, client: str, dest: str, rand: str, t: Any, level: str, end: Any) -> str:
+    """The rosauth MAC: sha512 hex of secret + client + dest + rand + t (s) + level + end (s)."""
     text = "%s%s%s%s%d%s%d" % (secret, client, dest, rand, int(t), level, int(end))
     return hashlib.sha512(text.encode("utf-8")).hexdigest()
 
 
 def check_mac(secret: str, frame: Dict[str, Any], now: Callable[..., Any], max_skew: float = 5.0) -> None:
-    """Validate an ``auth`` op the way rosauth's ros_mac_authentication does.
-
-    Args:
-        secret: Shared secret.
-        frame: The decoded ``auth`` frame.
-        now: Current time in seconds.
-        max_skew: Allowed |t - now| in seconds.
+    """Validate an ``auth`` op as rosauth's ros_mac_authentication does (now: wall clock [s]).
 
     Raises:
-        AuthError: If a field is missing, the time window is wrong or the MAC differs.
+        AuthError: A field is missing, t is more than max_skew from now, end has passed, or the MAC differs.
     """
     fields = {}
     for key in ("mac", "client", "dest", "rand", "level"):
@@ -200,13 +158,7 @@ def policy_from_params(get: Callable[..., Any], secret: str = None) -> Any:
     RoboDog default; ``"[*]"`` opens it; ``"[]"`` closes it. As rosbridge does, a given
     non-empty ``services_glob`` gets ``/rosapi/*`` added, and a given ``params_glob`` is
     writable unless ``params_writable`` is false (the RoboDog default has no parameters).
-
-    Args:
-        get: Callable(name, default) reading a private parameter.
-        secret: Shared secret when authentication is on.
-
-    Returns:
-        Policy: The policy.
+    ``get(name, default)`` reads a private parameter.
     """
     topics = parse_glob_list(get("topics_glob", None))
     publish = parse_glob_list(get("publish_topics_glob", None))

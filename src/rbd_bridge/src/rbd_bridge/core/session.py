@@ -356,12 +356,15 @@ class Session:
         self.advertised.add(topic)
         self.status("info", "advertised %s" % topic, frame.get("id"))
 
+    def _withdraw(self, frame: Dict[str, Any], key: str, held: set, release: Callable[..., Any]) -> None:
+        name = _name(frame, key)
+        if name not in held:
+            raise BridgeError("%s: %s is not advertised by this client" % (frame["op"], name), "warning")
+        held.discard(name)
+        release(self, name)
+
     def _op_unadvertise(self, frame: Dict[str, Any]) -> None:
-        topic = _name(frame, "topic")
-        if topic not in self.advertised:
-            raise BridgeError("unadvertise: %s is not advertised by this client" % topic, "warning")
-        self.advertised.discard(topic)
-        self.backend.unadvertise(self, topic)
+        self._withdraw(frame, "topic", self.advertised, self.backend.unadvertise)
 
     def _op_publish(self, frame: Dict[str, Any]) -> None:
         topic = _name(frame, "topic")
@@ -464,11 +467,7 @@ class Session:
         self.status("info", "advertised service %s" % service, frame.get("id"))
 
     def _op_unadvertise_service(self, frame: Dict[str, Any]) -> None:
-        service = _name(frame, "service")
-        if service not in self.services:
-            raise BridgeError("unadvertise_service: %s is not advertised by this client" % service, "warning")
-        self.services.discard(service)
-        self.backend.unadvertise_service(self, service)
+        self._withdraw(frame, "service", self.services, self.backend.unadvertise_service)
 
     def _op_service_response(self, frame: Dict[str, Any]) -> None:
         service = _name(frame, "service")

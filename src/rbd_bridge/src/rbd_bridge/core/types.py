@@ -30,17 +30,7 @@ class TypedArray:
 
 
 def normalize_type(type_name: Any) -> str:
-    """Return the ROS 1 spelling ``pkg/Name`` of a type (accepts ``pkg/msg/Name``, ``pkg/srv/Name``).
-
-    Args:
-        type_name: Type as a client wrote it.
-
-    Returns:
-        str: ``pkg/Name``.
-
-    Raises:
-        ConversionError: If the text is not a type name.
-    """
+    """The ROS 1 spelling ``pkg/Name`` of a type (``pkg/msg/Name``, ``pkg/srv/Name`` accepted); else ConversionError."""
     if not isinstance(type_name, str) or not type_name:
         raise ConversionError("type must be a non-empty string, got %r" % (type_name,))
     parts = type_name.strip("/").split("/")

@@ -186,15 +186,13 @@ class _Connection(asyncio.Protocol):
             self.data_received(rest)
 
     def _reject(self, event: Any, text: str) -> None:
-        if not isinstance(event, RejectConnection) or event.status_code == 400 and "Upgrade" in text:
-            event = RejectConnection(status_code=426)  # plain HTTP to a WebSocket server
+        status = getattr(event, "status_code", 400)
+        status = 426 if status == 400 and "Upgrade" in text else status  # plain HTTP to a WebSocket server
         body = (text + "\n").encode()
         headers = [(b"content-type", b"text/plain"), (b"content-length", b"%d" % len(body))]
         try:
-            self.transport.write(
-                self.ws.send(RejectConnection(status_code=event.status_code, headers=headers, has_body=True))
-                + self.ws.send(RejectData(data=body))
-            )
+            reject = RejectConnection(status_code=status, headers=headers, has_body=True)
+            self.transport.write(self.ws.send(reject) + self.ws.send(RejectData(data=body)))
         except Exception:  # the handshake state machine refuses: just drop the connection
             pass
         self.transport.close()
@@ -210,42 +208,32 @@ class _Connection(asyncio.Protocol):
             self.transport.write(data)
 
     def flush(self) -> None:
-        """Write queued frames (joined when small) until the transport asks to pause."""
-        out = self.out
-        write = self.transport.write
+        """Write queued frames (small ones joined, big ones alone) until the transport asks to pause."""
+        out, write = self.out, self.transport.write
         with self.lock:
             if self.closing:
                 return
             if self.head is not None:
                 head, self.head = self.head, None
                 write(head)
-            parts = []
-            size = 0
+            parts, size = [], 0
             while not self.paused and not self.closing:
                 frame = out.pop()
                 if frame is None:
                     break
-                if len(frame) >= 16384:
-                    if parts:
-                        write(b"".join(parts))
-                        parts, size = [], 0
-                    write(frame)
-                    continue
-                parts.append(frame)
-                size += len(frame)
-                if size >= _JOIN_BYTES:
+                if parts and (len(frame) >= 16384 or size >= _JOIN_BYTES):
                     write(b"".join(parts))
                     parts, size = [], 0
+                parts.append(frame)
+                size += len(frame)
             if parts and not self.closing:
-                write(b"".join(parts))
+                write(b"".join(parts))  # (one frame: written as it is, no copy)
 
     def try_direct(self, message: Any, compression: str) -> bool:
-        """Any thread: send a topic frame at once if nothing is queued; True if taken.
+        """Any thread: send a topic frame at once if nothing is queued and the socket takes it; True if taken.
 
-        Only when the client's queue, the transport's buffer and the socket have room is
-        the frame sent here (non-blocking); otherwise the caller queues it as usual. Order,
-        the bounded queue and the stalled-client guarantee are unchanged: a full socket
-        makes this return False, never wait.
+        Otherwise (False, never waiting) the caller queues it as usual: order, the bounded
+        queue and the stalled-client guarantee are unchanged.
         """
         sock = self.sock
         if sock is None or self.paused or self.closing or self.proto is None:
@@ -315,16 +303,14 @@ class BridgeServer:
         backend: The ROS side (see :mod:`rbd_bridge.core.session`).
         policy: :class:`rbd_bridge.core.security.Policy`.
         host: Bind address.
-        port: TCP port (0 = any free port; see :attr:`port` after :meth:`start`).
-        max_message_size: Largest incoming message in bytes (bigger closes with 1009).
-        max_queue_frames: Outgoing frames kept per client before the oldest are dropped.
-        max_queue_bytes: Outgoing bytes kept per client before the oldest are dropped.
-        ping_interval: WebSocket ping period in s (None = off); a client that sends
-            nothing within ping_timeout after a ping is disconnected.
+        port: TCP port (0 = any free port; :attr:`port` after :meth:`start`).
+        max_message_size: Largest incoming message [bytes] (bigger closes with 1009).
+        max_queue_frames: Outgoing frames kept per client (the oldest are dropped beyond).
+        max_queue_bytes: Outgoing bytes kept per client (the oldest are dropped beyond).
+        ping_interval: Ping period [s] (None = off); silent ping_timeout s after a ping: dropped.
         ping_timeout: See ping_interval.
         on_clients: Callable(count) called when the number of clients changes.
-        direct_writes: Let other threads send topic frames at once when a client's
-            queue is empty (see ``_Connection.try_direct``).
+        direct_writes: Other threads may send topic frames at once to idle clients (try_direct).
     """
 
     def __init__(
@@ -343,16 +329,10 @@ class BridgeServer:
         direct_writes: bool = True,
     ) -> None:
         """Configure; nothing listens until start()."""
-        self.loop = loop
-        self.backend = backend
-        self.policy = policy
-        self.host = host
-        self.port = port
+        self.loop, self.backend, self.policy, self.host, self.port = loop, backend, policy, host, port
         self.max_message_size = max_message_size
-        self.max_queue_frames = max_queue_frames
-        self.max_queue_bytes = max_queue_bytes
-        self.ping_interval = ping_interval
-        self.ping_timeout = ping_timeout
+        self.max_queue_frames, self.max_queue_bytes = max_queue_frames, max_queue_bytes
+        self.ping_interval, self.ping_timeout = ping_interval, ping_timeout
         self.on_clients = on_clients
         self.direct_writes = direct_writes
         self.sessions = {}

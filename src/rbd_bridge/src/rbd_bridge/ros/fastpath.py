@@ -10,7 +10,7 @@ connection, a receive thread per publisher connection).
   :class:`_DirectConnection`: the event loop sends with a non-blocking ``send``; only what
   the kernel does not take goes to a backlog of at most ``queue_size`` messages written by
   that connection's own thread. The publishes decoded from one WebSocket read are held per
-  connection (:class:`_Cork`) and leave together, at most ``_CORK_MESSAGES`` per write.
+  connection (the cork) and leave together (at most min(queue_size, ``_CORK_MESSAGES``)).
 - **Out of ROS** (direct reads, ``~direct_reads``). rospy still registers and makes each
   TCPROS connection, handshake included; then its ``receive_loop`` is replaced: the thread
   offers the socket to the event loop and ends, and the loop reads it
@@ -48,29 +48,16 @@ _CORK_MESSAGES = 256
 
 
 class _Cork:
-    """Holds the event loop's publishes while one client read is handled (one send per peer).
-
-    Set by :meth:`FastPath.begin_batch` / :meth:`FastPath.end_batch`; only writes from
-    the thread that set it are held.
-    """
-
-    __slots__ = ("thread", "pending")
-
     def __init__(self) -> None:
-        self.thread = None
-        self.pending = []
+        self.thread, self.pending = None, []  # whose writes are held; the connections holding some
 
 
 class _DirectConnection:
     """A rospy publisher connection that writes at once when it can, never blocking the caller.
 
-    rospy's own queued connection hands every message to a writer thread and yields the GIL
-    (``time.sleep(0)``) on each publish; that thread hop dominated the bridge's publish path.
-    Here the publishing thread (the event loop) tries a non-blocking ``send`` first; only
-    what the kernel does not take at once (a slow or stuck ROS subscriber) goes to a bounded
-    backlog that this connection's writer thread sends with blocking writes, in order. So a
-    stuck subscriber never blocks the event loop, costs at most ``queue_size`` messages, and
-    never delays other subscribers (each connection has its own backlog and thread).
+    A stuck subscriber never blocks the event loop, costs at most ``queue_size`` messages
+    (its backlog, written in order by this connection's own thread) and never delays the
+    other subscribers.
     """
 
     def __init__(self, connection: Any, queue_size: int, cork: Any = None) -> None:
@@ -207,23 +194,17 @@ class _DirectConnection:
                 return
 
 
-class _LazyMessage:
-    """A received message kept serialized until a client needs it as a dict."""
+def _lazy_dict(cls: Any, payload: bytes) -> Callable[[bool], Any]:
+    """to_dict of a received message that stays serialized until a client needs a dict."""
+    kept = []
 
-    __slots__ = ("cls", "payload", "msg")
+    def to_dict(binary: bool) -> Any:
+        if not kept:
+            kept.append(cls())
+            kept[0].deserialize(payload)
+        return msg_to_dict(kept[0], binary)
 
-    def __init__(self, cls: Any, payload: bytes) -> None:
-        self.cls = cls
-        self.payload = payload
-        self.msg = None
-
-    def to_dict(self, binary: bool) -> Any:
-        msg = self.msg
-        if msg is None:
-            msg = self.cls()
-            msg.deserialize(self.payload)
-            self.msg = msg
-        return msg_to_dict(msg, binary)
+    return to_dict
 
 
 class FastPath:
@@ -245,9 +226,7 @@ class FastPath:
         self._cork = _Cork()
         self._cork_depth = 0
         self._readers = {}  # rospy connection -> LoopReader (loop thread only)
-        self.counters = collections.Counter(
-            direct_read_connections=0, direct_read_messages=0, direct_read_fallbacks=0
-        )
+        self.counters = collections.Counter(direct_read_connections=0, direct_read_messages=0, direct_read_fallbacks=0)
 
     def publisher(self, topic: str, cls: Any, queue_size: int, latch: bool, listener: Any, window: Any) -> Any:
         """A rospy.Publisher whose connections are :class:`_DirectConnection` s.
@@ -427,8 +406,7 @@ class FastPath:
     ) -> None:
         topic, cls = sub.topic, sub.cls
         for payload in payloads:
-            lazy = _LazyMessage(cls, payload)
-            message = TopicMessage(topic, lazy.to_dict, lambda p=payload: (p,) + stamp, latched)
+            message = TopicMessage(topic, _lazy_dict(cls, payload), lambda p=payload: (p,) + stamp, latched)
             if not prepare(message, sessions):
                 continue
             if latched:

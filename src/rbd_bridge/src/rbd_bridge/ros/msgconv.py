@@ -18,6 +18,7 @@ import base64
 import binascii
 import math
 import threading
+import time
 from typing import Any, Callable, Optional
 
 import genpy
@@ -73,8 +74,7 @@ def get_service_class(type_name: str) -> Any:
     return _load("service", type_name)
 
 
-def _split_array(slot_type: str) -> Any:
-    """Return (base type, is_array, fixed length or None)."""
+def _split_array(slot_type: str) -> Any:  # (base type, is_array, fixed length or None)
     if slot_type.endswith("]"):
         base, _, rest = slot_type.partition("[")
         length = rest[:-1]
@@ -152,7 +152,7 @@ def _typed(kind: str) -> Any:
 
 
 def _float_list(values: Any) -> Any:
-    return [v if v - v == 0 else None for v in values]
+    return [v if v - v == 0 else None for v in values]  # (as _finite)
 
 
 def _nested_out(nested_cls: Any, binary: bool, is_array: bool) -> Any:
@@ -173,15 +173,10 @@ def _convert_out(msg: Any, plan: Any) -> Any:
 
 
 def msg_to_dict(msg: Any, binary: bool = False) -> Any:
-    """Convert a genpy message into a JSON-ready dict (rosbridge mapping).
+    """A genpy message as a JSON-ready dict (rosbridge mapping).
 
-    Args:
-        msg: A genpy message instance.
-        binary: True for the CBOR encoding: byte arrays stay ``bytes``, numeric arrays become
-            :class:`TypedArray`, floats keep NaN/Inf.
-
-    Returns:
-        dict: Field name to JSON-ready value.
+    With binary (for CBOR) byte arrays stay ``bytes``, numeric arrays become
+    :class:`TypedArray` s and floats keep NaN/Inf.
     """
     return _convert_out(msg, _compile_out(type(msg), binary))
 
@@ -367,31 +362,16 @@ def _fill(cls: Any, data: Any, path: str, ctx: Any) -> Any:
 
 
 def dict_to_msg(cls: Any, data: Any, now: Callable[..., Any] = None) -> Any:
-    """Build a message of class cls from a JSON object (rosbridge mapping, strict).
+    """Build (message, paths of the fields filled with defaults) of class cls from a JSON object.
 
-    Args:
-        cls: genpy message class (also a service request/response class).
-        data: The decoded JSON object (``None`` means an empty object).
-        now: Callable returning the current ``genpy.Time`` for header stamps
-            (defaults to wall clock).
-
-    Returns:
-        tuple: (message, list of missing field paths filled with defaults).
+    Strict rosbridge mapping (``None`` is an empty object); ``now()`` gives the
+    ``genpy.Time`` for missing header stamps (default: wall clock).
 
     Raises:
         ConversionError: On wrong types, unknown fields, out-of-range values.
     """
-    if data is None:
-        data = {}
-    ctx = _Context(now or _wall_now)
-    msg = _fill(cls, data, "", ctx)
-    return msg, ctx.missing
-
-
-def _wall_now() -> Any:
-    import time
-
-    return genpy.Time.from_sec(time.time())
+    ctx = _Context(now or (lambda: genpy.Time.from_sec(time.time())))
+    return _fill(cls, {} if data is None else data, "", ctx), ctx.missing
 
 
 def _describe(value: Any) -> str:

@@ -104,15 +104,11 @@ class _Hosted:
 
 
 class Services:
-    """``call_service`` and client-hosted services for the backend.
+    """``call_service`` and client-hosted services for the backend (answers come back on the loop).
 
-    Args:
-        loop: The event loop (answers are delivered on it).
-        master: rosgraph.Master-like (:class:`rbd_bridge.ros.graph.ThreadLocalMaster`).
-        rosapi: :class:`rbd_bridge.core.rosapi.RosApi` for ``/rosapi/*``.
-        service_timeout: Seconds a ROS caller waits for a client-hosted service.
-        call_timeout: Default seconds for ``call_service`` without ``timeout`` (0 = none).
-        workers: Threads for blocking calls.
+    ``rosapi`` (:class:`rbd_bridge.core.rosapi.RosApi`) answers ``/rosapi/*``; a ROS caller
+    waits ``service_timeout`` s for a client-hosted service; ``call_service`` without
+    ``timeout`` gives up after ``call_timeout`` s (0 = never).
     """
 
     def __init__(
