@@ -14,5 +14,6 @@ launcher=()
 # Paths under the checkout are hashed relative to it, so clones and worktrees share ccache hits.
 export CCACHE_BASEDIR="$root"
 if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
+# CI builds treat warnings as errors (a plain drop-in build does not: see the C++ CMakeLists).
 catkin_make --source . --build build -j"${RBD_JOBS:-2}" \
-  -DPYTHON_EXECUTABLE="$root/.venv/bin/python3" -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" "$@"
+  -DPYTHON_EXECUTABLE="$root/.venv/bin/python3" -DCMAKE_BUILD_TYPE=Release -DCMAKE_COMPILE_WARNING_AS_ERROR=ON "${launcher[@]}" "$@"

@@ -14,14 +14,11 @@ Writes OUT/report.txt, OUT/report.json, OUT/run.png and OUT/demo.bag.
 import argparse
 import math
 import os
-import shutil
-import signal
-import socket
-import subprocess
 import sys
-import tempfile
 import threading
 import time
+
+from rbd_testkit import RosEnv, free_port, restore_sigint, wait_for
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TRICKS = ["walk", "spin", "wiggle", "lie_down"]
@@ -30,13 +27,6 @@ PHOTO_MOTION = {"walk": "right", "lie_down": "down"}  # gestures a moving real p
 BAG_TOPICS = ["/rbd_sim/ground_truth", "/rbd_sim/obstacles", "/rbd_controller/state", "/rbd_controller/path_queue",
               "/rbd_pos_controller/status", "/rbd_lidar/state", "/cmd_vel", "/rbd_gestrec/gesture", "/scan",
               "/rbd_localization/pose", "/odometry/filtered", "/zed2/zed_node/pose", "/rbd_controller/path"]
-
-
-def free_port():
-    """A TCP port on 127.0.0.1 that is free right now."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def say(msg):
@@ -127,12 +117,7 @@ class Monitor:
 
     def wait_state(self, states, timeout):
         """Block until the controller is in one of states; False on timeout."""
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if self.state in states:
-                return True
-            time.sleep(0.05)
-        return False
+        return wait_for(lambda: self.state in states, timeout)
 
     def close(self):
         """Stop the LCM listener."""
@@ -201,10 +186,7 @@ class Audience:
 
 def main():
     """Run the demo; exit 0 when every trick completed with no contact."""
-    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
-        # started in the background by a non-interactive shell: SIGINT arrives ignored and
-        # would stay ignored in roslaunch, which then could not be stopped by SIGINT
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+    restore_sigint()  # started in the background, roslaunch would inherit SIGINT ignored
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "demo-output"))
     ap.add_argument("--tricks", default=",".join(TRICKS))
@@ -217,39 +199,23 @@ def main():
     tricks = [t for t in args.tricks.split(",") if t]
     os.makedirs(args.out, exist_ok=True)
 
-    home = tempfile.mkdtemp(prefix="rbd-demo-home.")
-    port, bridge_port = free_port(), free_port()
-    os.environ.update(ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOME=home,
-                      ROS_LOG_DIR=os.path.join(home, "log"), ROS_IP="127.0.0.1")
-    launch_log = open(os.path.join(args.out, "roslaunch.log"), "w")
-    cmd = ["roslaunch", "-p", str(port), "rbd_bringup", "sim.launch", "lidar_columns:=%d" % args.columns,
-           "bridge_port:=%d" % bridge_port, "rviz:=%s" % str(args.visual).lower()] + args.launch_args
-    say("starting the simulated system: %s" % " ".join(cmd))
-    launch = subprocess.Popen(cmd, stdout=launch_log, stderr=subprocess.STDOUT, start_new_session=True)
-    procs = [launch]
+    # A private master (own ROS_HOME, free port) that this process uses too; roslaunch.log in --out.
+    env = RosEnv(log_dir=args.out, use_here=True, master_timeout=60.0, prefix="rbd-demo-home.")
+    bridge_port = free_port()
+    launch_args = ["rbd_bringup", "sim.launch", "lidar_columns:=%d" % args.columns, "bridge_port:=%d" % bridge_port,
+                   "rviz:=%s" % str(args.visual).lower()] + args.launch_args
+    say("starting the simulated system: roslaunch %s (master %s)" % (" ".join(launch_args), env.uri))
+    env.launch(*launch_args, name="roslaunch")
     monitor = link = None
     try:
         import rospy
 
-        deadline = time.monotonic() + 60
-        while True:
-            try:
-                socket.create_connection(("127.0.0.1", port), 0.5).close()
-                break
-            except OSError as exc:
-                if time.monotonic() > deadline:
-                    raise RuntimeError("ROS master did not start") from exc
-                time.sleep(0.2)
         rospy.init_node("demo_audience", disable_signals=True)
-        deadline = time.monotonic() + 60
-        while not rospy.has_param("/rbd_sim/lcm_url") and time.monotonic() < deadline:
-            time.sleep(0.2)
+        wait_for(lambda: rospy.has_param("/rbd_sim/lcm_url"), 60.0, 0.2)
         monitor = Monitor(rospy.get_param("/rbd_sim/lcm_url"))
-        bag = subprocess.Popen(["rosbag", "record", "-q", "-O", os.path.join(args.out, "demo.bag")] + BAG_TOPICS,
-                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-        procs.append(bag)
+        env.start(["rosbag", "record", "-q", "-O", os.path.join(args.out, "demo.bag")] + BAG_TOPICS, name="rosbag")
         if args.visual:
-            procs.append(subprocess.Popen(["rbd-gui", "--port", str(bridge_port)], start_new_session=True))
+            env.start(["rbd-gui", "--port", str(bridge_port)], name="gui")
 
         from rbd_local.link import RobotLink
 
@@ -259,9 +225,7 @@ def main():
         say("laptop app connected to the bridge on port %d" % bridge_port)
         if not monitor.wait_state(("EMERGENCY_STOP",), 60.0):
             raise RuntimeError("controller did not come up in EMERGENCY_STOP")
-        deadline = time.monotonic() + 30
-        while monitor.pose is None and time.monotonic() < deadline:
-            time.sleep(0.1)
+        wait_for(lambda: monitor.pose is not None, 30.0, 0.1)
         audience = Audience(link, os.path.join(ROOT, "rbd_local", ".cache"))
 
         say("operator releases the e-stop (GUI path: bridge -> /rbd_controller/em_stop)")
@@ -297,15 +261,7 @@ def main():
             link.stop()
         if monitor is not None:
             monitor.close()
-        for p in reversed(procs):
-            if p.poll() is None:
-                os.killpg(p.pid, signal.SIGINT)
-        for p in reversed(procs):
-            try:
-                p.wait(20)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
-        shutil.rmtree(home, ignore_errors=True)
+        env.close(timeout=20.0)
 
     from rbd_bringup.demo_report import build_report, plot_run, reaction_times, render_text, write_report
 
@@ -334,13 +290,12 @@ def intrude(monitor):
 
     place = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
     # Wait until the robot really walks, then put the person 1.0 m ahead of it.
-    deadline = time.monotonic() + 15.0
-    while time.monotonic() < deadline:
+    def walking():
         with monitor.lock:
             moving = monitor.commands and monitor.commands[-1][1] > 0.1
-        if moving and monitor.state == "EXECUTING":
-            break
-        time.sleep(0.05)
+        return moving and monitor.state == "EXECUTING"
+
+    wait_for(walking, 15.0)
     x, y, yaw = monitor.pose
     px, py = x + 1.0 * math.cos(yaw), y + 1.0 * math.sin(yaw)
     say("a visitor steps in 1.0 m ahead of the walking robot at (%.2f, %.2f)" % (px, py))

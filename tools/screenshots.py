@@ -3,31 +3,26 @@
 
 - `rviz_audience.png`: RViz's audience view on the running simulated system, with a visitor
   standing in the collision zone (intruding points in red);
+- `rviz_a1.png`: the same view close to the robot: the A1 model (rbd_bringup's URDF) with its
+  legs from /joint_states, the OS1 on its back mount and the ZED2, from config/mounts.yaml;
 - `gui_sim.png`: the laptop app's operator window (rbd_local's `rbd-gui`) connected through the
   bridge to the running simulated system while the robot executes the `walk` trick (state
   colour, controller state, next moves).
 
-Usage: tools/screenshots.py [OUT_DIR] [--only rviz|gui] (default docs/, both). Needs Xvfb and
+Usage: tools/screenshots.py [OUT_DIR] [--only rviz|a1|gui] (default docs/, all). Needs Xvfb and
 ImageMagick's `import`.
 """
 
 import argparse
 import os
-import signal
-import socket
 import subprocess
 import sys
 import tempfile
 import time
 
+from rbd_testkit import free_port, restore_sigint, stop_process, wait_for_port
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def free_port():
-    """A TCP port on 127.0.0.1 that is free right now."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def free_display():
@@ -38,7 +33,22 @@ def free_display():
     raise RuntimeError("no free X display")
 
 
-def shoot_rviz(out):
+def closeup_config(home):
+    """audience_sim.rviz with the camera 1.6 m from base_link (the robot fills the view)."""
+    with open(os.path.join(ROOT, "src", "rbd_bringup", "rviz", "audience_sim.rviz")) as fh:
+        text = fh.read()
+    for old, new in (("      Distance: 7.5\n", "      Distance: 1.6\n"), ("      Pitch: 0.75\n", "      Pitch: 0.35\n"),
+                     ("      Yaw: 3.6\n", "      Yaw: 2.5\n"), ("        X: 0.3\n", "        X: 0\n")):
+        if old not in text:
+            raise RuntimeError("audience_sim.rviz changed: %r not found" % old)
+        text = text.replace(old, new)
+    path = os.path.join(home, "a1_closeup.rviz")
+    with open(path, "w") as fh:
+        fh.write(text)
+    return path
+
+
+def shoot_rviz(out, closeup=False):
     """Start Xvfb, the simulated system with RViz, place a visitor, capture the screen."""
     disp = free_display()
     home = tempfile.mkdtemp(prefix="rbd-shot-home.")
@@ -50,15 +60,17 @@ def shoot_rviz(out):
     try:
         time.sleep(1.5)
         log = open(os.path.join(home, "launch.log"), "w")
+        view = ["rviz_config:=" + closeup_config(home)] if closeup else []
         procs.append(subprocess.Popen(
             ["roslaunch", "-p", str(port), "rbd_bringup", "sim.launch", "rviz:=true", "lidar_columns:=1024",
-             "bridge_port:=%d" % free_port()], env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True))
+             "bridge_port:=%d" % free_port()] + view, env=env, stdout=log, stderr=subprocess.STDOUT,
+            start_new_session=True))
         time.sleep(20)
         call = ["rosservice", "call", "/rbd_sim/place_obstacle"]
         subprocess.run(call + ["{name: visitor, x: 0.55, y: 0.1, radius: 0.2, height: 1.7, remove: false}"], env=env,
                        check=True, stdout=subprocess.DEVNULL, timeout=30)
         time.sleep(8)
-        png = os.path.join(out, "rviz_audience.png")
+        png = os.path.join(out, "rviz_a1.png" if closeup else "rviz_audience.png")
         subprocess.run(["import", "-display", ":%d" % disp, "-window", "root", png], env=env, check=True, timeout=60)
         print("written", png)
     finally:
@@ -68,12 +80,7 @@ def shoot_rviz(out):
 def stop_all(procs):
     """SIGINT each process group (newest first), SIGKILL what does not stop."""
     for p in reversed(procs):
-        if p.poll() is None:
-            os.killpg(p.pid, signal.SIGINT)
-            try:
-                p.wait(20)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
+        stop_process(p, timeout=20.0)
 
 
 def shoot_gui(out, delay=2.0):
@@ -98,15 +105,7 @@ def shoot_gui(out, delay=2.0):
         from std_msgs.msg import String
         from std_srvs.srv import SetBool
 
-        deadline = time.monotonic() + 60
-        while True:
-            try:
-                socket.create_connection(("127.0.0.1", port), 0.5).close()
-                break
-            except OSError:
-                if time.monotonic() > deadline:
-                    raise
-                time.sleep(0.2)
+        wait_for_port(port, 60.0)
         rospy.init_node("screenshot_operator", disable_signals=True)
         state = {"v": ""}
         rospy.Subscriber("/rbd_controller/state", String, lambda m: state.update(v=m.data), queue_size=10)
@@ -138,17 +137,16 @@ def shoot_gui(out, delay=2.0):
 
 def main():
     """Take the screenshots asked for."""
-    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
-        # started in the background by a non-interactive shell: SIGINT arrives ignored and
-        # would stay ignored in roslaunch, which then could not be stopped by SIGINT
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+    restore_sigint()  # started in the background, roslaunch would inherit SIGINT ignored
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out", nargs="?", default=os.path.join(ROOT, "docs"))
-    ap.add_argument("--only", choices=["rviz", "gui"])
+    ap.add_argument("--only", choices=["rviz", "a1", "gui"])
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     if args.only in (None, "rviz"):
         shoot_rviz(args.out)
+    if args.only in (None, "a1"):
+        shoot_rviz(args.out, closeup=True)
     if args.only in (None, "gui"):
         shoot_gui(args.out)
 

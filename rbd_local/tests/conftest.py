@@ -1,21 +1,22 @@
-"""Test setup: import this checkout's rbd_local (not an installed copy) and share fixtures."""
+"""Test setup: import this checkout's rbd_local (not an installed copy) and share fixtures.
+
+The repository's test kit (``src/rbd_testkit``: SIGINT guard, ``ros_env``, ``wait_for``...) comes in
+as a pytest plugin; it is on the path after ``source ./env.sh`` and added from the source tree otherwise.
+"""
 
 import os
-import signal
 import sys
 
 import pytest
 
-# Started in the background by a non-interactive shell (nohup, `cmd &` in a script, some CI
-# runners), this process inherits SIGINT as *ignored*, and so would every child: rosmaster and
-# roslaunch would then ignore the SIGINT that stops them, and each stop would wait for the
-# SIGKILL fallback (10 s per test here). A handler in this process makes children start with
-# the default disposition again.
-if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
-    signal.signal(signal.SIGINT, signal.default_int_handler)
-
 HERE = os.path.dirname(os.path.abspath(__file__))
 PKG_ROOT = os.path.dirname(HERE)
+try:
+    import rbd_testkit  # noqa: F401
+except ImportError:
+    sys.path.insert(0, os.path.join(os.path.dirname(PKG_ROOT), "src", "rbd_testkit", "src"))
+
+pytest_plugins = ["rbd_testkit.pytest_plugin"]
 sys.path.insert(0, os.path.join(PKG_ROOT, "src"))
 sys.path.insert(0, HERE)
 for _name in [m for m in sys.modules if m == "rbd_local" or m.startswith("rbd_local.")]:

@@ -8,9 +8,9 @@ connection (link loss); ``stop``/``start`` on the same port simulate a bridge re
 import asyncio
 import json
 import threading
-import time
 
 import websockets
+from rbd_testkit import wait_for
 
 
 class FakeBridge:
@@ -84,14 +84,13 @@ class FakeBridge:
         asyncio.run_coroutine_threadsafe(send(), self._loop).result(5)
 
     def wait_for(self, predicate, timeout=10.0):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+        """The test kit's wait_for, with predicate evaluated under this bridge's lock."""
+
+        def locked():
             with self._lock:
-                if predicate():
-                    return True
-            time.sleep(0.02)
-        with self._lock:
-            return predicate()
+                return predicate()
+
+        return wait_for(locked, timeout, 0.02)
 
     def published_on(self, topic):
         with self._lock:

@@ -3,6 +3,7 @@
 import time
 
 import pytest
+from rbd_testkit import wait_for
 
 from rbd_local.link import (
     EM_STOP_SERVICE,
@@ -23,15 +24,6 @@ def _link(bridge, **kw):
         on_path_queue=got["moves"].append, on_connection=got["conn"].append, **kw,
     )
     return link.start(), got
-
-
-def _wait(pred, timeout=10.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if pred():
-            return True
-        time.sleep(0.02)
-    return pred()
 
 
 def test_gesture_heartbeat_and_subscriptions(fake_bridge):
@@ -57,7 +49,7 @@ def test_gesture_heartbeat_and_subscriptions(fake_bridge):
         fake_bridge.push(STATUS_TOPIC, {"nodata": 1})  # malformed: ignored, no crash
         fake_bridge.push(PATH_QUEUE_TOPIC, {"names": "x"})  # malformed: ignored
         fake_bridge.push(STATUS_TOPIC, {"data": "idle"})
-        assert _wait(lambda: got["status"] == ["running", "idle"])
+        assert wait_for(lambda: got["status"] == ["running", "idle"])
         assert got["state"] == ["EXECUTING"] and got["moves"] == [["a", "b", "c"]]
         assert link.connected
     finally:
@@ -86,12 +78,12 @@ def test_reconnects_after_link_loss_and_bridge_restart(fake_bridge):
     try:
         assert link.wait_connected(10)
         fake_bridge.kick_all()
-        assert _wait(lambda: got["conn"][-1:] == [True] and False in got["conn"])
+        assert wait_for(lambda: got["conn"][-1:] == [True] and False in got["conn"])
         assert link.wait_connected(10)
         assert fake_bridge.wait_for(lambda: fake_bridge.connections >= 2)
         port = fake_bridge.port
         fake_bridge.stop()
-        assert _wait(lambda: not link.connected)
+        assert wait_for(lambda: not link.connected)
         # while the bridge is gone: gestures are dropped at once (never delivered late), no blocking
         t0 = time.monotonic()
         assert link.send_gesture("spin") is False
@@ -105,7 +97,7 @@ def test_reconnects_after_link_loss_and_bridge_restart(fake_bridge):
             assert link.wait_connected(10), "no reconnection after the bridge came back"
             assert restarted.wait_for(lambda: STATUS_TOPIC in restarted.subscribed)
             restarted.push(STATUS_TOPIC, {"data": "collision"})
-            assert _wait(lambda: got["status"][-1:] == ["collision"])
+            assert wait_for(lambda: got["status"][-1:] == ["collision"])
             link.send_gesture("wiggle")
             assert restarted.wait_for(lambda: restarted.published_on(GESTURE_TOPIC) == [{"data": "wiggle"}])
             time.sleep(0.3)
@@ -236,10 +228,10 @@ def test_silent_link_is_dropped_by_keepalive_and_stale_estop_never_arrives(fake_
         t0 = time.monotonic()
         ok, msg = link.em_stop(True, timeout=0.5)  # written into the silent connection
         assert not ok
-        assert _wait(lambda: not link.connected, timeout=10.0), "silent link still reported connected"
+        assert wait_for(lambda: not link.connected, timeout=10.0), "silent link still reported connected"
         detected = time.monotonic() - t0
         assert detected < 7.0, "silence detected only after %.1f s" % detected
-        assert _wait(lambda: got["conn"][-1:] == [False], timeout=2.0)  # the app is told
+        assert wait_for(lambda: got["conn"][-1:] == [False], timeout=2.0)  # the app is told
         relay.silent.clear()  # the WLAN is back: a fresh connection, the old request is gone
         assert link.wait_connected(10)
         time.sleep(1.0)

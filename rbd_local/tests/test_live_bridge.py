@@ -7,14 +7,13 @@ rbd_bridge.launch`` (the RoboDog allow-list) and a stand-in controller (ros_peer
 
 import os
 import shutil
-import socket
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 
 import pytest
+from rbd_testkit import free_port, wait_for, wait_for_port
 
 from rbd_local.link import RobotLink
 
@@ -36,22 +35,6 @@ pytestmark = pytest.mark.skipif(
 )
 
 
-def _free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def _wait_port(port, timeout):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        with socket.socket() as s:
-            if s.connect_ex(("127.0.0.1", port)) == 0:
-                return True
-        time.sleep(0.1)
-    return False
-
-
 class Lines:
     """Collect a process's stdout lines in a thread."""
 
@@ -65,65 +48,36 @@ class Lines:
             self.lines.append(line.strip())
 
     def wait(self, pred, timeout=15):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if any(pred(x) for x in list(self.lines)):
-                return True
-            time.sleep(0.05)
-        return False
+        return bool(wait_for(lambda: any(pred(x) for x in list(self.lines)), timeout))
 
 
 class RosSystem:
-    """A private roscore on a free port, rbd_bridge with the RoboDog allow-list, and more nodes."""
+    """The test kit's private master (``ros_env``) with rbd_bridge and the RoboDog allow-list, and more nodes."""
 
-    def __init__(self):
-        self.home = tempfile.mkdtemp(prefix="rbd-local-ros-")
-        self.master_port, self.ws_port = _free_port(), _free_port()
-        self.env = dict(os.environ, ROS_HOME=self.home, ROS_LOG_DIR=os.path.join(self.home, "log"),
-                        ROS_IP="127.0.0.1", ROS_MASTER_URI="http://127.0.0.1:%d" % self.master_port,
-                        PYTHONUNBUFFERED="1", PYTHONDONTWRITEBYTECODE="1")
-        self.env.pop("ROS_HOSTNAME", None)
-        self.procs = []
+    def __init__(self, env):
+        self.ros = env
+        self.ws_port = free_port()
+        self.env = env.env
+        self.env.update(PYTHONUNBUFFERED="1", PYTHONDONTWRITEBYTECODE="1")
 
-    def spawn(self, cmd, stdout=subprocess.DEVNULL):
-        p = subprocess.Popen(cmd, env=self.env, stdout=stdout, stderr=subprocess.DEVNULL, text=True,
-                             start_new_session=True)
-        self.procs.append(p)
-        return p
+    def spawn(self, cmd, stdout=None):
+        return self.ros.start(cmd, capture=stdout == subprocess.PIPE)
 
     def start(self):
-        self.spawn(["roscore", "-p", str(self.master_port)])
-        assert _wait_port(self.master_port, 30), "roscore did not start"
         self.spawn(["roslaunch", "rbd_bridge", "rbd_bridge.launch", "port:=%d" % self.ws_port,
                     "address:=127.0.0.1"])
         return self
 
     def wait_bridge(self):
-        assert _wait_port(self.ws_port, 30), "rbd_bridge did not open its port"
+        wait_for_port(self.ws_port, 30)
 
     def run(self, cmd, timeout=30):
         return subprocess.run(cmd, env=self.env, capture_output=True, text=True, timeout=timeout)
 
-    def stop(self):
-        for p in reversed(self.procs):
-            if p.poll() is None:
-                os.killpg(p.pid, 2)  # SIGINT: roslaunch/roscore shut down their children
-        for p in reversed(self.procs):
-            try:
-                p.wait(15)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, 9)
-                p.wait()
-        shutil.rmtree(self.home, ignore_errors=True)
-
 
 @pytest.fixture
-def ros_system():
-    system = RosSystem().start()
-    try:
-        yield system
-    finally:
-        system.stop()
+def ros_system(ros_env):
+    return RosSystem(ros_env).start()
 
 
 @pytest.fixture
@@ -167,10 +121,7 @@ def test_link_through_the_real_bridge(ros_bridge):
 
 
 def _wait_value(values, wanted, timeout=15):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline and values[-1:] != [wanted]:
-        time.sleep(0.05)
-    return values[-1:] == [wanted]
+    return bool(wait_for(lambda: values[-1:] == [wanted], timeout))
 
 
 @pytest.mark.skipif(not HAVE_CONTROL, reason="rbd_controller / rbd_gestrec not in this sourced workspace")

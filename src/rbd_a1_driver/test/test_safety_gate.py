@@ -249,3 +249,67 @@ def test_estop_required_first_message_true_stays_engaged():
 def test_estop_required_must_be_a_bool(bad):
     with pytest.raises(ValueError):
         GateConfig(estop_required=bad)
+
+
+def walking_gate():
+    g = gate()
+    g.set_estop(False, 0.0)
+    g.set_velocity(0.3, 0.0, 0.0, 0.0)
+    assert moving(g.command(0.01))
+    return g
+
+
+def test_remote_estop_engages_in_the_next_command_and_forgets_the_velocity():
+    g = walking_gate()
+    assert g.remote_state == "ready"
+    assert g.set_remote(True) is True
+    out = g.command(0.02)
+    assert not moving(out) and "remote" in out.reason and g.remote_state == "engaged"
+    assert g.set_remote(True) is False  # already latched
+    assert "remote e-stop" in g.set_velocity(0.3, 0.0, 0.0, 0.03)
+    assert not moving(g.command(0.04))
+    assert "e-stop" in g.set_body_pose(0.1, 0.0, 0.0, 0.0)
+
+
+def test_remote_estop_released_only_by_the_operator_after_the_controller_engaged():
+    g = walking_gate()
+    g.set_remote(True)
+    g.set_remote(False)  # let go: still engaged
+    g.set_estop(False, 0.05)  # the controller's periodic false, before it engaged: no release
+    assert g.remote_state == "engaged"
+    g.set_estop(True, 0.1)  # the controller engaged (told by the driver)
+    assert g.remote_state == "engaged"
+    g.set_estop(False, 0.2)  # the operator releases
+    assert g.remote_state == "ready"
+    assert not moving(g.command(0.21))  # the old command is forgotten
+    g.set_velocity(0.3, 0.0, 0.0, 0.22)
+    assert moving(g.command(0.23))
+
+
+def test_remote_estop_release_while_held_is_void():
+    g = walking_gate()
+    g.set_remote(True)
+    g.set_estop(True, 0.1)
+    g.set_estop(False, 0.2)  # released while the combination is still held
+    assert g.remote_state == "engaged"
+    g.set_remote(False)
+    g.set_estop(False, 0.3)  # a further false (periodic republish) does not release either
+    assert g.remote_state == "engaged"
+    g.set_velocity(0.3, 0.0, 0.0, 0.31)
+    assert not moving(g.command(0.32))
+    g.set_estop(True, 0.4)  # engaged again, then released with the buttons up
+    g.set_estop(False, 0.5)
+    assert g.remote_state == "ready"
+
+
+def test_remote_estop_off():
+    g = gate(remote_estop=False)
+    g.set_velocity(0.3, 0.0, 0.0, 0.0)
+    assert g.set_remote(True) is False
+    assert g.remote_state == "off" and not g.remote_held and moving(g.command(0.01))
+
+
+@pytest.mark.parametrize("bad", ["true", 1, None])
+def test_remote_estop_must_be_a_bool(bad):
+    with pytest.raises(ValueError, match="remote_estop"):
+        GateConfig(remote_estop=bad)

@@ -1,7 +1,10 @@
-"""Helpers for rbd_bridge integration tests (imported by conftest.py and the test modules)."""
+"""Helpers for rbd_bridge integration tests (imported by conftest.py and the test modules).
+
+The generic ones (ports, the private master, waiting) come from the test kit, rbd_testkit.
+"""
 
 import base64
-import importlib.util
+import functools
 import json
 import os
 import struct
@@ -15,6 +18,7 @@ import rosgraph
 from websockets.sync.client import connect
 
 from rbd_bridge.core import encoding
+from rbd_testkit import free_port, wait_for, wait_for_port
 
 PKG = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ROOT = os.path.dirname(os.path.dirname(PKG))
@@ -24,33 +28,12 @@ PROBE = os.path.join(TEST, "ros_probe.py")
 FIBONACCI = os.path.join(TEST, "fibonacci_server.py")
 
 
-def _root_conftest():
-    spec = importlib.util.spec_from_file_location("rbd_root_conftest", os.path.join(ROOT, "conftest.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-ROOTCONF = _root_conftest()
-free_port = ROOTCONF.free_port
-wait_for_port = ROOTCONF.wait_for_port
-
-
 def master_of(env):
     return rosgraph.Master("/rbd_bridge_test", master_uri=env.env["ROS_MASTER_URI"])
 
 
-def wait_until(predicate, timeout=15.0, period=0.05):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        try:
-            value = predicate()
-        except Exception:
-            value = None
-        if value:
-            return value
-        time.sleep(period)
-    return None
+# A predicate that raises (a rosapi call while the bridge comes up) counts as "not yet".
+wait_until = functools.partial(wait_for, ignore=(Exception,))
 
 
 def wait_for_service(env, name, timeout=20.0):

@@ -6,10 +6,12 @@ import threading
 import time
 
 import pytest
+import rosgraph
 import roslibpy
 from rbd_bridge_testing import master_of, png_text, start_echo, wait_until
 
 from rbd_bridge.core.rosapi import ROSAPI_TYPES
+from rbd_testkit import free_port
 
 BRIDGE = "/rbd_bridge"
 
@@ -161,12 +163,25 @@ def test_call_service_success_failure_and_missing_service(roslibpy_client):
 
 
 def _service_gone(master, name):
-    """True once the master no longer knows the service."""
+    """True once the master answers that no node provides the service.
+
+    Only that answer counts: any other failure (the master unreachable, a timeout) raises, so a
+    wait on this never passes because the question could not be asked.
+    """
     try:
         master.lookupService(name)
         return False
-    except Exception:
-        return True
+    except rosgraph.masterapi.Error as err:  # the master's ERROR code (-1)
+        if "no provider" in str(err):
+            return True
+        raise
+
+
+def test_service_gone_needs_the_masters_answer():
+    # An unreachable master is no proof that a service is gone.
+    master = rosgraph.Master("/rbd_bridge_test", master_uri="http://127.0.0.1:%d" % free_port())
+    with pytest.raises(OSError):
+        _service_gone(master, "/web/negate")
 
 
 def test_client_hosted_service_is_a_ros_service_and_disappears_with_its_client(roslibpy_client, open_bridge):

@@ -8,11 +8,12 @@ import time
 
 import pytest
 import roslibpy
-from rbd_bridge_testing import ROOTCONF, master_of, start_bridge, wait_until
+from rbd_bridge_testing import master_of, start_bridge, wait_until
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 from rbd_bridge.core.security import make_mac
+from rbd_testkit import RosEnv
 
 SECRET = "0123456789abcdef"
 
@@ -20,7 +21,7 @@ SECRET = "0123456789abcdef"
 @pytest.fixture(scope="module")
 def robodog():
     """Master + the bridge exactly as rbd_bridge.launch starts it (RoboDog allow-list)."""
-    env = ROOTCONF.RosEnv()
+    env = RosEnv()
     try:
         port, _ = start_bridge(env, launch="rbd_bridge.launch")
         secret_file = os.path.join(env.home, "secret")
@@ -114,6 +115,7 @@ def test_rosapi_lists_only_allowed_names(robodog):
     ros = roslibpy.Ros("127.0.0.1", port, transport="asyncio")
     ros.run(timeout=15)
     try:
+        # The allowed topic exists in the graph because this test advertises it (not an earlier test).
         roslibpy.Topic(ros, "/rbd_gestrec/gesture", "std_msgs/String").advertise()
         assert wait_until(lambda: "/rbd_gestrec/gesture" in ros.get_topics(), 10)
         assert "/rosout" not in ros.get_topics()  # every node publishes it: live, but not allowed

@@ -14,13 +14,15 @@ import time
 import types
 
 import pytest
-from rbd_bridge_testing import OPEN, ROOTCONF, WsClient, probe_call, start_bridge, start_echo, start_probe, wait_until
+from rbd_bridge_testing import OPEN, WsClient, probe_call, start_bridge, start_echo, start_probe, wait_until
 from std_msgs.msg import String
+
+from rbd_testkit import RosEnv, stop_process
 
 
 @pytest.fixture(scope="module")
 def bridges():
-    env = ROOTCONF.RosEnv()
+    env = RosEnv()
     try:
         start_echo(env, tick_rate=50.0)
         direct, _ = start_bridge(env, node_name="bridge_direct", **OPEN)
@@ -145,7 +147,7 @@ def test_a_vanishing_publisher_closes_its_direct_connection_and_a_new_one_is_rea
         client.send({"op": "subscribe", "topic": "/direct/vanish", "type": "std_msgs/String"})
         assert client.recv_until(_published("/direct/vanish"), timeout=20)["msg"] == {"data": "alive"}
         open_with = client.stats("bridge_direct")["direct_read_open"]
-        ROOTCONF.stop_process(publisher)
+        stop_process(publisher)
         assert wait_until(lambda: client.stats("bridge_direct")["direct_read_open"] == open_with - 1, timeout=15)
         bridges.env.start(pub_cmd)
         assert client.recv_until(_published("/direct/vanish"), timeout=20)["msg"] == {"data": "alive"}

@@ -26,7 +26,6 @@ import roslibpy
 from rbd_bridge_testing import (
     FIBONACCI,
     OPEN,
-    ROOTCONF,
     WsClient,
     master_of,
     probe_call,
@@ -40,6 +39,8 @@ from rbd_bridge_testing import (
 from roslibpy.ros1 import actionlib
 from websockets.frames import Frame, Opcode
 
+from rbd_testkit import RosEnv
+
 PROBE = "probe"
 SMOKE_A = "/a_topic"
 SMOKE_B = "/b_topic"
@@ -52,7 +53,7 @@ HEADER_TOPIC = "/compat/points"
 @pytest.fixture(scope="module")
 def open_bridge(tutorial_types):
     """Master, echo peer, probe, Fibonacci server and our node started as rosbridge_websocket."""
-    env = ROOTCONF.RosEnv()
+    env = RosEnv()
     try:
         use_tutorial_types(env, tutorial_types)
         start_echo(env)

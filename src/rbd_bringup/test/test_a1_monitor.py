@@ -6,8 +6,12 @@ import time
 import lcm
 import pytest
 
-from rbd_a1_driver import unitree_layout as ul
-from rbd_bringup.a1_monitor import HighCmdMonitor, command_speed, stop_delay, wait_for, yaw_of
+from rbd_bringup.a1_monitor import HighCmdMonitor, command_speed, stop_delay, yaw_of
+from rbd_sim import unitree_wire as wire
+from rbd_testkit import wait_for
+from rbd_wire_oracle import unitree as vendor
+
+WALK, STAND = vendor.MODE_VELOCITY_WALK, vendor.MODE_FORCE_STAND
 
 
 def free_udp_port():
@@ -17,12 +21,9 @@ def free_udp_port():
 
 
 def high_cmd(mode, vx=0.0, vy=0.0, wz=0.0):
-    cmd = ul.HighCmd()
-    cmd.mode = mode
-    cmd.gait_type = ul.GAIT_TROT
-    cmd.velocity = (vx, vy)
-    cmd.yaw_speed = wz
-    return cmd
+    """HighCmd bytes assembled from the vendor's offsets."""
+    return vendor.pack(vendor.HIGH_CMD, {"mode": mode, "gaitType": vendor.GAIT_TROT, "velocity": (vx, vy),
+                                         "yawSpeed": wz})
 
 
 @pytest.fixture
@@ -31,23 +32,25 @@ def url():
 
 
 def test_command_speed_only_counts_walking():
-    assert command_speed(high_cmd(ul.MODE_VELOCITY_WALK, 0.3, 0.4)) == pytest.approx(0.5)
-    assert command_speed(high_cmd(ul.MODE_VELOCITY_WALK, 0.0, 0.0, -0.7)) == pytest.approx(0.7)
-    assert command_speed(high_cmd(ul.MODE_FORCE_STAND, 0.3, 0.0, 0.5)) == 0.0
+    def speed(*args):
+        return command_speed(wire.decode_high_cmd(high_cmd(*args)))
+
+    assert speed(WALK, 0.3, 0.4) == pytest.approx(0.5)
+    assert speed(WALK, 0.0, 0.0, -0.7) == pytest.approx(0.7)
+    assert speed(STAND, 0.3, 0.0, 0.5) == 0.0
 
 
 def test_monitor_records_packets_over_lcm(url):
     mon = HighCmdMonitor(url)
     pub = lcm.LCM(url)
     try:
-        walk, stand = ul.MODE_VELOCITY_WALK, ul.MODE_FORCE_STAND
-        sent = [high_cmd(walk, 0.3), high_cmd(walk), high_cmd(stand, 0.3)]
+        sent = [high_cmd(WALK, 0.3), high_cmd(WALK), high_cmd(STAND, 0.3)]
 
         def delivered():
             for cmd in sent:
-                pub.publish(ul.CHANNEL_HIGH_CMD, cmd.pack())
-            pub.publish(ul.CHANNEL_HIGH_CMD, b"\x00" * 7)  # garbage: counted, ignored
-            pub.publish("OTHER_CHANNEL", sent[0].pack())  # other channels are not commands
+                pub.publish("LCM_High_Cmd", cmd)
+            pub.publish("LCM_High_Cmd", b"\x00" * 7)  # garbage: counted, ignored
+            pub.publish("OTHER_CHANNEL", sent[0])  # other channels are not commands
             time.sleep(0.05)
             return len(mon.snapshot()) >= 3 and mon.bad >= 1
 
@@ -65,7 +68,7 @@ def test_monitor_custom_sink_and_clock(url):
     mon = HighCmdMonitor(url, record=lambda t, v: got.append((t, v)), clock=lambda: 42.0)
     pub = lcm.LCM(url)
     try:
-        assert wait_for(lambda: pub.publish(ul.CHANNEL_HIGH_CMD, high_cmd(2, 0.1).pack()) or got, 5.0)
+        assert wait_for(lambda: pub.publish("LCM_High_Cmd", high_cmd(WALK, 0.1)) or got, 5.0)
     finally:
         mon.close()
     assert got[0] == (42.0, pytest.approx(0.1)) and mon.snapshot() == []
@@ -80,13 +83,7 @@ def test_stop_delay():
     assert stop_delay([(0.0, 0.3), (0.1, 0.0), (0.2, 0.3), (0.3, 0.0)], 0.0, 1.0, 1e-6) == pytest.approx(0.3)
 
 
-def test_wait_for_and_yaw():
-    t0 = time.monotonic()
-    assert not wait_for(lambda: False, 0.1, step=0.01)
-    assert time.monotonic() - t0 >= 0.1
-    assert wait_for(lambda: True, 5.0)
-    assert not wait_for(lambda: False, 5.0, abort=lambda: True)
-
+def test_yaw():
     class Q:
         x = y = 0.0
         z, w = 0.7071067811865476, 0.7071067811865476

@@ -371,3 +371,30 @@ def test_lidar_monitor_back_clear_resumes():
     assert ctl.state == State.COLLISION_DETECTED
     ctl.on_lidar_state(world.t, False)
     assert ctl.state == State.WAITING_FOR_GESTURE
+
+
+def test_remote_estop_engages_during_a_trick_and_blocks_release_while_held():
+    world, ctl = make()
+    release(world, ctl)
+    world.gestures.append("walk")
+    run(world, ctl, 4)
+    assert ctl.state == State.EXECUTING and world.estop_flag is False
+    ctl.set_remote_estop(True)
+    assert ctl.state == State.EMERGENCY_STOP and world.estop_flag is True
+    assert ("pos_emergency", True) in world.calls  # the same e-stop path as the service
+    message = ctl.set_emergency(False)  # the operator releases while the combination is held
+    assert "refused" in message and ctl.release_refusal() == message
+    assert ctl.state == State.EMERGENCY_STOP and world.estop_flag is True
+    ctl.set_remote_estop(False)  # let go: still stopped, only the operator releases
+    assert ctl.state == State.EMERGENCY_STOP and ctl.release_refusal() == ""
+    ctl.set_emergency(False)
+    assert ctl.state == State.EXECUTING and world.estop_flag is False  # resumes the interrupted trick
+
+
+def test_remote_let_go_alone_releases_nothing():
+    world, ctl = make()
+    ctl.set_remote_estop(False)
+    assert ctl.state == State.EMERGENCY_STOP and world.estop_flag is True
+    release(world, ctl)
+    ctl.set_remote_estop(False)
+    assert ctl.state == State.WAITING_FOR_GESTURE and world.estop_flag is False

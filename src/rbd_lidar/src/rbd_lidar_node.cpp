@@ -68,6 +68,7 @@ class LidarNode {
 
   void readParameters() {
     base_frame_ = param<std::string>("base_frame", "base_link");
+    zone_frame_ = param<std::string>("zone_frame", "");
     mount_from_tf_ = param("mount_from_tf", true);
     mount_t_ = Eigen::Vector3d(param("lidar_offset_x", 0.0), param("lidar_offset_y", 0.0),
                                param("lidar_offset_z", 0.10));
@@ -198,6 +199,19 @@ class LidarNode {
                           base_frame_.c_str(), frame.c_str(), e.what());
       }
     }
+    if (!zone_frame_.empty() && !zone_found_) {
+      try {
+        const auto tf = tf_buffer_.lookupTransform(base_frame_, zone_frame_, ros::Time(0));
+        zone_t_ = Eigen::Vector3d(tf.transform.translation.x, tf.transform.translation.y,
+                                  tf.transform.translation.z);
+        zone_found_ = true;
+        ROS_INFO("rbd_lidar: zone distances measured from %s at (%.3f %.3f) m in %s", zone_frame_.c_str(),
+                 zone_t_.x(), zone_t_.y(), base_frame_.c_str());
+      } catch (const tf2::TransformException& e) {
+        ROS_WARN_THROTTLE(10.0, "rbd_lidar: no TF %s -> %s yet (%s); zone measured from the LiDAR meanwhile",
+                          base_frame_.c_str(), zone_frame_.c_str(), e.what());
+      }
+    }
     double roll = fixed_roll_, pitch = fixed_pitch_, height = base_height_;
     if (attitude_source_ == "odom") {
       if (!odom_time_.isZero() && (ros::Time::now() - odom_time_).toSec() < attitude_timeout_) {
@@ -230,9 +244,21 @@ class LidarNode {
   void cloudCb(const sensor_msgs::PointCloud2ConstPtr& cloud) {
     const ros::Time now = ros::Time::now();
     const SensorPose pose = currentPose(cloud->header.frame_id);
-    ZoneParams zone = zone_;
+    // Zone distances from the body's zone origin: the LiDAR's offset from it, in the level frame.
+    Eigen::Vector2d offset(0.0, 0.0);
+    if (zone_found_ && (mount_found_ || !mount_from_tf_)) {
+      const Eigen::Vector3d o = pose.level_from_sensor * mount_r_.transpose() * (mount_t_ - zone_t_);
+      offset = o.head<2>();
+    }
+    bool clamped = false;
+    const ZoneParams base = zoneAroundOrigin(zone_, offset.x(), offset.y(), &clamped);
+    if (clamped) {
+      ROS_WARN_THROTTLE(10.0, "rbd_lidar: the LiDAR sits outside the zone around %s; a side was clamped to 0",
+                        zone_frame_.c_str());
+    }
+    ZoneParams zone = base;
     if (velocity_aware_ && !cmd_time_.isZero() && (now - cmd_time_).toSec() < cmd_timeout_) {
-      zone = grownZone(zone_, cmd_.linear.x, cmd_.linear.y, cmd_.angular.z, motion_);
+      zone = grownZone(base, cmd_.linear.x, cmd_.linear.y, cmd_.angular.z, motion_);
     }
     pipeline_.setZone(zone);
     pipeline_.setPose(pose);
@@ -248,6 +274,11 @@ class LidarNode {
         ROS_WARN_THROTTLE(30.0, "rbd_lidar: the cloud's xyz differs from the beam model by %.0f mm",
                           pipeline_.modelResidual() * 1000.0);
       }
+    }
+    // Reported distances are from the zone origin, like the configured ones.
+    const double shift[4] = {offset.x(), offset.y(), -offset.x(), -offset.y()};  // FRONT LEFT BACK RIGHT
+    for (int s = 0; s < 4; ++s) {
+      if (std::isfinite(out.state.min_distance[s])) out.state.min_distance[s] += shift[s];
     }
     critical_pub_.publish(out.critical);
     if (err == CloudError::NONE) {
@@ -388,8 +419,10 @@ class LidarNode {
   int stale_periods_ = 3;
   double scan_rate_ = 10.0;
 
-  std::string base_frame_, attitude_source_, last_frame_;
+  std::string base_frame_, zone_frame_, attitude_source_, last_frame_;
   bool mount_from_tf_ = true, mount_found_ = false, use_odom_height_ = false, marker_sent_ = false;
+  bool zone_found_ = false;
+  Eigen::Vector3d zone_t_ = Eigen::Vector3d::Zero();
   Eigen::Matrix3d mount_r_ = Eigen::Matrix3d::Identity();
   Eigen::Vector3d mount_t_ = Eigen::Vector3d(0, 0, 0.1);
   double base_height_ = 0.28, fixed_roll_ = 0, fixed_pitch_ = 0, attitude_timeout_ = 0.5, cmd_timeout_ = 0.5;

@@ -446,6 +446,42 @@ TEST(CriticalZone, VelocityAwareGrowth) {
   EXPECT_EQ(run(zone, img).total(), 0u);
 }
 
+// Zone distances measured from a body point: a LiDAR 0.08 m behind it (and 0.02 m to the right)
+// sees the front limit 0.08 m further away; the same return flips with the offset.
+TEST(CriticalZone, ZoneAroundBodyOrigin) {
+  ZoneParams base;  // 0.70 / 0.55 / 0.35 / 0.35
+  bool clamped = true;
+  ZoneParams z = rbd_lidar::zoneAroundOrigin(base, -0.08, -0.02, &clamped);
+  EXPECT_FALSE(clamped);
+  EXPECT_NEAR(z.front, 0.78, 1e-12);
+  EXPECT_NEAR(z.back, 0.47, 1e-12);
+  EXPECT_NEAR(z.left, 0.37, 1e-12);
+  EXPECT_NEAR(z.right, 0.33, 1e-12);
+  z = rbd_lidar::zoneAroundOrigin(base, 0.0, 0.0, &clamped);
+  EXPECT_NEAR(z.front, base.front, 1e-12);
+  EXPECT_NEAR(z.right, base.right, 1e-12);
+  z = rbd_lidar::zoneAroundOrigin(base, 0.9, 0.0, &clamped);  // LiDAR ahead of the zone's front edge
+  EXPECT_TRUE(clamped);
+  EXPECT_EQ(z.front, 0.0);
+  EXPECT_NEAR(z.back, 1.45, 1e-12);
+  z = rbd_lidar::zoneAroundOrigin(base, NAN, 0.0, &clamped);
+  EXPECT_FALSE(clamped);
+  EXPECT_NEAR(z.front, base.front, 1e-12);
+
+  // A horizontal return 0.75 m ahead of the LiDAR: clear around the LiDAR (0.70), critical when
+  // the LiDAR sits 0.08 m behind the zone origin (0.78 from the LiDAR).
+  const BeamModel m = simple({0.0}, 360);
+  ZoneParams zp;
+  zp.point_threshold = 1;
+  std::vector<uint32_t> img(360, 0);
+  img[0] = 750;
+  CriticalZone zone;
+  ASSERT_TRUE(zone.configure(m, zp, level(0.5), nullptr));
+  EXPECT_EQ(run(zone, img).total(), 0u);
+  ASSERT_TRUE(zone.configure(m, rbd_lidar::zoneAroundOrigin(zp, -0.08, 0.0), level(0.5), nullptr));
+  EXPECT_EQ(run(zone, img).total(), 1u);
+}
+
 TEST(CriticalZone, SlowdownScale) {
   const BeamModel m = simple({0.0}, 360);
   ZoneParams z;  // front 0.70 + slowdown 0.50

@@ -4,22 +4,28 @@ import math
 
 import pytest
 
-from rbd_a1_driver import unitree_layout as ul
+from rbd_sim import unitree_wire as wire
 from rbd_sim.a1_model import A1Config, A1Model
+from rbd_wire_oracle import unitree as vendor
 
 DT = 0.004  # the driver's default 250 Hz
+MODE_BACKFLIP = 9
 
 
 def walk(vx=0.0, vy=0.0, wz=0.0):
-    c = ul.HighCmd()
-    c.mode, c.gait_type, c.velocity, c.yaw_speed = ul.MODE_VELOCITY_WALK, ul.GAIT_TROT, (vx, vy), wz
-    return c.pack()
+    """A HighCmd assembled from the vendor's offsets (the mock must understand it)."""
+    return vendor.pack(vendor.HIGH_CMD, {"mode": vendor.MODE_VELOCITY_WALK, "gaitType": vendor.GAIT_TROT,
+                                         "velocity": (vx, vy), "yawSpeed": wz})
 
 
 def stand(roll=0.0, pitch=0.0, yaw=0.0, dh=0.0):
-    c = ul.HighCmd()
-    c.mode, c.euler, c.body_height = ul.MODE_FORCE_STAND, (roll, pitch, yaw), dh
-    return c.pack()
+    return vendor.pack(vendor.HIGH_CMD, {"mode": vendor.MODE_FORCE_STAND, "euler": (roll, pitch, yaw),
+                                         "bodyHeight": dh})
+
+
+def state_of(model, layout="3.3.4"):
+    """The mock's HighState packet in an SDK layout, read back through the vendor table."""
+    return vendor.unpack(vendor.HIGH_STATES[layout], wire.encode_high_state(layout, model.high_state()))
 
 
 def drive(model, packet_fn, t0, duration, dt=DT):
@@ -139,11 +145,10 @@ def test_bad_packet_between_good_ones_is_ignored():
 
 
 def test_unmodeled_mode_holds_still():
-    c = ul.HighCmd()
-    c.mode, c.velocity = ul.MODE_BACKFLIP, (0.5, 0.0)
+    packet = vendor.pack(vendor.HIGH_CMD, {"mode": MODE_BACKFLIP, "velocity": (0.5, 0.0)})
     m = A1Model(A1Config())
-    drive(m, lambda t: c.pack(), 0.0, 1.0)
-    assert m.x == 0.0 and m.unmodeled_mode == ul.MODE_BACKFLIP
+    drive(m, lambda t: packet, 0.0, 1.0)
+    assert m.x == 0.0 and m.unmodeled_mode == MODE_BACKFLIP
 
 
 def test_force_stand_tilts_and_lowers_body():
@@ -152,9 +157,10 @@ def test_force_stand_tilts_and_lowers_body():
     x, y, z, roll, pitch, yaw = m.pose()
     assert (roll, pitch, yaw) == pytest.approx((0.3, -0.2, 0.1))
     assert z == pytest.approx(0.28 - 0.16)
-    s = ul.HighState.unpack(m.high_state().pack())
-    assert s.rpy == pytest.approx((0.3, -0.2, 0.1), abs=1e-6)
-    assert s.body_height == pytest.approx(0.12)
+    for layout in ("3.3", "3.3.4"):
+        s = state_of(m, layout)
+        assert s["imu"]["rpy"] == pytest.approx((0.3, -0.2, 0.1), abs=1e-6)
+        assert s["bodyHeight"] == pytest.approx(0.12)
     # Saturated by the robot.
     drive(m, lambda t: stand(2.0, 0.0, 0.0, -1.0), 1.5, 3.0)
     assert m.pose()[3] == pytest.approx(0.75) and m.pose()[2] == pytest.approx(0.12)
@@ -170,12 +176,14 @@ def test_walking_returns_body_to_level():
 def test_high_state_reports_motion():
     m = A1Model(A1Config(drift_per_180=0.0))
     drive(m, lambda t: walk(0.3, 0.0, 0.2), 0.0, 2.0)
-    s = ul.HighState.unpack(m.high_state().pack())
-    assert s.velocity[0] == pytest.approx(0.3) and s.yaw_speed == pytest.approx(0.2)
-    assert s.gyroscope[2] == pytest.approx(0.2)
-    assert s.position[0] == pytest.approx(m.x, abs=1e-5) and s.position[1] == pytest.approx(m.y, abs=1e-5)
-    assert s.rpy[2] == pytest.approx(m.heading, abs=1e-6)
-    assert s.mode == ul.MODE_VELOCITY_WALK
+    for layout in ("3.3", "3.3.4"):
+        s = state_of(m, layout)
+        assert s["levelFlag"] == vendor.HIGHLEVEL and s["mode"] == vendor.MODE_VELOCITY_WALK
+        assert s["gaitType"] == vendor.GAIT_TROT
+        assert s["velocity"][0] == pytest.approx(0.3) and s["yawSpeed"] == pytest.approx(0.2)
+        assert s["imu"]["gyroscope"][2] == pytest.approx(0.2)
+        assert s["position"][0] == pytest.approx(m.x, abs=1e-5) and s["position"][1] == pytest.approx(m.y, abs=1e-5)
+        assert s["imu"]["rpy"][2] == pytest.approx(m.heading, abs=1e-6)
 
 
 def test_config_validation():

@@ -26,3 +26,11 @@ def test_missing_world_lists_known_worlds(ros_env):
 
 def test_rosrun_available():
     assert subprocess.call(["which", "rosrun"], stdout=subprocess.DEVNULL) == 0
+
+
+def test_bad_mount_in_the_calibration_file_is_a_clear_startup_error(ros_env):
+    code, log = ros_env.run_to_exit(["rosrun", "rbd_sim", "os1_sim", "_world:=lab",
+                                     "_mounts:={os_sensor: {parent: base_link, xyz: [0, 0], rpy: [0, 0, 0]}}"],
+                                    timeout=40)
+    assert code == 1, log
+    assert "mount os_sensor.xyz must be 3 numbers" in log, log

@@ -177,3 +177,18 @@ def test_motion_distortion_forward_and_turning():
     ca = np.flatnonzero(a.hit[row] >= 2).mean()
     cb = np.flatnonzero(b.hit[row] >= 2).mean()
     assert 3.0 <= cb - ca <= 5.5
+
+
+def test_mount_pose_of_a_calibration_file_entry():
+    from rbd_sim.transforms import mount_pose
+
+    entry = {"parent": "base_link", "xyz": [-0.08, 0, 0.07], "rpy": [0, 0.1, 3]}
+    assert mount_pose(entry, "os_sensor") == [-0.08, 0.0, 0.07, 0.0, 0.1, 3.0]
+    for bad, key in (({"xyz": [0, 0], "rpy": [0, 0, 0]}, "xyz"), ({"xyz": [0, 0, 0]}, "rpy"),
+                     ({"xyz": [0, 0, 0], "rpy": [0, "a", 0]}, "rpy"),
+                     ({"xyz": [0, float("inf"), 0], "rpy": [0, 0, 0]}, "xyz")):
+        with pytest.raises(ValueError) as err:
+            mount_pose(bad, "os_sensor")
+        assert "os_sensor.%s" % key in str(err.value)
+    with pytest.raises(ValueError):
+        mount_pose([0, 0, 0.07, 0, 0, 0], "os_sensor")

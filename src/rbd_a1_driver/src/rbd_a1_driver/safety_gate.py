@@ -16,6 +16,11 @@ Rules (DESIGN.md §5.2/§5.3, CONTRACT.md):
 * ``estop_required`` (on the robot and in the simulated system): before the first e-stop message
   the gate counts as engaged (zero velocity, commands and body poses ignored), so nothing moves
   until the e-stop source is up. Off, "never received" means no gate (isolated tests).
+* The A1's own remote as a physical e-stop (``remote_estop``): a HighState whose remote buttons
+  hold the e-stop combination (default L2 + B) latches the gate at once (zero velocity from the
+  next send cycle; the last command is forgotten). Only the operator's release clears it: the
+  e-stop flag of rbd_controller must go true (it engaged, told by the driver) and then false
+  while the combination is no longer held. A release while it is held is void.
 * No HighState for ``state_timeout`` (0.5 s), or none yet => zero velocity (the link is suspect).
 * Modes: a fresh non-zero velocity => mode 2 (velocity walking, trot). After the velocity has been
   zero for ``stand_delay`` the A1 is put in mode 1 (force stand) with the requested body pose
@@ -48,12 +53,14 @@ class GateConfig:
         max_body_height: float = 0.06,
         estop_timeout: float = 0.5,
         estop_required: bool = False,
+        remote_estop: bool = True,
     ) -> None:
-        if not isinstance(estop_required, bool):
-            raise ValueError("estop_required must be true or false, got %r" % (estop_required,))
         values = dict(locals())
         values.pop("self")
-        values.pop("estop_required")
+        for name in ("estop_required", "remote_estop"):
+            flag = values.pop(name)
+            if not isinstance(flag, bool):
+                raise ValueError("%s must be true or false, got %r" % (name, flag))
         for name, value in values.items():
             if not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise ValueError("%s must be a finite number, got %r" % (name, value))
@@ -77,6 +84,7 @@ class GateConfig:
         self.max_body_height = float(max_body_height)
         self.estop_timeout = float(estop_timeout)
         self.estop_required = estop_required
+        self.remote_estop = remote_estop
 
 
 def _clamp(value: float, limit: float) -> float:
@@ -122,6 +130,9 @@ class SafetyGate:
         self._estop_time = None  # arrival of the last e-stop message
         self._estop_armed = False  # the e-stop source has shown it is periodic
         self._estop_lost = False  # engaged because the e-stop messages stopped
+        self._remote_held = False  # the remote's e-stop combination held in the last HighState
+        self._remote_latched = False  # engaged by the remote, waiting for the operator's release
+        self._remote_ack = False  # rbd_controller's e-stop flag was true since the latch engaged
         self._state_time = None
         self._euler = (0.0, 0.0, 0.0)
         self._body_height = 0.0
@@ -141,6 +152,8 @@ class SafetyGate:
             self.rejected += 1
             return "non-finite velocity %r rejected: zero velocity sent" % (values,)
         self._check_estop_signal(now)
+        if self._remote_latched:
+            return "remote e-stop engaged: velocity command ignored"
         if self._estop:
             return "e-stop engaged: velocity command ignored"
         if self.estop_missing:
@@ -164,6 +177,30 @@ class SafetyGate:
         self._estop_time = now
         self._estop_lost = False
         self._engage(bool(engaged))
+        if self._remote_latched:
+            if engaged:
+                self._remote_ack = True
+            elif self._remote_ack and not self._remote_held:
+                self._remote_latched = False  # the operator released it after it engaged
+            else:
+                self._remote_ack = False  # released while held (or before it engaged): void
+
+    def set_remote(self, held: bool) -> bool:
+        """The remote's e-stop combination is (not) held in the latest HighState.
+
+        Returns:
+            True if this engaged the remote e-stop (it was not latched before).
+        """
+        if not self.config.remote_estop:
+            return False
+        self._remote_held = bool(held)
+        if not held or self._remote_latched:
+            return False
+        self._remote_latched = True
+        self._remote_ack = False
+        self._vel = (0.0, 0.0, 0.0)
+        self._vel_time = None
+        return True
 
     def _engage(self, engaged: bool) -> None:
         self._estop = engaged
@@ -190,7 +227,7 @@ class SafetyGate:
                 roll, pitch, yaw, c.max_roll, c.max_pitch, c.max_yaw)
         if not c.min_body_height <= body_height <= c.max_body_height:
             return "body_height %.3f m outside [%.3f, %.3f]" % (body_height, c.min_body_height, c.max_body_height)
-        if self._estop:
+        if self._estop or self._remote_latched:
             return "e-stop engaged: body pose ignored"
         if self.estop_missing:
             return "no e-stop signal yet (estop_required): body pose ignored"
@@ -207,6 +244,18 @@ class SafetyGate:
     def estop(self) -> bool:
         """True while the e-stop is engaged (by a message or by a lost e-stop signal)."""
         return bool(self._estop)
+
+    @property
+    def remote_state(self) -> str:
+        """The remote e-stop: ``off`` (switched off), ``ready`` or ``engaged`` (latched)."""
+        if not self.config.remote_estop:
+            return "off"
+        return "engaged" if self._remote_latched else "ready"
+
+    @property
+    def remote_held(self) -> bool:
+        """True while the last HighState had the remote's e-stop combination held."""
+        return self._remote_held
 
     @property
     def estop_missing(self) -> bool:
@@ -232,7 +281,9 @@ class SafetyGate:
         reason = ""
         self._check_estop_signal(now)
         vel = self._vel
-        if self._estop_lost:
+        if self._remote_latched:
+            reason = "remote e-stop (A1 remote)"
+        elif self._estop_lost:
             reason = "e-stop signal lost (no /rbd_controller/estop for > %.2f s)" % self.config.estop_timeout
         elif self._estop:
             reason = "e-stop"

@@ -1,27 +1,73 @@
 #!/usr/bin/env python3
-"""rostest node: a fake A1 LCM server around the real rbd_a1_driver; checks the HighCmd bytes on the wire.
+"""rostest node: a fake A1 LCM server around the real rbd_a1_driver; every byte through the vendor's tables.
 
-The test publishes HighState (so the driver sees a live robot) and records every HighCmd.
+The fake server assembles HighState packets of both SDK layouts from ``rbd_wire_oracle`` (vendor
+offsets) and reads the driver's HighCmd packets back through the same tables; nothing here
+imports the driver's layout module. Before it starts the driver (``roslaunch
+rbd_a1_driver.launch``) it starts ``lcm-logger``, which records every LCM packet with its kernel
+receive time, so the whole HighCmd stream from the driver's first packet on is on record. A
+minimal reference sender (its own process, nothing but a 2 ms LCM loop) is logged beside it:
+when the machine itself stalls (this is a shared 2-core machine), the reference falls silent too,
+which tells a stall of the machine from a pause of the driver. A 10 Hz e-stop flag stands in for
+rbd_controller (as in the real system, the driver's e-stop watchdog is armed).
 """
 
+import functools
 import math
+import os
+import signal
+import subprocess
+import sys
+import tempfile
 import threading
 import time
 import unittest
+import xmlrpc.client
 
 import lcm
+import rosgraph
+import rosnode
 import rospy
-import rostest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
-from sensor_msgs.msg import Imu
-from std_msgs.msg import Bool
+from sensor_msgs.msg import Imu, JointState
+from std_msgs.msg import Bool, String
 
-from rbd_a1_driver import unitree_layout as ul
+import rbd_testkit
 from rbd_msgs.srv import SetBodyPose
+from rbd_testkit.ros import run_rostest
+from rbd_wire_oracle import unitree as vendor
 
 PKG = "rbd_a1_driver"
+HIGH_CMD, HIGH_STATE = "LCM_High_Cmd", "LCM_High_State"
+REFERENCE = "RBD_TEST_REFERENCE"
+REFERENCE_SENDER = """
+import sys, time, lcm
+lc = lcm.LCM(sys.argv[1])
+t = time.monotonic()
+while True:
+    lc.publish("%s", b"r")
+    t += 0.002
+    time.sleep(max(0.0, t - time.monotonic()))
+""" % REFERENCE
+SEND_RATE = 250.0  # the driver's default
+KEEPALIVE_GAP = 0.020  # lcm_server_high exits after 10 loops of 2 ms without a command
+KEEPALIVE_HOLD = 0.05  # the driver's ~keepalive_hold: its last command repeated this long, then zero velocity
+NOMINAL = dict(
+    mode=2,
+    gaitType=1,
+    imu={"quaternion": (1.0, 0.0, 0.0, 0.0), "accelerometer": (0.0, 0.0, 9.81)},
+    bodyHeight=0.28,
+    footForce=(29, 30, 31, 32),
+)
+
+
+def state_packet(layout="3.3.4", **values):
+    """A HighState of an SDK layout, assembled from the vendor table (NOMINAL + values)."""
+    v = dict(NOMINAL)
+    v.update(values)
+    return vendor.pack(vendor.HIGH_STATES[layout], v)
 
 
 def twist(vx=0.0, vy=0.0, wz=0.0):
@@ -30,45 +76,103 @@ def twist(vx=0.0, vy=0.0, wz=0.0):
     return t
 
 
+def still(c):
+    return tuple(c["velocity"]) == (0.0, 0.0) and c["yawSpeed"] == 0.0
+
+
+# The test kit's wait_for at 50 Hz, ending early when ROS shuts down.
+wait_for = functools.partial(rbd_testkit.wait_for, step=0.02, abort=rospy.is_shutdown)
+
+
+def read_log(path):
+    """(time [s], channel, data) of every complete event in an LCM log (may still be written)."""
+    events = []
+    log = lcm.EventLog(path, "r")
+    try:
+        for e in log:
+            events.append((e.timestamp * 1e-6, e.channel, e.data))
+    except (OSError, ValueError):
+        pass  # a partly written last event
+    finally:
+        log.close()
+    return events
+
+
 class DriverWire(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         rospy.init_node("driver_wire")
+        cls.url = rospy.get_param("~lcm_url")
         cls.lock = threading.Lock()
-        cls.cmds = []  # (monotonic time, HighCmd)
+        cls.cmds = []  # (monotonic time, HighCmd as a dict of SDK members)
         cls.bad = []
-        cls.state = ul.HighState()
+        cls.packet = state_packet()
         cls.state_on = True
+        cls.estop_value = False  # the stand-in controller's flag, published at 10 Hz
+        cls.estop_on = True
         cls.running = True
-        cls.lc = lcm.LCM(rospy.get_param("~lcm_url"))
-        cls.lc.subscribe(ul.CHANNEL_HIGH_CMD, cls._on_cmd)
-        for target in (cls._rx, cls._tx):
+        cls.tmp = tempfile.mkdtemp(prefix="driver_wire.")
+        cls.log_path = os.path.join(cls.tmp, "lcm.log")
+        cls.logger = subprocess.Popen(["lcm-logger", "-q", "-f", "--flush-interval=50", "-l", cls.url,
+                                       "-c", "LCM_High_.*|" + REFERENCE, cls.log_path], start_new_session=True)
+        cls.reference = subprocess.Popen([sys.executable, "-c", REFERENCE_SENDER, cls.url], start_new_session=True)
+        time.sleep(0.5)
+        cls.lc = lcm.LCM(cls.url)
+        cls.lc.subscribe(HIGH_CMD, cls._on_cmd)
+        cls.pub = rospy.Publisher("/cmd_vel", Twist, queue_size=5)
+        cls.estop = rospy.Publisher("/rbd_controller/estop", Bool, queue_size=1, latch=True)
+        cls.status = rospy.Publisher("/rbd_pos_controller/status", String, queue_size=1, latch=True)
+        cls.diag = []
+        cls.joints = []
+        cls.remote_held = []
+        rospy.Subscriber("/diagnostics", DiagnosticArray, cls.diag.append)
+        rospy.Subscriber("/joint_states", JointState, cls.joints.append)
+        rospy.Subscriber("/rbd_a1_driver/remote_estop_held", Bool, lambda m: cls.remote_held.append(m.data))
+        for target in (cls._rx, cls._tx, cls._controller):
             th = threading.Thread(target=target)
             th.daemon = True
             th.start()
-        cls.pub = rospy.Publisher("/cmd_vel", Twist, queue_size=5)
-        cls.estop = rospy.Publisher("/rbd_controller/estop", Bool, queue_size=1, latch=True)
-        cls.diag = []
-        rospy.Subscriber("/diagnostics", DiagnosticArray, cls.diag.append)
+        master = rosgraph.Master("/driver_wire")
+        cls.driver_started = time.time()
+        cls.driver = subprocess.Popen(["roslaunch", "rbd_a1_driver", "rbd_a1_driver.launch", "lcm_url:=" + cls.url,
+                                       "send_rate:=%d" % SEND_RATE], start_new_session=True)
+        cls.driver_registered = None
+        deadline = time.monotonic() + 120.0
+        while cls.driver_registered is None and time.monotonic() < deadline:
+            try:
+                master.lookupNode("/rbd_a1_driver")
+                cls.driver_registered = time.time()
+            except (rosgraph.MasterError, OSError):
+                time.sleep(0.01)
+        assert cls.driver_registered is not None, "rbd_a1_driver did not register within 120 s"
         rospy.wait_for_message("/rbd_a1_driver/odom", Odometry, timeout=60.0)
-        deadline = time.monotonic() + 30.0
-        while cls.pub.get_num_connections() == 0 and time.monotonic() < deadline:
-            time.sleep(0.05)
+        wait_for(lambda: cls.pub.get_num_connections() > 0, 30.0)
 
     @classmethod
     def tearDownClass(cls):
         cls.running = False
+        for proc in (cls.driver, cls.reference, cls.logger):
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+                try:
+                    proc.wait(15.0)
+                except subprocess.TimeoutExpired:
+                    os.killpg(proc.pid, signal.SIGKILL)
+                    proc.wait()
 
+    # ---- the fake A1 server and the stand-in controller ----------------------------------------
     @classmethod
     def _on_cmd(cls, channel, data):
         try:
-            cmd = ul.decode_high_cmd(data)
-        except ul.LayoutError as e:
+            cmd = vendor.unpack(vendor.HIGH_CMD, data)
+        except ValueError as e:
             cls.bad.append(str(e))
             return
+        if cmd["levelFlag"] != vendor.HIGHLEVEL:
+            cls.bad.append("levelFlag %r" % cmd["levelFlag"])
         with cls.lock:
             cls.cmds.append((time.monotonic(), cmd))
-            del cls.cmds[:-2000]
+            del cls.cmds[:-3000]
 
     @classmethod
     def _rx(cls):
@@ -79,10 +183,32 @@ class DriverWire(unittest.TestCase):
     def _tx(cls):
         while cls.running:
             if cls.state_on:
-                with cls.lock:
-                    data = cls.state.pack()
-                cls.lc.publish(ul.CHANNEL_HIGH_STATE, data)
+                cls.lc.publish(HIGH_STATE, cls.packet)
             time.sleep(0.005)
+
+    @classmethod
+    def _controller(cls):
+        while cls.running:
+            if cls.estop_on:
+                cls.estop.publish(Bool(cls.estop_value))
+            time.sleep(0.1)
+
+    # ---- helpers ----------------------------------------------------------------------------------
+    def setUp(self):
+        """Known state: a live 3.3.4 robot, no buttons, e-stop released, no status."""
+        DriverWire.packet = state_packet()
+        DriverWire.state_on = True
+        DriverWire.estop_on = True
+        DriverWire.estop_value = False
+        self.pub.publish(twist())
+        self.assertTrue(wait_for(lambda: self.diag_value("remote_estop") in ("ready", "off"), 5.0)
+                        or self.release_remote(), "remote e-stop still engaged from before")
+
+    def release_remote(self):
+        DriverWire.estop_value = True
+        time.sleep(0.3)
+        DriverWire.estop_value = False
+        return wait_for(lambda: self.diag_value("remote_estop") == "ready", 3.0)
 
     def last(self):
         with self.lock:
@@ -92,6 +218,12 @@ class DriverWire(unittest.TestCase):
         with self.lock:
             return [(t, c) for t, c in self.cmds if t >= t0]
 
+    def assert_still_since(self, t0, msg="moved"):
+        """Commands were sent since t0 (the driver kept sending), and every one had zero velocity."""
+        late = [c for t, c in self.since(t0)]
+        self.assertTrue(late, "no HighCmd since t0: the driver stopped sending")
+        self.assertTrue(all(still(c) for c in late), msg)
+
     def send(self, msg, duration, rate=20.0):
         t0 = t_pub = time.monotonic()
         while time.monotonic() - t0 < duration:
@@ -100,109 +232,141 @@ class DriverWire(unittest.TestCase):
             time.sleep(1.0 / rate)
         return t_pub
 
-    def test_0_every_packet_is_a_valid_v33_high_cmd(self):
-        time.sleep(0.5)
+    def status_now(self):
+        return self.diag[-1].status[0] if self.diag else None
+
+    def diag_value(self, key):
+        st = self.status_now()
+        if st is None:
+            return None
+        return {kv.key: kv.value for kv in st.values}.get(key)
+
+    def fresh_diag(self, timeout=3.0):
+        """The first diagnostics published after now."""
+        n = len(self.diag)
+        self.assertTrue(wait_for(lambda: len(self.diag) > n, timeout), "no /diagnostics")
+        return self.diag[-1].status[0]
+
+    def drive_until(self, msg, predicate, timeout=5.0):
+        """Publish ``msg`` at 20 Hz until the last HighCmd satisfies ``predicate`` (True) or ``timeout``."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and not rospy.is_shutdown():
+            self.pub.publish(msg)
+            time.sleep(0.05)
+            if predicate(self.last()):
+                return True
+        return False
+
+    def walks(self, timeout=5.0):
+        """cmd_vel 0.3 m/s until a HighCmd carries it (True) or ``timeout`` s pass."""
+        return self.drive_until(twist(0.3), lambda c: abs(c["velocity"][0] - 0.3) < 1e-5, timeout)
+
+    def walk(self, msg="the driver does not walk on cmd_vel"):
+        self.assertTrue(self.walks(), msg)
+
+    def events_until(self, t_wall, timeout=10.0):
+        """Every event of the LCM log once it holds the reference sender's packets up to ``t_wall``."""
+        deadline = time.monotonic() + timeout
+        while True:
+            events = read_log(self.log_path)
+            if any(ch == REFERENCE and t >= t_wall for t, ch, _ in events[-200:]) or time.monotonic() > deadline:
+                return events
+            time.sleep(0.05)
+
+    # ---- HighCmd on the wire ----------------------------------------------------------------------
+    def test_every_packet_is_a_vendor_high_cmd(self):
+        self.assertTrue(wait_for(lambda: len(self.cmds) > 20, 5.0))
         self.assertEqual(self.bad, [])
-        with self.lock:
-            self.assertGreater(len(self.cmds), 20)
 
-    def test_1_cmd_vel_to_velocity_walk(self):
-        self.send(twist(0.3, 0.1, 0.2), 0.5)
-        c = self.last()
-        self.assertEqual((c.mode, c.gait_type), (ul.MODE_VELOCITY_WALK, ul.GAIT_TROT))
-        self.assertAlmostEqual(c.velocity[0], 0.3, places=5)
-        self.assertAlmostEqual(c.velocity[1], 0.1, places=5)
-        self.assertAlmostEqual(c.yaw_speed, 0.2, places=5)
+    def test_cmd_vel_reads_back_as_mode_2_with_the_commanded_velocity(self):
+        def commanded(c):
+            return (c["mode"], c["gaitType"]) == (vendor.MODE_VELOCITY_WALK, vendor.GAIT_TROT) and all(
+                abs(a - b) < 1e-5 for a, b in zip(tuple(c["velocity"]) + (c["yawSpeed"],), (0.3, 0.1, 0.2)))
 
-    def test_2_clamped(self):
-        self.send(twist(5.0, -5.0, 9.0), 0.5)
-        c = self.last()
-        self.assertAlmostEqual(c.velocity[0], 0.5, places=5)
-        self.assertAlmostEqual(c.velocity[1], -0.3, places=5)
-        self.assertAlmostEqual(c.yaw_speed, 1.0, places=5)
+        self.assertTrue(self.drive_until(twist(0.3, 0.1, 0.2), commanded), "not mode 2 / trot / 0.3, 0.1, 0.2: %s"
+                        % self.last())
 
-    def test_3_zero_after_025s_without_cmd_vel(self):
-        t_last = self.send(twist(0.3), 0.5)
-        time.sleep(0.8)
-        cmds = self.since(t_last)
-        first_zero = next(t for t, c in cmds if c.velocity == (0.0, 0.0) and c.yaw_speed == 0.0)
-        delay = first_zero - t_last
-        rospy.loginfo("MEASURED zero velocity %.3f s after the last cmd_vel", delay)
-        self.assertGreater(delay, 0.2)
-        self.assertLess(delay, 0.45)
-        self.assertTrue(all(c.velocity == (0.0, 0.0) for t, c in cmds if t > first_zero))
+    def test_clamped(self):
+        def clamped(c):
+            return all(abs(a - b) < 1e-5 for a, b in zip(tuple(c["velocity"]) + (c["yawSpeed"],), (0.5, -0.3, 1.0)))
 
-    def test_4_nan_gives_zero(self):
-        self.send(twist(0.3), 0.3)
+        self.assertTrue(self.drive_until(twist(5.0, -5.0, 9.0), clamped), "not clamped: %s" % self.last())
+
+    def test_zero_after_025s_without_cmd_vel(self):
+        """Measured from the HighCmd that first carries the last cmd_vel (its arrival at the driver) to
+        the first zero one, on the logger's receive times: the 0.25 s cmd_timeout, not the transport."""
+        self.walk()
+        t0 = time.time()
+        self.pub.publish(twist(0.31))  # the last one, recognisable on the wire
+        time.sleep(1.0)
+        cmds = [(t, vendor.unpack(vendor.HIGH_CMD, d)) for t, ch, d in self.events_until(time.time())
+                if ch == HIGH_CMD and t > t0]
+        t_last = next(t for t, c in cmds if abs(c["velocity"][0] - 0.31) < 1e-6)
+        t_zero = next(t for t, c in cmds if t > t_last and still(c))
+        rospy.loginfo("MEASURED zero velocity %.3f s after the last cmd_vel reached the driver", t_zero - t_last)
+        self.assertGreater(t_zero - t_last, 0.2)
+        self.assertLess(t_zero - t_last, 0.32)
+        self.assertTrue(all(still(c) for t, c in cmds if t >= t_zero))
+
+    def test_nan_gives_zero(self):
+        self.walk()
         t0 = time.monotonic()
         self.send(twist(float("nan")), 0.3)
-        late = [c for t, c in self.since(t0 + 0.1)]
-        self.assertTrue(late)
-        self.assertTrue(all(c.velocity == (0.0, 0.0) for c in late))
+        self.assert_still_since(t0 + 0.1)
 
-    def test_5_estop(self):
-        released = False
-        try:
-            self.send(twist(0.3), 0.3)
-            self.estop.publish(Bool(True))
-            t0 = time.monotonic()
-            self.send(twist(0.3), 0.5)
-            late = [c for t, c in self.since(t0 + 0.1)]
-            self.assertTrue(all(c.velocity == (0.0, 0.0) for c in late))
-            time.sleep(0.3)  # one-shot messages > estop_timeout apart: the signal watchdog stays unarmed
-            self.estop.publish(Bool(False))
-            released = True
-            self.send(twist(0.3), 0.3)
-            self.assertAlmostEqual(self.last().velocity[0], 0.3, places=5)
-        finally:
-            if not released:
-                self.estop.publish(Bool(False))
+    def test_estop_flag(self):
+        self.walk()
+        DriverWire.estop_value = True
+        t0 = time.monotonic()
+        self.send(twist(0.3), 0.5)
+        self.assert_still_since(t0 + 0.15)
+        DriverWire.estop_value = False
+        self.walk("no motion after the e-stop flag went false")
 
-    def test_6_stale_high_state_gives_zero_and_error(self):
-        try:
-            self.send(twist(0.3), 0.3)
-            DriverWire.state_on = False
-            t0 = time.monotonic()
-            self.send(twist(0.3), 1.5)
-            late = [c for t, c in self.since(t0 + 0.7)]
-            self.assertTrue(late, "the driver must keep sending while the state is stale")
-            self.assertTrue(all(c.velocity == (0.0, 0.0) for c in late))
-            deadline = time.monotonic() + 3.0
-            while time.monotonic() < deadline and not any(
-                s.level == DiagnosticStatus.ERROR for s in self.diag[-1].status
-            ):
-                self.pub.publish(twist(0.3))
-                time.sleep(0.05)
-            self.assertEqual(self.diag[-1].status[0].level, DiagnosticStatus.ERROR,
-                             "no diagnostics ERROR while HighState is stale")
-        finally:
-            DriverWire.state_on = True
-        self.send(twist(0.3), 0.3)
-        self.assertAlmostEqual(self.last().velocity[0], 0.3, places=5)
+    def test_stale_high_state_gives_zero_and_error(self):
+        self.walk()
+        DriverWire.state_on = False
+        t0 = time.monotonic()
+        self.send(twist(0.3), 1.5)
+        self.assert_still_since(t0 + 0.7)
+        self.assertEqual(self.fresh_diag().level, DiagnosticStatus.ERROR, "no diagnostics ERROR while stale")
+        DriverWire.state_on = True
+        self.walk("no motion once the state was fresh again")
 
-    def test_7_body_pose_force_stand(self):
+    def test_body_pose_force_stand(self):
         call = rospy.ServiceProxy("/set_body_pose", SetBodyPose)
         rospy.wait_for_service("/set_body_pose", timeout=10.0)
         self.assertTrue(call(0.2, -0.3, 0.1, -0.1).success)
         self.assertFalse(call(float("nan"), 0.0, 0.0, 0.0).success)
         self.assertFalse(call(2.0, 0.0, 0.0, 0.0).success)
-        time.sleep(0.8)  # stand_delay after the last motion
-        c = self.last()
-        self.assertEqual(c.mode, ul.MODE_FORCE_STAND)
-        for got, want in zip(c.euler + (c.body_height,), (0.2, -0.3, 0.1, -0.1)):
-            self.assertAlmostEqual(got, want, places=5)
+        want = (0.2, -0.3, 0.1, -0.1)
+
+        def standing_in_pose():
+            c = self.last()
+            got = tuple(c["euler"]) + (c["bodyHeight"],)
+            return c["mode"] == vendor.MODE_FORCE_STAND and all(abs(g - w) < 1e-5 for g, w in zip(got, want))
+
+        self.assertTrue(wait_for(standing_in_pose, 5.0), "no force stand with the pose: %s" % self.last())
         self.assertTrue(call(0.0, 0.0, 0.0, 0.0).success)
 
-    def test_8_odom_and_imu_from_high_state(self):
-        s = ul.HighState()
-        s.position = (1.5, -0.5, 0.0)
-        s.quaternion = (math.cos(0.25), 0.0, 0.0, math.sin(0.25))  # yaw 0.5 rad
-        s.velocity = (0.2, 0.05, 0.0)
-        s.gyroscope = (0.0, 0.0, 0.3)
-        s.accelerometer = (0.1, 0.0, 9.8)
-        with self.lock:
-            DriverWire.state = s
-        time.sleep(0.3)
+    # ---- HighState of both layouts, from the vendor table ----------------------------------------
+    def check_odom(self, layout):
+        values = dict(
+            position=(1.5, -0.5, 0.0),
+            velocity=(0.2, 0.05, 0.0),
+            yawSpeed=0.3,
+            imu={"quaternion": (math.cos(0.25), 0.0, 0.0, math.sin(0.25)), "gyroscope": (0.0, 0.0, 0.3),
+                 "accelerometer": (0.1, 0.0, 9.8)},
+            footForce=(11, -22, 33, 44),
+        )
+        if layout == "3.3.4":
+            values["motorState"] = [{"q": 0.1 * (i + 1), "dq": -0.01 * i, "tauEst": 0.5 * i} for i in range(20)]
+        DriverWire.packet = state_packet(layout, **values)
+
+        def odom_ok():
+            odom = rospy.wait_for_message("/rbd_a1_driver/odom", Odometry, timeout=5.0)
+            return abs(odom.pose.pose.position.x - 1.5) < 1e-5 and odom
+        self.assertTrue(wait_for(odom_ok, 5.0), "odometry never showed the packet's position")
         odom = rospy.wait_for_message("/rbd_a1_driver/odom", Odometry, timeout=5.0)
         imu = rospy.wait_for_message("/rbd_a1_driver/imu", Imu, timeout=5.0)
         self.assertEqual((odom.header.frame_id, odom.child_frame_id), ("odom", "base_link"))
@@ -211,41 +375,224 @@ class DriverWire(unittest.TestCase):
         self.assertAlmostEqual(p.y, -0.5, places=5)
         self.assertAlmostEqual(2 * math.atan2(q.z, q.w), 0.5, places=5)
         self.assertAlmostEqual(odom.twist.twist.linear.x, 0.2, places=5)
+        self.assertAlmostEqual(odom.twist.twist.linear.y, 0.05, places=5)
         self.assertAlmostEqual(odom.twist.twist.angular.z, 0.3, places=5)
-        self.assertEqual(imu.header.frame_id, "base_link")
         self.assertAlmostEqual(imu.angular_velocity.z, 0.3, places=5)
         self.assertAlmostEqual(imu.linear_acceleration.z, 9.8, places=5)
         self.assertAlmostEqual(imu.orientation.z, math.sin(0.25), places=5)
+        st = self.fresh_diag()
+        values = {kv.key: kv.value for kv in st.values}
+        self.assertEqual(values["sdk_layout"], layout)
+        self.assertEqual(values["sdk_layout_source"], "auto")
+        self.assertEqual(values["high_state_size"], str(vendor.HIGH_STATES[layout].size))
+        self.assertEqual(values["foot_force"], "[11, -22, 33, 44]")
 
-    def test_9_estop_signal_lost_engages_until_fresh_false(self):
-        """A periodic e-stop source that goes silent (controller killed) engages the gate."""
-        period = 0.1
-        t_last = time.monotonic()
+    def test_334_packets_give_odometry_and_joint_states(self):
+        self.check_odom("3.3.4")
+        del self.joints[:]
+        self.assertTrue(wait_for(lambda: len(self.joints) > 2, 5.0), "no /joint_states from 3.3.4 packets")
+        js = self.joints[-1]
+        self.assertEqual(list(js.name), list(vendor.JOINT_NAMES))
+        for i in range(12):
+            self.assertAlmostEqual(js.position[i], 0.1 * (i + 1), places=5)
+            self.assertAlmostEqual(js.velocity[i], -0.01 * i, places=5)
+            self.assertAlmostEqual(js.effort[i], 0.5 * i, places=5)
+
+    def test_v33_packets_give_odometry_and_no_joint_states(self):
+        self.check_odom("3.3")
+        odoms = []
+        sub = rospy.Subscriber("/rbd_a1_driver/odom", Odometry, odoms.append)
+        time.sleep(0.3)  # joint states of earlier 3.3.4 packets still in flight
+        del self.joints[:]
         try:
-            for _ in range(15):  # 1.5 s: periodic false (armed) while walking
-                self.estop.publish(Bool(False))
-                t_last = self.send(twist(0.3), period)
-            self.assertAlmostEqual(self.last().velocity[0], 0.3, places=5, msg="not walking while armed")
-            self.send(twist(0.3), 1.5)  # e-stop messages stop; cmd_vel keeps coming
-            late = [c for t, c in self.since(t_last + 0.5 + 0.3)]
-            self.assertTrue(late)
-            self.assertTrue(all(c.velocity == (0.0, 0.0) for c in late), "still walking without e-stop signal")
-            moving = [t for t, c in self.since(t_last) if c.velocity != (0.0, 0.0)]
-            self.assertTrue(moving and moving[-1] - t_last > 0.3, "engaged before the timeout")
-            deadline = time.monotonic() + 2.5
-            while time.monotonic() < deadline and not any(
-                s.level == DiagnosticStatus.ERROR and "e-stop" in s.message for s in self.diag[-1].status
-            ):
-                self.pub.publish(twist(0.3))
-                time.sleep(0.05)
-            self.assertIn("e-stop signal lost", self.diag[-1].status[0].message)
-            self.assertEqual(self.last().velocity, (0.0, 0.0))
-            self.estop.publish(Bool(False))  # a fresh false releases
-            self.send(twist(0.3), 0.3)
-            self.assertAlmostEqual(self.last().velocity[0], 0.3, places=5, msg="no motion after a fresh false")
+            self.assertTrue(wait_for(lambda: len(odoms) > 50, 5.0), "odometry stopped")
         finally:
-            self.estop.publish(Bool(False))
+            sub.unregister()
+        self.assertEqual(self.joints, [], "a v3.3 HighState has no motor states")
+
+    def test_unknown_sizes_are_dropped_with_a_clear_error_and_no_motion(self):
+        self.walk()
+        before = int({kv.key: kv.value for kv in self.fresh_diag().values}["unknown_size_packets"])
+        good = state_packet()
+        DriverWire.packet = good + b"\x00" * 7  # 1032 B
+        t0 = time.monotonic()
+        self.send(twist(0.3), 1.2)
+        st = self.fresh_diag()
+        values = {kv.key: kv.value for kv in st.values}
+        self.assertGreater(int(values["unknown_size_packets"]), before + 50, "the odd packets never arrived")
+        self.assertEqual(values["high_state_size"], "1032")
+        self.assertEqual(st.level, DiagnosticStatus.ERROR)
+        for text in ("1032 B", "265 B", "1025 B"):
+            self.assertIn(text, st.message)
+        self.assert_still_since(t0 + 0.7, "moved on HighStates of an unknown size")
+        DriverWire.packet = good
+        self.walk("no motion once usable HighStates came again")
+
+    def test_estop_signal_lost_engages_until_fresh_false(self):
+        self.walk()
+        DriverWire.estop_on = False  # the stand-in controller dies
+        t_stop = time.monotonic()
+        self.send(twist(0.3), 1.2)
+        self.assert_still_since(t_stop + 0.5 + 0.2, "still walking without e-stop signal")
+        moving = [t for t, c in self.since(t_stop) if not still(c)]
+        self.assertTrue(moving and moving[-1] - t_stop > 0.3, "engaged before the timeout")
+        self.assertIn("e-stop signal lost", self.fresh_diag().message)
+        DriverWire.estop_on = True  # a fresh false releases
+        self.walk("no motion after a fresh false")
+
+    # ---- the A1's remote as a physical e-stop ----------------------------------------------------
+    def press(self, held):
+        DriverWire.packet = state_packet(wirelessRemote=vendor.remote(["L2", "B"] if held else []))
+
+    def test_remote_estop_engages_at_the_driver_and_only_the_operator_releases(self):
+        self.walk()
+        del self.remote_held[:]
+        t_press = time.monotonic()
+        self.press(True)
+        self.send(twist(0.3), 0.5)
+        self.assertTrue(wait_for(lambda: True in self.remote_held, 2.0), "no remote_estop_held true")
+        self.assert_still_since(t_press + 0.05)
+        # Measured on the logger's kernel receive times: the HighState carrying the press, then
+        # the HighCmds that follow it.
+        events = self.events_until(time.time())
+        t_packet = next(t for t, ch, data in events if ch == HIGH_STATE and len(data) == 1025 and vendor.buttons_held(
+            vendor.unpack(vendor.HIGH_STATE_V334, data)["wirelessRemote"]) == ["L2", "B"])
+        after = [(t, vendor.unpack(vendor.HIGH_CMD, d)) for t, ch, d in events if ch == HIGH_CMD and t > t_packet]
+        first_zero = next(i for i, (t, c) in enumerate(after) if still(c))
+        delay = after[first_zero][0] - t_packet
+        rospy.loginfo("MEASURED remote e-stop: zero velocity %.1f ms after the packet (%d HighCmd before it)",
+                      delay * 1e3, first_zero)
+        self.assertLessEqual(first_zero, 1, "more than the one HighCmd in flight moved after the press")
+        self.assertLess(delay, 2.0 / SEND_RATE + 0.005)
+        self.assertEqual(self.fresh_diag().level, DiagnosticStatus.WARN)
+        self.assertEqual(self.diag_value("remote_estop"), "engaged")
+        # Releases while the combination is held are void; so is a plain periodic false.
+        DriverWire.estop_value = True
+        time.sleep(0.3)
+        DriverWire.estop_value = False
+        t0 = time.monotonic()
+        self.send(twist(0.3), 0.5)
+        self.assert_still_since(t0, "released while the buttons are held")
+        self.press(False)
+        self.assertTrue(wait_for(lambda: self.remote_held[-1] is False, 2.0))
+        t0 = time.monotonic()
+        self.send(twist(0.3), 0.5)
+        self.assert_still_since(t0, "released without the operator")
+        self.assertEqual(self.fresh_diag().level, DiagnosticStatus.WARN)
+        # The operator's release: the controller's flag goes true (engaged), then false.
+        DriverWire.estop_value = True
+        time.sleep(0.3)
+        DriverWire.estop_value = False
+        self.assertTrue(wait_for(lambda: self.diag_value("remote_estop") == "ready", 3.0))
+        self.walk("no motion after the operator's release")
+
+    # ---- LED, diagnostics, keep-alive -------------------------------------------------------------
+    def test_a_stalled_driver_process_is_covered_by_the_keepalive(self):
+        """SIGSTOP the driver for 0.4 s while walking: the keep-alive process keeps the HighCmd stream
+        going (no gap of 20 ms), repeats the walk for at most keepalive_hold, then zero velocity."""
+        self.walk()
+        pid = driver_pid()
+        t0 = time.time()
+        os.kill(pid, signal.SIGSTOP)
+        try:
+            time.sleep(0.4)
+        finally:
+            os.kill(pid, signal.SIGCONT)
+        t1 = time.time()
+        self.walk()
+        events = self.events_until(t1 + 0.1)
+        ref = [t for t, ch, _ in events if ch == REFERENCE]
+        window = [(t, vendor.unpack(vendor.HIGH_CMD, d)) for t, ch, d in events
+                  if ch == HIGH_CMD and t0 - 0.05 < t < t1 + 0.05]
+        stalled = [(t, c) for t, c in window if t0 + 0.02 < t < t1 - 0.02]
+        self.assertGreater(len(stalled), 50, "nothing sent while the driver was stopped")
+        late = [c for t, c in stalled if t > t0 + KEEPALIVE_HOLD + 0.02]
+        self.assertTrue(late and all(still(c) for c in late), "the keep-alive kept the robot walking")
+        self.assertEqual(pauses([t for t, _ in window], ref), [])
+
+
+    def leds(self):
+        return [(led["r"], led["g"], led["b"]) for led in self.last()["led"]]
+
+    def test_led_mirrors_the_gui_state_colour(self):
+        for status, rgb in (("running", (0x2E, 0x7D, 0x32)), ("collision", (0xEF, 0x6C, 0x00)),
+                            ("idle", (0x15, 0x65, 0xC0))):
+            self.status.publish(String(status))
+            self.assertTrue(wait_for(lambda rgb=rgb: self.leds() == [rgb] * 4, 2.0), "%s: %s" % (status, self.leds()))
+        DriverWire.estop_value = True
+        self.assertTrue(wait_for(lambda: self.leds() == [(0xC6, 0x28, 0x28)] * 4, 2.0), "e-stop is not red")
+
+    def test_diagnostics_contract(self):
+        st = self.fresh_diag()
+        self.assertEqual(st.name, "rbd_a1_driver: A1 link")
+        v = {kv.key: kv.value for kv in st.values}
+        for key in ("sdk_layout", "sdk_layout_source", "high_state_size", "high_state_rate", "high_cmd_rate",
+                    "unknown_size_packets", "estop_gate_armed", "remote_estop", "foot_force"):
+            self.assertIn(key, v)
+        self.assertEqual(v["sdk_layout"], "3.3.4")
+        self.assertEqual(v["estop_gate_armed"], "true")
+        self.assertEqual(v["remote_estop"], "ready")
+        self.assertEqual(v["foot_force"], "[29, 30, 31, 32]")
+        self.assertTrue(100.0 < float(v["high_state_rate"]) <= 210.0, v["high_state_rate"])  # fake server: 200 Hz
+        self.assertTrue(200.0 < float(v["high_cmd_rate"]) <= 260.0, v["high_cmd_rate"])
+
+    def test_keepalive_from_the_first_second_with_no_gap_over_20ms(self):
+        """The HighCmd stream on record from the driver's first packet on, through e-stop engage and
+        release, the remote e-stop and a stale state: never a gap of 20 ms (lcm_server_high's limit)."""
+        self.walk()
+        DriverWire.estop_value = True
+        self.send(twist(0.3), 0.5)
+        DriverWire.estop_value = False
+        self.walk()
+        self.press(True)
+        self.send(twist(0.3), 0.3)
+        self.press(False)
+        self.assertTrue(self.release_remote())
+        DriverWire.state_on = False
+        self.send(twist(0.3), 1.0)
+        DriverWire.state_on = True
+        self.walk()
+        events = self.events_until(time.time())
+        cmds = [t for t, ch, _ in events if ch == HIGH_CMD]
+        ref = [t for t, ch, _ in events if ch == REFERENCE]
+        gaps = [(b - a, a, b) for a, b in zip(cmds, cmds[1:])]
+        first = cmds[0] - self.driver_registered
+        over = [g for g in gaps if g[0] >= KEEPALIVE_GAP]
+        driver_pauses = pauses(cmds, ref)
+        rospy.loginfo("MEASURED keep-alive: %d HighCmd over %.1f s, largest gap %.1f ms; %d gaps >= 20 ms, %d of them "
+                      "while the machine ran (the reference sender was not silent); first HighCmd %.3f s after the "
+                      "driver registered, %.3f s after its process started", len(cmds), cmds[-1] - cmds[0],
+                      max(gaps)[0] * 1e3, len(over), len(driver_pauses), first, cmds[0] - self.driver_started)
+        self.assertLess(first, 1.0, "the driver did not send within its first second")
+        self.assertGreater(cmds[-1] - cmds[0], 4.0)
+        self.assertGreater(len(ref), 1000, "the reference sender did not run")
+        self.assertEqual(driver_pauses, [], "the HighCmd stream paused >= 20 ms while the machine ran "
+                                            "(lcm_server_high would exit)")
+
+
+def driver_pid():
+    """PID of the running driver node (its XML-RPC getPid)."""
+    api = rosnode.get_api_uri(rosgraph.Master("/driver_wire"), "/rbd_a1_driver", skip_cache=True)
+    code, _msg, pid = xmlrpc.client.ServerProxy(api).getPid("/driver_wire")
+    assert code == 1, _msg
+    return pid
+
+
+def pauses(cmds, ref):
+    """Gaps >= 20 ms between HighCmd times that the machine does not explain (reference sender active)."""
+    return [(b - a, a, b) for a, b in zip(cmds, cmds[1:])
+            if b - a >= KEEPALIVE_GAP and not machine_stalled(ref, a, b)]
+
+
+def machine_stalled(ref, a, b, slack=0.010):
+    """True if the reference sender was silent for all but ``slack`` of the interval (a, b)."""
+    for ra, rb in zip(ref, ref[1:]):
+        if rb <= a or ra >= b:
+            continue
+        if min(b, rb) - max(a, ra) >= (b - a) - slack:
+            return True
+    return False
 
 
 if __name__ == "__main__":
-    rostest.rosrun(PKG, "driver_wire", DriverWire)
+    run_rostest(PKG, "driver_wire", DriverWire)

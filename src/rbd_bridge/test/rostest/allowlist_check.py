@@ -8,9 +8,10 @@ import unittest
 
 import rosgraph
 import rospy
-import rostest
 from std_msgs.msg import String
 from websockets.sync.client import connect
+
+from rbd_testkit.ros import run_rostest
 
 
 class AllowListWiring(unittest.TestCase):
@@ -52,4 +53,4 @@ class AllowListWiring(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_bridge", "bridge_allowlist", AllowListWiring)
+    run_rostest("rbd_bridge", "bridge_allowlist", AllowListWiring)

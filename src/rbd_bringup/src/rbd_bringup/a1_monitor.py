@@ -1,11 +1,13 @@
 """What the (mock) A1 is told to do: the Unitree HighCmd stream on LCM, as seen by the robot.
 
 Safety tests and the demo measure "zero velocity at the A1" on the commands the A1 actually
-receives (``LCM_High_Cmd`` on the mock A1's LCM URL), not on what a node believes it sent.
-This module is ROS-free; the clock and the sink for the samples are the caller's.
+receives (``LCM_High_Cmd`` on the mock A1's LCM URL), not on what a node believes it sent. The
+packets are decoded with the robot side's description of the wire (``rbd_sim.unitree_wire``, the
+mock A1's), not with the driver's own layout module. This module is ROS-free; the clock and the
+sink for the samples are the caller's.
 
-Also holds the small helpers the rbd_bringup rostests share (``wait_for``, ``yaw_of``,
-``report_fault_result``).
+Also holds the small helpers the rbd_bringup rostests share (``yaw_of``, ``report_fault_result``);
+waiting comes from the test kit (``rbd_testkit.wait_for``).
 """
 
 import json
@@ -15,12 +17,12 @@ import threading
 import time
 from typing import Callable, Dict, List, Optional, Tuple
 
-from rbd_a1_driver import unitree_layout as ul
+from rbd_sim import unitree_wire as wire
 
 Sample = Tuple[float, float]  # (time, commanded speed)
 
 
-def command_speed(cmd: ul.HighCmd) -> float:
+def command_speed(cmd: wire.Command) -> float:
     """Commanded speed of a HighCmd: max(|v_xy| [m/s], |yaw speed| [rad/s]); 0 unless walking.
 
     Args:
@@ -29,9 +31,9 @@ def command_speed(cmd: ul.HighCmd) -> float:
     Returns:
         The speed; 0.0 for any mode other than velocity walking (force stand does not move).
     """
-    if cmd.mode != ul.MODE_VELOCITY_WALK:
+    if cmd.mode != wire.MODE_VELOCITY_WALK:
         return 0.0
-    return max(math.hypot(cmd.velocity[0], cmd.velocity[1]), abs(cmd.yaw_speed))
+    return max(math.hypot(cmd.velocity[0], cmd.velocity[1]), abs(cmd.yawSpeed))
 
 
 class HighCmdMonitor:
@@ -53,7 +55,7 @@ class HighCmdMonitor:
         url: str,
         record: Optional[Callable[[float, float], None]] = None,
         clock: Callable[[], float] = time.monotonic,
-        channel: str = ul.CHANNEL_HIGH_CMD,
+        channel: str = wire.CHANNEL_HIGH_CMD,
     ) -> None:
         import lcm  # here, so that importing the module needs no LCM
 
@@ -75,8 +77,8 @@ class HighCmdMonitor:
 
     def _on_packet(self, _channel: str, data: bytes) -> None:
         try:
-            cmd = ul.decode_high_cmd(data)
-        except ValueError:  # LayoutError is a ValueError
+            cmd = wire.decode_high_cmd(data)
+        except wire.WireError:
             self.bad += 1
             return
         self._record(self.clock(), command_speed(cmd))
@@ -121,27 +123,6 @@ def stop_delay(samples: List[Sample], t0: float, t1: float, still: float) -> Opt
     if stop is None:
         return None
     return max(0.0, stop - t0)
-
-
-def wait_for(predicate: Callable[[], object], timeout: float, step: float = 0.05,
-             abort: Optional[Callable[[], bool]] = None) -> bool:
-    """Poll ``predicate`` until it is true or ``timeout`` seconds pass.
-
-    Args:
-        predicate: condition to wait for.
-        timeout: seconds.
-        step: polling period [s].
-        abort: stop waiting early when this returns true (e.g. ``rospy.is_shutdown``).
-
-    Returns:
-        The truth of the predicate at the end.
-    """
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline and not (abort is not None and abort()):
-        if predicate():
-            return True
-        time.sleep(step)
-    return bool(predicate())
 
 
 def yaw_of(q: object) -> float:

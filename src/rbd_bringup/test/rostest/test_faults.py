@@ -3,28 +3,39 @@
 assert zero velocity at the A1 within the bound, clear the fault, assert recovery.
 
 Measured on ground truth (/rbd_sim/ground_truth twist) and on the LCM_High_Cmd stream the mock
-A1 receives. The fault is chosen with the private param ``~fault``; every measurement is printed
-as one ``FAULT_RESULT {json}`` line (and appended to $RBD_FAULT_LOG if set) for docs/RELIABILITY.md.
+A1 receives. The faults are chosen with the private param ``~fault`` (one name, or several
+separated by spaces, run in order on the same system); every measurement is printed as one
+``FAULT_RESULT {json}`` line (and appended to $RBD_FAULT_LOG if set) for docs/RELIABILITY.md.
+``~sdk_layout`` (default 3.3.4) is the Unitree SDK layout the mock A1 was launched with: checked
+on the wire (HighState size) and in the driver's diagnostics before any fault.
 """
 
 import copy
+import functools
 import math
 import os
 import signal
+import subprocess
+import tempfile
 import threading
 import time
 import unittest
 
+import lcm
 import rosgraph
 import rospy
-import rostest
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import PointCloud2
-from std_msgs.msg import Header, String
+from std_msgs.msg import Bool, Header, String
 from std_srvs.srv import SetBool
 
+import rbd_testkit
 from rbd_bringup import a1_monitor
+from rbd_msgs.srv import PressRemote
+from rbd_testkit.ros import run_rostest
+from rbd_wire_oracle import unitree as vendor
 
 TRUTH_STILL = 0.02  # ground-truth speed below this is "stopped" [m/s, rad/s]
 MOVING = 0.08  # ground-truth speed above this is "walking"
@@ -34,8 +45,17 @@ def speed_of_twist(t):
     return max(math.hypot(t.linear.x, t.linear.y), abs(t.angular.z))
 
 
-def wait_for(predicate, timeout, step=0.05):
-    return a1_monitor.wait_for(predicate, timeout, step, abort=rospy.is_shutdown)
+# The kit's wait_for, ending early when ROS shuts down.
+wait_for = functools.partial(rbd_testkit.wait_for, abort=rospy.is_shutdown)
+
+
+def children(pid):
+    """PIDs of the child processes of ``pid`` (Linux /proc)."""
+    out = []
+    for task in os.listdir("/proc/%d/task" % pid):
+        with open("/proc/%d/task/%s/children" % (pid, task)) as fh:
+            out += [int(c) for c in fh.read().split()]
+    return out
 
 
 def node_pid(name):
@@ -63,12 +83,16 @@ class Monitor:
         self.pose_pass = True
         self.last_pose = None
         self.heartbeat = False
+        self.diag = None  # the driver's last DiagnosticStatus
+        self.remote_held = []  # (t, held) from /rbd_a1_driver/remote_estop_held
         self.cloud_pub = rospy.Publisher("/reliability/points", PointCloud2, queue_size=2)
         self.pose_pub = rospy.Publisher("/reliability/pose", PoseStamped, queue_size=5)
         self.hb_pub = rospy.Publisher("/rbd_local/heartbeat", Header, queue_size=2)
         self.gesture = rospy.Publisher("/rbd_gestrec/gesture", String, queue_size=10)
         rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_truth, queue_size=50)
         rospy.Subscriber("/rbd_controller/state", String, self.on_state, queue_size=20)
+        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diag, queue_size=20)
+        rospy.Subscriber("/rbd_a1_driver/remote_estop_held", Bool, self.on_remote, queue_size=20)
         fault = rospy.get_param("~fault")
         if fault.startswith("lidar"):  # rbd_lidar reads /reliability/points in these tests
             rospy.Subscriber("/ouster/points", PointCloud2, self.on_cloud, queue_size=2, buff_size=2 ** 24)
@@ -89,6 +113,15 @@ class Monitor:
     def on_state(self, msg):
         with self.lock:
             self.states.append((time.monotonic(), msg.data))
+
+    def on_diag(self, msg):
+        for st in msg.status:
+            if st.name == "rbd_a1_driver: A1 link":
+                self.diag = {kv.key: kv.value for kv in st.values}
+
+    def on_remote(self, msg):
+        with self.lock:
+            self.remote_held.append((time.monotonic(), msg.data))
 
     def on_cloud(self, msg):
         mode = self.cloud_mode
@@ -178,7 +211,7 @@ class Faults(unittest.TestCase):
 
     # ------------------------------------------------------------ helpers
     def record(self, **result):
-        result["fault"] = rospy.get_param("~fault")
+        result["fault"] = self.fault
         rospy.loginfo("FAULT_RESULT %s", a1_monitor.report_fault_result(result))
 
     def em_stop(self, engaged):
@@ -229,14 +262,26 @@ class Faults(unittest.TestCase):
     def wait_ready(self):
         self.assertTrue(wait_for(lambda: self.m.state and self.m.truth, 90.0), "system not up")
         self.assertTrue(wait_for(lambda: self.m.count("commands", 0, 1e12) > 10, 30.0), "no LCM HighCmd seen")
+        layout = str(rospy.get_param("~sdk_layout", "3.3.4"))
+        sizes = []
+        lc = lcm.LCM(rospy.get_param("/rbd_sim/lcm_url"))
+        sub = lc.subscribe("LCM_High_State", lambda _c, data: sizes.append(len(data)))
+        try:
+            self.assertTrue(wait_for(lambda: lc.handle_timeout(50) or len(sizes) > 5, 10.0, step=0.0))
+        finally:
+            lc.unsubscribe(sub)
+        self.assertEqual(set(sizes), {vendor.HIGH_STATES[layout].size}, "the mock A1 does not speak SDK %s" % layout)
+        self.assertTrue(wait_for(lambda: (self.m.diag or {}).get("sdk_layout") == layout, 10.0),
+                        "the driver did not detect SDK %s: %s" % (layout, self.m.diag))
 
     # ------------------------------------------------------------ the catalogue
     def test_fault(self):
         self.wait_ready()
-        fault = rospy.get_param("~fault")
         repeat = int(rospy.get_param("~repeat", 1))
         for i in range(repeat):
-            getattr(self, "fault_" + fault)(i)
+            for fault in rospy.get_param("~fault").split():
+                self.fault = fault
+                getattr(self, "fault_" + fault)(i)
 
     def fault_lidar_silent(self, i):
         m = self.m
@@ -274,15 +319,19 @@ class Faults(unittest.TestCase):
     def fault_link_silent(self, i):
         m = self.m
         self.walk()
-        pid = node_pid("/rbd_a1_driver")
-        os.kill(pid, signal.SIGSTOP)  # the driver freezes: nothing reaches the A1 any more
+        # The driver and its keep-alive process freeze: nothing reaches the A1 any more.
+        pids = [node_pid("/rbd_a1_driver")]
+        pids += children(pids[0])
+        for pid in pids:
+            os.kill(pid, signal.SIGSTOP)
         t0 = time.monotonic()
         try:
             # mock A1's own watchdog: cmd_timeout 0.1 s + latency 0.05 s + margin
             _cmd, truth = self.assert_stops(t0, 1.0, 1.0, lcm=False)
             silent = m.count("commands", t0 + 0.3, t0 + 2.0)
         finally:
-            os.kill(pid, signal.SIGCONT)
+            for pid in pids:
+                os.kill(pid, signal.SIGCONT)
         self.assertEqual(silent, 0, "the A1 still received commands: the link was not silent")
         rec = self.assert_recovers()
         self.record(run=i, truth_stop_s=truth, recovery_s=rec, bound_s=1.0)
@@ -445,6 +494,62 @@ class Faults(unittest.TestCase):
         self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume")
         self.record(run=i, state="COLLISION+ESTOP", cmd_stop_s=cmd, truth_stop_s=truth)
 
+    def fault_remote_estop(self, i):
+        """L2 + B on the A1's own remote while the robot walks: zero velocity at the A1 from the HighCmd
+        after the HighState that carries the press (measured on lcm-logger's receive times), the robot
+        at rest on ground truth, the controller in EMERGENCY_STOP; releases refused while held, nothing
+        released by letting go, the operator's release resumes the trick."""
+        m = self.m
+        press = rospy.ServiceProxy("/rbd_sim/remote", PressRemote)
+        rospy.wait_for_service("/rbd_sim/remote", 10.0)
+        self.walk()
+        log = os.path.join(tempfile.mkdtemp(prefix="faults_remote."), "lcm.log")
+        logger = subprocess.Popen(["lcm-logger", "-q", "-f", "--flush-interval=50", "-l",
+                                   rospy.get_param("/rbd_sim/lcm_url"), "-c", "LCM_High_.*", log])
+        try:
+            time.sleep(0.5)
+            hold = 4.0
+            t0 = time.monotonic()
+            self.assertTrue(press(["L2", "B"], hold).success)
+            cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.0)
+            self.assertTrue(wait_for(lambda: m.state == "EMERGENCY_STOP", 2.0), "controller not told: %s" % m.state)
+        finally:
+            logger.send_signal(signal.SIGINT)
+            logger.wait(10.0)
+        events = []
+        reader = lcm.EventLog(log, "r")
+        for e in reader:
+            events.append((e.timestamp * 1e-6, e.channel, e.data))
+        reader.close()
+        layout = vendor.HIGH_STATES[str(rospy.get_param("~sdk_layout", "3.3.4"))]
+        t_packet = next(t for t, ch, d in events if ch == "LCM_High_State" and len(d) == layout.size
+                        and vendor.buttons_held(vendor.unpack(layout, d)["wirelessRemote"]) == ["L2", "B"])
+        after = [(t, vendor.unpack(vendor.HIGH_CMD, d)) for t, ch, d in events if ch == "LCM_High_Cmd" and t > t_packet]
+        first_zero = next(k for k, (_t, c) in enumerate(after)
+                          if tuple(c["velocity"]) == (0.0, 0.0) and c["yawSpeed"] == 0.0)
+        packet_to_zero = after[first_zero][0] - t_packet
+        self.assertLessEqual(first_zero, 1, "%d HighCmd still moving after the press reached the A1" % first_zero)
+        self.assertLess(packet_to_zero, 0.015)
+        # While the buttons are held: the operator's release is refused, nothing moves.
+        res = self.em_stop(False)
+        self.assertFalse(res.success)
+        self.assertIn("remote", res.message)
+        t1 = time.monotonic()
+        time.sleep(0.5)
+        self.assertEqual(m.state, "EMERGENCY_STOP")
+        # Let go: still stopped (the input arrived: remote_estop_held went false).
+        self.assertTrue(wait_for(lambda: m.remote_held and m.remote_held[-1][1] is False, hold + 3.0),
+                        "the remote never let go")
+        time.sleep(1.0)
+        self.assertEqual(m.state, "EMERGENCY_STOP")
+        self.assertLess(m.max_speed("truth", t1, time.monotonic()), TRUTH_STILL)
+        self.assertLess(m.max_speed("commands", t1, time.monotonic()), 1e-6)
+        # The operator's release.
+        self.assertTrue(self.em_stop(False).success)
+        self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume after the release")
+        self.record(run=i, state="EXECUTING", packet_to_zero_ms=packet_to_zero * 1e3, moving_after_packet=first_zero,
+                    cmd_stop_s=cmd, truth_stop_s=truth)
+
     def fault_operator_link(self, i):
         m = self.m
         m.heartbeat = True
@@ -464,4 +569,4 @@ class Faults(unittest.TestCase):
 
 if __name__ == "__main__":
     rospy.init_node("test_faults")
-    rostest.rosrun("rbd_bringup", "faults_" + rospy.get_param("~fault"), Faults)
+    run_rostest("rbd_bringup", "faults_" + rospy.get_param("~fault").split()[0], Faults)

@@ -1,30 +1,41 @@
 #!/usr/bin/env python3
-"""rostest: sim.launch brings up the whole simulated system; e-stop first, then a trick."""
+"""rostest: sim.launch brings up the whole simulated system; e-stop first, then a trick.
 
+Also the A1 wire of SDK 3.3.4 end to end: /joint_states from the mock's motor states through the
+driver (standing angles, legs moving in the trick), and the status light: the LEDs the driver puts
+in HighCmd, shown by the mock as /rbd_sim/led, red in EMERGENCY_STOP, the GUI's blue when idle.
+"""
+
+import functools
 import math
+import os
 import time
 import unittest
 
 import rosnode
+import rospkg
 import rospy
-import rostest
 import tf2_ros
+import yaml
 from nav_msgs.msg import Odometry
-from sensor_msgs.msg import PointCloud2
+from sensor_msgs.msg import JointState, PointCloud2
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
+from visualization_msgs.msg import Marker
 
-from rbd_bringup import a1_monitor
+import rbd_testkit
 from rbd_bringup.a1_monitor import yaw_of
+from rbd_testkit.ros import run_rostest
 
 EXPECTED_NODES = [
     "/mock_a1", "/rbd_a1_driver", "/os1_sim", "/zed2_sim", "/world", "/robot_state_publisher",
     "/rbd_controller", "/rbd_pos_controller", "/rbd_navigation", "/rbd_gestrec", "/rbd_bridge", "/rbd_lidar",
+    "/joint_state_fallback", "/cloud_decimator",
 ]
 
 
-def wait_for(predicate, timeout, step=0.05):
-    return a1_monitor.wait_for(predicate, timeout, step, abort=rospy.is_shutdown)
+# The kit's wait_for, ending early when ROS shuts down.
+wait_for = functools.partial(rbd_testkit.wait_for, abort=rospy.is_shutdown)
 
 
 class SimSmoke(unittest.TestCase):
@@ -33,10 +44,15 @@ class SimSmoke(unittest.TestCase):
         self.state = ""
         self.states = []
         self.clouds = 0
+        self.joints = None
+        self.thighs = []
+        self.led = None
         self.max_speed_while_estopped = 0.0
         rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_truth)
         rospy.Subscriber("/rbd_controller/state", String, self.on_state)
         rospy.Subscriber("/ouster/points", PointCloud2, self.on_cloud)
+        rospy.Subscriber("/joint_states", JointState, self.on_joints)
+        rospy.Subscriber("/rbd_sim/led", Marker, self.on_led)
         self.gesture = rospy.Publisher("/rbd_gestrec/gesture", String, queue_size=10)
 
     def on_truth(self, msg):
@@ -53,6 +69,18 @@ class SimSmoke(unittest.TestCase):
     def on_cloud(self, _msg):
         self.clouds += 1
 
+    def on_joints(self, msg):
+        if msg._connection_header.get("callerid") != "/rbd_a1_driver":
+            return  # the standing-pose fallback (rbd_bringup) publishes here too while the driver is silent
+        self.joints = msg
+        self.thighs.append(msg.position[1])
+
+    def on_led(self, msg):
+        self.led = [(round(c.r * 255), round(c.g * 255), round(c.b * 255)) for c in msg.colors]
+
+    def led_is(self, rgb):
+        return self.led == [rgb] * 4
+
     def test_system(self):
         self.assertTrue(wait_for(lambda: self.truth is not None and self.state, 60.0), "no ground truth / state")
         self.assertEqual(self.state, "EMERGENCY_STOP", "power-up state must be EMERGENCY_STOP")
@@ -66,8 +94,21 @@ class SimSmoke(unittest.TestCase):
 
         buf = tf2_ros.Buffer()
         tf2_ros.TransformListener(buf)
-        mount = buf.lookup_transform("base_link", "os_sensor", rospy.Time(0), rospy.Duration(10.0))
-        self.assertAlmostEqual(mount.transform.translation.z, 0.07, places=3)
+        mount = buf.lookup_transform("base_link", "os_sensor", rospy.Time(0), rospy.Duration(10.0)).transform
+        with open(os.path.join(rospkg.RosPack().get_path("rbd_bringup"), "config", "mounts.yaml")) as fh:
+            xyz = yaml.safe_load(fh)["os_sensor"]["xyz"]
+        t = mount.translation
+        for got, want in zip((t.x, t.y, t.z), xyz):
+            self.assertAlmostEqual(got, want, places=6)
+
+        # SDK 3.3.4 motor states through the driver: the A1 standing (a1_description angles).
+        self.assertTrue(wait_for(lambda: self.joints is not None, 10.0), "no /joint_states from rbd_a1_driver")
+        self.assertEqual(list(self.joints.name[:3]), ["FR_hip_joint", "FR_thigh_joint", "FR_calf_joint"])
+        for leg in range(4):
+            self.assertTrue(0.7 <= self.joints.position[3 * leg + 1] <= 0.9, self.joints.position)
+            self.assertTrue(-1.6 <= self.joints.position[3 * leg + 2] <= -1.4, self.joints.position)
+        # Status light: red while e-stopped (the GUI's emergency colour).
+        self.assertTrue(wait_for(lambda: self.led_is((0xC6, 0x28, 0x28)), 10.0), "LEDs not red: %s" % self.led)
 
         # A gesture while the e-stop is engaged must not move the robot.
         start = self.truth.pose.pose.position
@@ -83,6 +124,7 @@ class SimSmoke(unittest.TestCase):
         rospy.wait_for_service("/rbd_controller/em_stop", 10.0)
         self.assertTrue(rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)(False).success)
         self.assertTrue(wait_for(lambda: self.state == "WAITING_FOR_GESTURE", 15.0), self.states)
+        self.assertTrue(wait_for(lambda: self.led_is((0x15, 0x65, 0xC0)), 10.0), "LEDs not idle blue: %s" % self.led)
 
         # Show the spin gesture until the controller takes it (a collision stop may come and go
         # meanwhile), then watch the trick on ground truth.
@@ -98,11 +140,13 @@ class SimSmoke(unittest.TestCase):
             yaws.append(yaw_of(self.truth.pose.pose.orientation))
             return self.state == "WAITING_FOR_GESTURE"
 
+        del self.thighs[:]
         self.assertTrue(wait_for(back_waiting, 90.0), "trick did not finish: %s" % self.states[-5:])
+        self.assertGreater(max(self.thighs) - min(self.thighs), 0.1, "the legs did not move in the trick")
         self.assertGreater(max(abs(y) for y in yaws), 2.8, "the robot never faced backwards during spin")
         self.assertLess(abs(yaws[-1]), 0.1)
 
 
 if __name__ == "__main__":
     rospy.init_node("test_sim_smoke")
-    rostest.rosrun("rbd_bringup", "sim_smoke", SimSmoke)
+    run_rostest("rbd_bringup", "sim_smoke", SimSmoke)

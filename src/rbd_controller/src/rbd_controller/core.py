@@ -112,6 +112,7 @@ class MainController:
         self._flush_gesture = False
         self._synced = (None, None)  # (emergency, collision) told to the position controller
         self._now = 0.0  # latest time seen by tick()/on_heartbeat()
+        self.remote_held = False  # the A1 remote's e-stop combination is held (rbd_a1_driver reports it)
         self.fsm = Fsm(
             on_enter={
                 State.EMERGENCY_STOP: self._enter_stop,
@@ -143,8 +144,14 @@ class MainController:
 
     # ------------------------------------------------------------------ stop inputs
     def set_emergency(self, engaged: bool) -> str:
-        """Engage/release the e-stop (service, CLI, GUI); returns a message."""
+        """Engage/release the e-stop (service, CLI, GUI); returns a message.
+
+        A release while the A1 remote's e-stop combination is held is refused (see
+        :meth:`release_refusal`); the state does not change.
+        """
         with self.lock:
+            if not engaged and self.remote_held:
+                return self.release_refusal()
             before = self.fsm.state
             if not engaged and self.operator.lost(self._now):
                 self.operator.disarm()  # the release acknowledges the lost link
@@ -152,6 +159,24 @@ class MainController:
             self._sync_stops()
             self.ports.publish(self)
             return "%s -> %s" % (before.name, self.fsm.state.name)
+
+    def release_refusal(self) -> str:
+        """Why an e-stop release would be refused now ("" if it would not)."""
+        if self.remote_held:
+            return "release refused: the e-stop combination is held on the A1's remote"
+        return ""
+
+    def set_remote_estop(self, held: bool) -> str:
+        """The A1's remote holds (True) or let go of (False) its e-stop combination.
+
+        Held engages the e-stop through the same event as the service and blocks releases
+        until it is let go; letting go releases nothing (the operator does). Returns a message.
+        """
+        with self.lock:
+            self.remote_held = bool(held)
+            if not held:
+                return "remote e-stop combination let go"
+            return self.set_emergency(True)
 
     def set_collision(self, detected: bool) -> str:
         """Collision reported (True) or cleared (False) by rbd_lidar; returns a message."""

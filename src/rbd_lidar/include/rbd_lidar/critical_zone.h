@@ -96,6 +96,13 @@ struct MotionParams {
 // The stop zone grown for the commanded body velocity (vx, vy [m/s], wz [rad/s]).
 ZoneParams grownZone(const ZoneParams& base, double vx, double vy, double wz, const MotionParams& motion);
 
+// A zone whose distances are measured from a point fixed to the body (the zone origin) instead of
+// from the LiDAR, expressed around the LiDAR: (dx, dy) [m] is the LiDAR's position relative to the
+// zone origin in the level frame (x = heading). Front/left shrink and back/right grow by the
+// offset, never below 0. *clamped (optional) tells whether a side had to be clamped (the LiDAR
+// sits outside the zone). Non-finite offsets leave the zone unchanged.
+ZoneParams zoneAroundOrigin(const ZoneParams& zone, double dx, double dy, bool* clamped = nullptr);
+
 struct ZoneResult {
   std::array<uint32_t, 4> counts{{0, 0, 0, 0}};  // critical points per side
   std::array<float, 4> min_distance;             // smallest perpendicular distance per side among

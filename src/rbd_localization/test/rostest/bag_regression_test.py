@@ -10,9 +10,10 @@ import time
 import unittest
 
 import rospy
-import rostest
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
+
+from rbd_testkit.ros import run_rostest
 
 
 class BagRegressionTest(unittest.TestCase):
@@ -62,4 +63,4 @@ class BagRegressionTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_localization", "bag_regression", BagRegressionTest)
+    run_rostest("rbd_localization", "bag_regression", BagRegressionTest)

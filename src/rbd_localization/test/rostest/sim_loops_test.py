@@ -10,7 +10,8 @@ import sys
 import unittest
 
 import rospy
-import rostest
+
+from rbd_testkit.ros import run_rostest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sim_loops  # noqa: E402
@@ -42,4 +43,4 @@ class SimLoopsTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_localization", "sim_loops", SimLoopsTest)
+    run_rostest("rbd_localization", "sim_loops", SimLoopsTest)

@@ -1,7 +1,7 @@
 """Kinematic model of the Unitree A1 under high-level control (ROS-free; the mock A1 node wraps it).
 
-It receives raw ``HighCmd`` bytes exactly as the robot's LCM server would hand them on, and
-integrates them:
+It receives raw ``HighCmd`` bytes exactly as the robot's LCM server would hand them on (decoded
+with the robot side's own description, ``rbd_sim.unitree_wire``), and integrates them:
 
 * Bad packets (wrong size, wrong levelFlag, unknown mode/gait/speed level, NaN/inf) are rejected
   and counted; the robot keeps doing what the last valid command said.
@@ -22,14 +22,17 @@ integrates them:
   ``1 + drift_sigma * N(0, 1)`` from the seeded RNG. ``drift_per_180 = 0`` turns it off.
 
 Ground truth (``pose()``) includes the slip; the robot's own odometry (``HighState.position``)
-does not, as the real A1's leg odometry does not see it.
+does not, as the real A1's leg odometry does not see it. The legs (``motorState``, ``footForce``
+of SDK 3.3.4) come from a trot phase model (``rbd_sim.a1_legs``); the hand-held remote's buttons
+are whatever :meth:`A1Model.press` holds.
 """
 
 import collections
 import math
 import random
 
-from rbd_a1_driver import unitree_layout as ul
+from rbd_sim import unitree_wire as wire
+from rbd_sim.a1_legs import FOOT_RAISE, Legs
 from rbd_sim.transforms import rpy_to_quat
 
 
@@ -125,15 +128,19 @@ class A1Model:
         self.accepted = 0
         self.last_error = ""
         self.unmodeled_mode = None
-        self.mode = ul.MODE_IDLE
-        self.gait_type = ul.GAIT_IDLE
+        self.mode = wire.MODE_IDLE
+        self.gait_type = wire.GAIT_IDLE
+        self.legs = Legs()
+        self.led = ((0, 0, 0),) * 4  # LED[4] (r, g, b) of the effective command
+        self._buttons = ()  # remote buttons held
+        self._buttons_until = 0.0  # ... until this time
 
     # ---- input ----------------------------------------------------------------------------------
     def receive(self, data: bytes, now: float) -> str:
         """Take one LCM_High_Cmd payload. Returns "" if accepted, else why it was rejected."""
         try:
-            cmd = ul.decode_high_cmd(bytes(data))
-        except ul.LayoutError as e:
+            cmd = wire.decode_high_cmd(bytes(data))
+        except wire.WireError as e:
             self.rejected += 1
             self.last_error = str(e)
             return self.last_error
@@ -165,20 +172,21 @@ class A1Model:
             self._active = self._pending.popleft()
         targets = (0.0, 0.0, 0.0, self.roll, self.pitch, self.body_yaw, self.dheight)
         if self.command_stale(now):
-            self.mode = ul.MODE_IDLE if self._active is None else self.mode
+            self.mode = wire.MODE_IDLE if self._active is None else self.mode
             return targets
         cmd = self._active[1]
-        self.mode, self.gait_type = cmd.mode, cmd.gait_type
-        dh = max(c.min_body_height, min(c.max_body_height, cmd.body_height))
-        if cmd.mode == ul.MODE_VELOCITY_WALK:
+        self.mode, self.gait_type = cmd.mode, cmd.gaitType
+        self.led = tuple((led["r"], led["g"], led["b"]) for led in cmd.led)
+        dh = max(c.min_body_height, min(c.max_body_height, cmd.bodyHeight))
+        if cmd.mode == wire.MODE_VELOCITY_WALK:
             self.unmodeled_mode = None
             return (_clamp(cmd.velocity[0], c.max_vx), _clamp(cmd.velocity[1], c.max_vy),
-                    _clamp(cmd.yaw_speed, c.max_wz), 0.0, 0.0, 0.0, dh)
-        if cmd.mode == ul.MODE_FORCE_STAND:
+                    _clamp(cmd.yawSpeed, c.max_wz), 0.0, 0.0, 0.0, dh)
+        if cmd.mode == wire.MODE_FORCE_STAND:
             self.unmodeled_mode = None
             e = cmd.euler
             return (0.0, 0.0, 0.0, _clamp(e[0], c.max_roll), _clamp(e[1], c.max_pitch), _clamp(e[2], c.max_yaw), dh)
-        if cmd.mode == ul.MODE_IDLE:
+        if cmd.mode == wire.MODE_IDLE:
             self.unmodeled_mode = None
             return (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         self.unmodeled_mode = cmd.mode
@@ -215,7 +223,7 @@ class A1Model:
     # ---- outputs --------------------------------------------------------------------------------
     def body_height(self) -> float:
         """Absolute height of base_link above the floor [m]."""
-        return ul.NOMINAL_BODY_HEIGHT + self.dheight
+        return wire.NOMINAL_BODY_HEIGHT + self.dheight
 
     def yaw(self) -> float:
         """Body yaw in the world frame (heading of the feet + body yaw offset) [rad]."""
@@ -230,25 +238,60 @@ class A1Model:
         return (self.vx + self.slip[0], self.vy + self.slip[1], self.dheight_rate, self.rates[0], self.rates[1],
                 self.wz + self.rates[2])
 
-    def high_state(self) -> ul.HighState:
-        """The HighState the A1 would report now."""
-        s = ul.HighState()
-        s.mode = self.mode
-        s.gait_type = self.gait_type
+    def walking(self) -> bool:
+        """True while the robot trots (mode 2 with a fresh command)."""
+        return self.mode == wire.MODE_VELOCITY_WALK and not self.command_stale(self.time)
+
+    def press(self, buttons: tuple, now: float, duration: float) -> None:
+        """Hold remote buttons (names of ``unitree_wire.BUTTONS``) from ``now`` for ``duration`` s.
+
+        Raises:
+            ValueError: an unknown button name or a negative/non-finite duration.
+        """
+        unknown = [b for b in buttons if b not in wire.BUTTONS]
+        if unknown:
+            raise ValueError("unknown remote buttons %s (known: %s)" % (unknown, ", ".join(wire.BUTTONS)))
+        if not (math.isfinite(duration) and duration >= 0.0):
+            raise ValueError("duration must be >= 0 s, got %r" % duration)
+        self._buttons = tuple(buttons)
+        self._buttons_until = now + duration
+
+    def buttons(self, now: float) -> tuple:
+        """Remote buttons held at ``now``."""
+        return self._buttons if now < self._buttons_until else ()
+
+    def high_state(self) -> dict:
+        """What the A1 would report now: HighState members by their SDK names (both layouts' superset)."""
         yaw_imu = wrap_angle(self.yaw() - self.config.yaw0)
         qx, qy, qz, qw = rpy_to_quat(self.roll, self.pitch, yaw_imu)
-        s.quaternion = (qw, qx, qy, qz)
-        s.rpy = (self.roll, self.pitch, yaw_imu)
         tw = self.twist()
-        s.gyroscope = (tw[3], tw[4], tw[5])
         # Specific force in the body frame: gravity seen through roll/pitch plus horizontal acceleration.
         g = self.GRAVITY
         cr, sr = math.cos(self.roll), math.sin(self.roll)
         cp, sp = math.cos(self.pitch), math.sin(self.pitch)
-        s.accelerometer = (self.acc[0] - g * sp, self.acc[1] + g * sr * cp, g * cr * cp)
-        s.position = (self.odom_x, self.odom_y, 0.0)
-        s.body_height = self.body_height()
-        s.velocity = (self.vx, self.vy, 0.0)
-        s.yaw_speed = self.wz
-        s.foot_force = (60, 60, 60, 60)
-        return s
+        legs = self.legs
+        legs.update(self.time, self.walking(), self.body_height(), (self.vx, self.vy, self.wz))
+        forces = tuple(int(round(f)) for f in legs.force)
+        return {
+            "levelFlag": wire.HIGHLEVEL,
+            "mode": self.mode,
+            "gaitType": self.gait_type,
+            "footRaiseHeight": FOOT_RAISE,
+            "imu": {
+                "quaternion": (qw, qx, qy, qz),
+                "gyroscope": (tw[3], tw[4], tw[5]),
+                "accelerometer": (self.acc[0] - g * sp, self.acc[1] + g * sr * cp, g * cr * cp),
+                "rpy": (self.roll, self.pitch, yaw_imu),
+                "temperature": 30,
+            },
+            "position": (self.odom_x, self.odom_y, 0.0),
+            "bodyHeight": self.body_height(),
+            "velocity": (self.vx, self.vy, 0.0),
+            "yawSpeed": self.wz,
+            "motorState": [{"mode": 0x0A, "q": legs.q[i], "dq": legs.dq[i], "tauEst": legs.tau[i],
+                            "temperature": 35} for i in range(12)],
+            "footForce": forces,
+            "footForceEst": forces,
+            "footPosition2Body": [{"x": x, "y": y, "z": z} for x, y, z in legs.feet],
+            "wirelessRemote": wire.remote_bytes(self.buttons(self.time)),
+        }

@@ -8,13 +8,11 @@ inside a closed 16 m hall with a 3 m ceiling. Ground truth: base_link at (0, 0, 
 import json
 import math
 import struct
-import sys
 import unittest
 
 import cloud_check as cc
 import numpy as np
 import rospy
-import rostest
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
 from sensor_msgs.msg import Imu, PointCloud2, PointField
@@ -22,6 +20,7 @@ from std_msgs.msg import String
 from visualization_msgs.msg import MarkerArray
 
 from rbd_msgs.srv import PlaceObstacle, PlaceObstacleRequest
+from rbd_testkit.ros import run_rostest
 
 BASE_Z = 0.28
 MOUNT_Z = 0.07
@@ -52,6 +51,11 @@ class TestSensors(unittest.TestCase):
         rospy.wait_for_service("/rbd_sim/place_obstacle", timeout=60.0)
         cls.place = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
         cls.first = cls.clouds.wait_new(rospy.Time(0), timeout=60.0)
+
+    def setUp(self):
+        """Known state, whatever ran before: none of the obstacles these tests place."""
+        for name in ("p1", "close"):
+            self.place(PlaceObstacleRequest(name=name, remove=True))  # success=False when absent
 
     def fresh_cloud(self):
         """A cloud whose scan started after now (so it reflects the world as of now)."""
@@ -251,4 +255,4 @@ class TestSensors(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_sim", "sensors", TestSensors, sys.argv)
+    run_rostest("rbd_sim", "sensors", TestSensors)

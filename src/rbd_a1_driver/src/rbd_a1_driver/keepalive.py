@@ -1,0 +1,151 @@
+"""Keep-alive of the HighCmd stream: a small process that fills the gaps when the driver's process stalls.
+
+The SDK's ``lcm_server_high`` exits once it has gone 10 loops (20 ms) without a command on
+``LCM_High_Cmd``. The driver sends every 4 ms from a Python thread, but on a loaded machine its
+process can stall for 30-50 ms (a thread holding the GIL is preempted by another process; the
+send thread waits for it). This process has a single thread and no ROS: the driver hands it a
+copy of every HighCmd it publishes (through a pipe), and when none has come for ``gap`` seconds,
+it publishes the driver's last command itself, every ``period``, until the driver sends again.
+
+It never moves the robot more than the driver did: it repeats the driver's last command for at
+most ``hold`` seconds after the driver's last packet, then the same command with zero velocity
+and zero yaw rate. When the pipe closes (the driver exits or dies), it stops at once.
+
+Run by the driver as ``python -m rbd_a1_driver.keepalive URL PERIOD GAP HOLD`` with the pipe on
+stdin (records: the driver's send time and the HighCmd), in a session of its own (``setsid``):
+with the kernel's autogroup scheduling, a session shares the CPU as one group, so the keep-alive
+does not wait behind the driver's (or roslaunch's) busy threads; where it may (root or
+CAP_SYS_NICE), it also takes the lowest real-time priority (SCHED_FIFO 1), so that its wake-ups
+are not queued behind other processes on a loaded machine (it sleeps between packets: about 1 %
+of a core). It writes one line to stdout when it is ready, naming its scheduling.
+:class:`KeepAlive` is the ROS-free decision, tested on its own.
+"""
+
+import os
+import select
+import struct
+import sys
+import time
+from typing import Optional
+
+from rbd_a1_driver import unitree_layout as ul
+
+#: One record on the pipe: the driver's send time (time.monotonic(), the same clock in every process
+#: of the host) and the HighCmd bytes.
+RECORD = struct.Struct("<d%ds" % ul.HIGH_CMD_SIZE)
+
+
+def record(packet: bytes, sent: float) -> bytes:
+    """The pipe record of a HighCmd the driver published at ``sent`` (monotonic)."""
+    return RECORD.pack(sent, packet)
+
+
+def zero_velocity(packet: bytes) -> bytes:
+    """The same HighCmd with velocity and yaw rate set to zero."""
+    cmd = ul.HighCmd.unpack(packet)
+    cmd.velocity = (0.0, 0.0)
+    cmd.yaw_speed = 0.0
+    return cmd.pack()
+
+
+class KeepAlive:
+    """What to publish when the driver is silent.
+
+    Args:
+        period: send period while filling in [s].
+        gap: silence of the driver after which filling starts [s] (below lcm_server_high's 20 ms).
+        hold: how long after the driver's last packet its command is repeated as it was [s];
+            after that with zero velocity.
+
+    Raises:
+        ValueError: a non-positive period or gap, gap >= 0.02 s, or a negative hold.
+    """
+
+    def __init__(self, period: float, gap: float, hold: float) -> None:
+        if not (0.0 < period and 0.0 < gap < 0.02 and hold >= 0.0):
+            raise ValueError("need period > 0, 0 < gap < 0.02 s and hold >= 0, got %r, %r, %r" % (period, gap, hold))
+        self.period = period
+        self.gap = gap
+        self.hold = hold
+        self.last = None  # type: Optional[bytes]
+        self.last_time = 0.0
+        self._zero = None  # type: Optional[bytes]
+        self.next_fill = 0.0
+        self.filled = 0
+
+    def from_driver(self, packet: bytes, now: float) -> None:
+        """The driver published ``packet`` at ``now`` (its own send time, not when it was read here)."""
+        if packet != self.last:
+            self._zero = None
+        self.last = packet
+        self.last_time = now
+        self.next_fill = now + self.gap
+
+    def due(self, now: float) -> Optional[bytes]:
+        """The packet to publish at ``now``, or None while the driver itself is sending."""
+        if self.last is None or now < self.next_fill:
+            return None
+        self.next_fill = max(self.next_fill + self.period, now)
+        self.filled += 1
+        if now - self.last_time <= self.hold:
+            return self.last
+        if self._zero is None:
+            self._zero = zero_velocity(self.last)
+        return self._zero
+
+    def wait(self, now: float) -> Optional[float]:
+        """Seconds until the next fill could be due (None: nothing to fill yet)."""
+        if self.last is None:
+            return None
+        return max(0.0, self.next_fill - now)
+
+
+def realtime() -> str:
+    """Take SCHED_FIFO priority 1 if allowed; returns the scheduling now in force, for the log."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))
+        return "SCHED_FIFO 1"
+    except (AttributeError, OSError) as e:  # not Linux, or no permission
+        return "SCHED_OTHER (no real-time priority: %s)" % e
+
+
+def run(url: str, period: float, gap: float, hold: float, fd: int = 0) -> int:
+    """Read the driver's packets from ``fd`` and fill its silences on ``url`` until ``fd`` closes."""
+    import lcm  # here, so that the module imports without LCM (unit tests)
+
+    lc = lcm.LCM(url)
+    keep = KeepAlive(period, gap, hold)
+    size = RECORD.size
+    pending = b""
+    sys.stdout.write("ready %s\n" % realtime())
+    sys.stdout.flush()
+    while True:
+        timeout = keep.wait(time.monotonic())
+        ready, _, _ = select.select([fd], [], [], timeout)
+        now = time.monotonic()
+        if ready:
+            data = os.read(fd, 65536)
+            if not data:
+                return 0  # the driver closed the pipe: it is gone
+            pending += data
+            whole = len(pending) - len(pending) % size
+            if whole:
+                sent, packet = RECORD.unpack(pending[whole - size:whole])
+                keep.from_driver(packet, sent)
+                pending = pending[whole:]
+        packet = keep.due(now)
+        if packet is not None:
+            lc.publish(ul.CHANNEL_HIGH_CMD, packet)
+
+
+def main() -> int:
+    """Command line: URL PERIOD GAP HOLD (the driver starts it)."""
+    url, period, gap, hold = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4])
+    try:
+        return run(url, period, gap, hold)
+    except KeyboardInterrupt:
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Test oracles of the wire formats RoboDog speaks (vendor facts, not our code)."""

@@ -1,0 +1,70 @@
+"""A mount changed in the calibration file moves the simulated OS1; the zone stays with the body.
+
+Two runs of mount_zone.py (each its own simulator stack, run side by side): the shipped
+config/mounts.yaml (the OS1 on the robot's back, thesis §3.3.1) and the same file with the OS1
+centred on the trunk (the mount the URDF used to hard-code). The truth is the simulator's: the
+ground-truth body position, a target placed in the world, the cloud the simulated sensor sees
+(decoded with sensor_msgs.point_cloud2), and the zone boundaries found by Fig. 23's bisection on
+the collision state, measured from the body frame collision_zone.
+"""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+import yaml
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+SHIPPED = os.path.join(ROOT, "src", "rbd_bringup", "config", "mounts.yaml")
+THESIS_TOLERANCE = 0.08  # Fig. 23: the boundary within +-80 mm of the set distance
+SAME_BOUNDARY = 0.02  # the two mounts' boundaries agree to this; moving the zone with the sensor shifts them 0.08 m
+TARGET_SURFACE = 1.2  # mount_zone.py: target surface this far ahead of the body [m]
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    out = tmp_path_factory.mktemp("mount_zone")
+    with open(SHIPPED) as fh:
+        centred = yaml.safe_load(fh)
+    centred["os_sensor"]["xyz"] = [0.0, 0.0, 0.07]
+    files = {"back": SHIPPED, "centre": str(out / "centre.yaml")}
+    with open(files["centre"], "w") as fh:
+        yaml.safe_dump(centred, fh)
+    procs = {name: subprocess.Popen([sys.executable, os.path.join(HERE, "mount_zone.py"), "--mounts", path,
+                                     "--out", str(out / (name + ".json"))], start_new_session=True)
+             for name, path in files.items()}
+    try:
+        for name, proc in procs.items():
+            assert proc.wait(timeout=300) == 0, "mount_zone.py failed for %s (logs in %s)" % (name, out)
+    finally:
+        for proc in procs.values():
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+    results = {}
+    for name, path in files.items():
+        with open(str(out / (name + ".json"))) as fh:
+            results[name] = json.load(fh)
+        with open(path) as fh:
+            results[name]["file_xyz"] = yaml.safe_load(fh)["os_sensor"]["xyz"]
+    return results
+
+
+def test_the_sensor_frames_and_the_simulated_sensor_move_with_the_file(runs):
+    assert runs["back"]["file_xyz"][0] < -0.05  # the shipped mount is on the rear half of the back
+    for r in runs.values():
+        assert r["tf_mount"] == pytest.approx(r["file_xyz"], abs=1e-6)
+        # Where the simulated OS1 really is: the target's returns sit at (surface - body - mount) in os_sensor.
+        assert r["cloud_x"] == pytest.approx(TARGET_SURFACE - r["file_xyz"][0], abs=0.015), r
+    assert runs["back"]["cloud_x"] - runs["centre"]["cloud_x"] == pytest.approx(0.08, abs=0.015)
+
+
+@pytest.mark.parametrize("side", ["front", "back"])
+def test_the_zone_keeps_its_boundaries_relative_to_the_body(runs, side):
+    for r in runs.values():
+        assert r[side] is not None, r
+        assert abs(r[side] - r[side + "_set"]) <= THESIS_TOLERANCE, r
+    assert runs["back"][side] == pytest.approx(runs["centre"][side], abs=SAME_BOUNDARY)
