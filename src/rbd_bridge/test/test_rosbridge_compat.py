@@ -165,7 +165,7 @@ def test_burst_reaches_a_rospy_subscriber_with_queue_1000(open_bridge):
             counts.append(report(open_bridge)[BURST]["count"])
             return counts[-1] == counts[-2]
 
-        assert wait_until(settled, 20, period=0.5)
+        assert wait_until(settled, 20, step=0.5)
         got = report(open_bridge)[BURST]
         delivered = got["count"] - base
         assert delivered == 5000, "%d of 5000 delivered" % delivered
