@@ -36,9 +36,16 @@ def count_file(path):
             continue
         for case in cases:
             label = "%s.%s" % (case.get("classname", ""), case.get("name", ""))
-            if case.find("failure") is not None or case.find("error") is not None:
+            if label.startswith("__main__.") or not case.get("classname"):
+                # a rostest node's unittest names its class __main__: say which file it was
+                label = "%s: %s" % (os.path.splitext(name)[0], label)
+            bad = case.find("failure")
+            if bad is None:
+                bad = case.find("error")
+            if bad is not None:
                 failed += 1
-                names.append(label)
+                reason = (bad.get("message") or bad.text or "").strip().splitlines()
+                names.append(label + (" -- " + reason[0][:200] if reason else ""))
             elif case.find("skipped") is not None:
                 skipped += 1
             else:
