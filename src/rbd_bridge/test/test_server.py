@@ -115,6 +115,37 @@ def test_invalid_utf8_in_a_text_frame_closes_with_1007(server):
     assert info.value.rcvd is not None and info.value.rcvd.code == 1007  # RFC 6455 section 8.1
 
 
+def test_common_frames_then_the_stream_handed_to_wsproto(server):
+    """Frames made by websockets: the fast path's frames (a big one over several reads), then a
+    fragmented message hands the stream to wsproto mid-read; every message once, in order,
+    pings answered before and after, invalid UTF-8 closes with 1007 on the wsproto side too."""
+    _, backend, port = server
+    ws = connect("ws://127.0.0.1:%d" % port, compression=None, max_size=None)
+    ws.send(json.dumps({"op": "subscribe", "topic": "/loop"}))
+    assert wait_for(lambda: backend.sessions)
+    assert ws.ping(b"before").wait(5)
+
+    def pub(data):
+        return json.dumps({"op": "publish", "topic": "/loop", "msg": {"data": data}}).encode()
+
+    big = "a" * 70000
+    frames = [
+        Frame(Opcode.TEXT, pub(big)),
+        Frame(Opcode.BINARY, pub("b")),
+        Frame(Opcode.TEXT, pub("c")[:7], fin=False),  # fragmented: wsproto from here on
+        Frame(Opcode.CONT, pub("c")[7:]),
+        Frame(Opcode.TEXT, pub("d")),
+    ]
+    ws.socket.sendall(b"".join(f.serialize(mask=True) for f in frames))
+    got = [json.loads(ws.recv(timeout=5))["msg"]["data"] for _ in range(4)]
+    assert got == [big, "b", "c", "d"]
+    assert ws.ping(b"after").wait(5)
+    ws.socket.sendall(Frame(Opcode.TEXT, b'{"op": "\xff"}').serialize(mask=True))
+    with pytest.raises(ConnectionClosed) as info:
+        ws.recv(timeout=5)
+    assert info.value.rcvd is not None and info.value.rcvd.code == 1007
+
+
 def wait_for(predicate, timeout=5.0):
     deadline = time.monotonic() + timeout
     while not predicate() and time.monotonic() < deadline:

@@ -6,7 +6,15 @@ with 1007), ping/pong and close frames (its frame layer, ``FrameProtocol``; the 
 layer above it cost ~7 us more per message, measured). Around it stays the design that
 keeps the bridge fast: each network read is parsed once and its messages are handled in
 the same ``data_received`` call (no coroutine per frame), and frames to clients are
-written straight to the socket. A topic frame is framed once (:func:`wire`) and the same
+written straight to the socket.
+
+wsproto's frame layer costs ~25 us per small frame (pure Python, a generator and objects
+per frame; the bridge's own parser took ~3.5 us), which failed the performance gate of
+issue 18. So the common frames a client sends - complete, final, masked text, binary,
+ping and pong frames without extension bits - are read by :meth:`_Connection._fast`; the
+first frame that is anything else (fragmented, close, unmasked, reserved bits or opcodes)
+hands the connection's stream to wsproto from that frame on, for good. Server frames are
+headers plus payload (:func:`wire`). A topic frame is framed once (:func:`wire`) and the same
 bytes go to every client; while a client's socket and asyncio's write buffer are full
 (``pause_writing``) its frames wait in its bounded
 :class:`rbd_bridge.core.outqueue.OutQueue`. No extension (permessage-deflate) is
@@ -17,6 +25,7 @@ import asyncio
 import itertools
 import logging
 import socket
+import struct
 import threading
 from typing import Any, Callable, Optional
 
@@ -34,20 +43,38 @@ _log = logging.getLogger("rbd_bridge")
 _RECV_SIZE = 65536  # asyncio reads this much per call (its 256 KiB default costs an mmap per read)
 _JOIN_BYTES = 65536  # queued small frames leave joined in writes of up to this size
 _MAX_HANDSHAKE = 16384
-_encoders = threading.local()
 _TEXT, _BINARY = Opcode.TEXT, Opcode.BINARY
+_FAST_OPCODES = (1, 2, 9, 10)  # text, binary, ping, pong
+try:  # websockets' C helper when installed (the venv); else Python's big-int XOR
+    from websockets.speedups import apply_mask as _apply_mask
+except ImportError:
+    _apply_mask = None
 
 
 def _utf8(text: Any) -> Any:
     return text.encode("utf-8") if isinstance(text, str) else text
 
 
+def _unmask(payload: bytes, mask: bytes) -> bytes:
+    if _apply_mask is not None:
+        return _apply_mask(payload, mask)
+    n = len(payload)
+    key = (mask * (n // 4 + 1))[:n]
+    return (int.from_bytes(payload, "little") ^ int.from_bytes(key, "little")).to_bytes(n, "little")
+
+
 def wire(payload: Any) -> bytes:
-    """One unmasked, final server frame (text for str, binary for bytes), as wsproto frames it."""
-    encoder = getattr(_encoders, "frames", None)
-    if encoder is None:  # one per thread: ROS threads frame messages for direct sends too
-        encoder = _encoders.frames = FrameProtocol(client=False, extensions=[])
-    return encoder.send_data(payload, True)
+    """One unmasked, final server frame: text for str, binary for bytes (RFC 6455 5.2)."""
+    if isinstance(payload, str):
+        payload, first = payload.encode("utf-8"), 0x81
+    else:
+        first = 0x82
+    n = len(payload)
+    if n < 126:
+        return bytes((first, n)) + payload
+    if n < 65536:
+        return struct.pack("!BBH", first, 126, n) + payload
+    return struct.pack("!BBQ", first, 127, n) + payload
 
 
 class _Connection(asyncio.Protocol):
@@ -65,6 +92,8 @@ class _Connection(asyncio.Protocol):
         self.paused = False
         self.parts = []
         self.parts_size = 0
+        self.buf = bytearray()  # an incomplete frame of the fast path
+        self.fast = True  # False once wsproto has the stream
         self.alive = True
         self.timer = None
         self.peer = "?"
@@ -97,6 +126,11 @@ class _Connection(asyncio.Protocol):
         backend = self.server.backend
         backend.begin_batch()  # the publishes of this read leave together, per ROS peer
         try:
+            if self.fast:
+                data = self._fast(data)
+                if not data or self.closing:
+                    return
+                self.fast = False
             self.proto.receive_bytes(data)
             for frame in self.proto.received_frames():
                 self.alive = True
@@ -116,6 +150,50 @@ class _Connection(asyncio.Protocol):
             self.close(1011, "internal error")
         finally:
             backend.end_batch()
+
+    def _fast(self, data: bytes) -> bytes:
+        """Handle the complete common frames of buf + data; return the bytes wsproto must take."""
+        buf = self.buf
+        buf += data
+        limit = self.server.max_message_size
+        pos, end = 0, len(buf)
+        while not self.closing and end - pos >= 2:
+            b0, b1 = buf[pos], buf[pos + 1]
+            length, head = b1 & 0x7F, pos + 2
+            if length == 126:
+                if end - pos < 4:
+                    break
+                length, head = struct.unpack_from("!H", buf, head)[0], pos + 4
+            elif length == 127:
+                if end - pos < 10:
+                    break
+                length, head = struct.unpack_from("!Q", buf, head)[0], pos + 10
+            opcode = b0 & 0x0F
+            if b0 & 0xF0 != 0x80 or not b1 & 0x80 or opcode not in _FAST_OPCODES or (opcode > 8 and length > 125):
+                rest = bytes(buf[pos:])  # anything else: wsproto from this frame on
+                del buf[:]
+                return rest
+            if limit and length > limit:
+                self.close(1009, "message larger than max_message_size")
+                return b""
+            if end < head + 4 + length:
+                break
+            payload = _unmask(bytes(buf[head + 4 : head + 4 + length]), bytes(buf[head : head + 4]))
+            pos = head + 4 + length
+            self.alive = True
+            if opcode == 9:
+                self._write(self.proto.pong(payload))
+            elif opcode == 1:
+                try:
+                    text = payload.decode("utf-8")
+                except UnicodeDecodeError:
+                    self.close(1007, "invalid UTF-8 in a text message")
+                    return b""
+                self.session.receive(text)
+            elif opcode == 2:
+                self.session.receive(payload)
+        del buf[:pos]
+        return b""
 
     def _message(self, data: Any, finished: bool) -> None:
         limit = self.server.max_message_size
