@@ -462,8 +462,9 @@ class Faults(unittest.TestCase):
         self.collision(True)
         t0 = time.monotonic()
         cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.0)
-        self.em_stop(True)
-        self.assertEqual(m.state, "EMERGENCY_STOP")
+        self.assertTrue(self.em_stop(True).success)
+        # the service answers before /rbd_controller/state reaches this node: wait for it
+        self.assertTrue(wait_for(lambda: m.state == "EMERGENCY_STOP", 2.0), m.state)
         self.collision(False)
         t1 = time.monotonic()
         time.sleep(1.5)
