@@ -2,13 +2,18 @@
 """`make demo`: the whole RoboDog system in simulation with a scripted audience.
 
 Starts a private ROS master and `rbd_bringup sim.launch`, plays the laptop app (rbd_local) for
-the audience: gestures go through the app's own recognition pipeline (MediaPipe on a clip made
-from a real hand photo for `walk` and `lie_down`; recorded key-point sequences for `spin` and
-`wiggle`) and through the rosbridge-compatible server to the robot. During the walk a person
-steps into the robot's way and leaves again. Everything safety-related is measured on the
-simulator's ground truth and on the command stream the A1 receives over LCM.
+the audience: gestures go through the app's own recognition pipeline (MediaPipe on clips in
+which the real hand of an opencv-doc photo is moved along a generated gesture path) and through
+the rosbridge-compatible server to the robot. After the four built-in tricks a visitor teaches a
+new gesture (a checkmark, five shows) for the trick `bow` in teach mode and performs it; the
+app sends the trick's name, which rbd_gestrec accepts because `bow` is a trick of
+rbd_navigation. During the walk a person steps into the robot's way and leaves again.
+Everything safety-related is measured on the simulator's ground truth and on the command
+stream the A1 receives over LCM.
 
-Writes OUT/report.txt, OUT/report.json, OUT/run.png and OUT/demo.bag.
+Writes OUT/report.txt, OUT/report.json, OUT/run.png, OUT/demo.bag and OUT/recording (the robot's
+inputs while it stands ready, before the release: `roslaunch rbd_bringup robot.launch
+replay:=OUT/recording`).
 """
 
 import argparse
@@ -23,7 +28,9 @@ from rbd_testkit import RosEnv, free_port, restore_sigint, wait_for
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TRICKS = ["walk", "spin", "wiggle", "lie_down"]
 GESTURE_OF = {"walk": "swipe_right", "spin": "circle", "wiggle": "wave", "lie_down": "push_down"}
-PHOTO_MOTION = {"walk": "right", "lie_down": "down"}  # gestures a moving real photo can show
+TAUGHT = ("checkmark", "bow")  # the gesture a visitor teaches, and its trick
+GESTURE_INPUT = ("MediaPipe on clips of the real hand photos of opencv-doc moved along generated gesture "
+                 "paths (real hand images, generated motion); 'bow' taught from 5 such clips in teach mode")
 BAG_TOPICS = ["/rbd_sim/ground_truth", "/rbd_sim/obstacles", "/rbd_controller/state", "/rbd_controller/path_queue",
               "/rbd_pos_controller/status", "/rbd_lidar/state", "/cmd_vel", "/rbd_gestrec/gesture", "/scan",
               "/rbd_localization/pose", "/odometry/filtered", "/zed2/zed_node/pose", "/rbd_controller/path"]
@@ -125,7 +132,7 @@ class Monitor:
 
 
 class Audience:
-    """The laptop app's gesture pipeline feeding the robot link."""
+    """The laptop app's gesture pipeline feeding the robot link, shown real-photo clips."""
 
     def __init__(self, link, cache_dir):
         from rbd_local.gestures.config import load_config
@@ -137,20 +144,51 @@ class Audience:
         self.cfg = cfg
         self.link = link
         self.cache_dir = cache_dir
-        self.photo = None
+        self._sprites = None
 
-    def _photo(self):
-        if self.photo is None:
-            import cv2
-
+    def sprites(self):
+        """Hand sprites of the two real photos (loaded once)."""
+        if self._sprites is None:
+            from rbd_local.evaluation import load_sprites
             from rbd_local.testdata import fetch_hand_photos
 
-            self.photo = cv2.imread(fetch_hand_photos(self.cache_dir)["handSrc.jpg"])
-        return self.photo
+            photos = fetch_hand_photos(self.cache_dir)
+            self._sprites = load_sprites([photos["handSrc.jpg"], photos["handDst.jpg"]])
+        return self._sprites
+
+    def clip(self, gesture, seed):
+        """Frames of one baseline real-photo clip of ``gesture``."""
+        import numpy as np
+
+        from rbd_local.gestures import realclips
+
+        return realclips.make_clip(self.sprites(), gesture, realclips.BASELINE, np.random.default_rng(seed))[1]
+
+    def teach(self, seed):
+        """A visitor shows the new gesture five times; the app learns it (teach mode)."""
+        import numpy as np
+
+        from rbd_local.gestures.detector import HandDetector
+        from rbd_local.gestures.realclips import track_clip
+        from rbd_local.gestures.teach import extract_show
+
+        gesture, trick = TAUGHT
+        windows = []
+        with HandDetector(model_complexity=self.cfg["model_complexity"]) as det:
+            for i in range(5):
+                frames = self.clip(gesture, seed + i)
+                kps = track_clip(det, frames)
+                w = extract_show(np.arange(len(frames)) / 30.0, kps, self.model.window_s, self.model.samples)
+                if w is not None:
+                    windows.append(w)
+        t0 = time.monotonic()
+        report = self.model.teach(gesture, trick, np.stack(windows))
+        say("a visitor teaches %r -> %s from %d shows (learned in %.0f ms)"
+            % (gesture, trick, report["shows"], 1000 * (time.monotonic() - t0)))
 
     def show(self, trick, seed):
         """Perform the gesture for ``trick``; returns the commands the app sent."""
-        from rbd_local.gestures.recognizer import GestureRecognizer
+        from rbd_local.gestures.pipeline import GesturePipeline
 
         sent = []
 
@@ -158,29 +196,15 @@ class Audience:
             sent.append(command)
             self.link.send_gesture(command)
 
-        if trick in PHOTO_MOTION:
-            from rbd_local.gestures.photo_clip import moving_photo_frames
-            from rbd_local.gestures.pipeline import GesturePipeline
-
-            pipe = GesturePipeline(self.model, self.mapping, send=send, model_complexity=self.cfg["model_complexity"])
-            try:
-                frames = moving_photo_frames(self._photo(), PHOTO_MOTION[trick])
-                for i, frame in enumerate(frames):
-                    pipe.process(i / 30.0, frame)
-                    time.sleep(1.0 / 60.0)
-            finally:
-                pipe.close()
-            source = "MediaPipe on a moving real hand photo"
-        else:
-            from rbd_local.gestures import synthetic
-
-            rec = GestureRecognizer(self.model, None, self.cfg["min_consecutive"], self.cfg["cooldown_s"])
-            for t, kp in synthetic.stream(["static", GESTURE_OF[trick], "static"], seed):
-                d = rec.update(t, kp)
-                if d.fired and self.mapping.get(d.label):
-                    send(self.mapping[d.label])
-            source = "recorded key-point sequence"
-        say("audience shows %s (%s) -> app sent %s" % (GESTURE_OF[trick], source, sent or "nothing"))
+        gesture = TAUGHT[0] if trick == TAUGHT[1] else GESTURE_OF[trick]
+        pipe = GesturePipeline(self.model, self.mapping, send=send, model_complexity=self.cfg["model_complexity"])
+        try:
+            for i, frame in enumerate(self.clip(gesture, seed)):
+                pipe.process(i / 30.0, frame)
+                time.sleep(1.0 / 60.0)
+        finally:
+            pipe.close()
+        say("audience shows %s (MediaPipe on a real-photo clip) -> app sent %s" % (gesture, sent or "nothing"))
         return sent
 
 
@@ -189,10 +213,13 @@ def main():
     restore_sigint()  # started in the background, roslaunch would inherit SIGINT ignored
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "demo-output"))
-    ap.add_argument("--tricks", default=",".join(TRICKS))
+    ap.add_argument("--tricks", default=",".join(TRICKS + [TAUGHT[1]]),
+                    help="tricks to show; %s is taught first (teach mode)" % TAUGHT[1])
     ap.add_argument("--intrude", default="walk", help="trick during which a person steps in ('' = none)")
     ap.add_argument("--columns", type=int, default=1024)
     ap.add_argument("--visual", action="store_true", help="open RViz (audience view) and the GUI")
+    ap.add_argument("--record-seconds", type=float, default=6.0,
+                    help="length of OUT/recording, the inputs for robot.launch replay:= (0 = none)")
     ap.add_argument("--trick-timeout", type=float, default=90.0)
     ap.add_argument("launch_args", nargs="*", help="extra sim.launch arguments, e.g. follow_localization:=true")
     args = ap.parse_args()
@@ -203,7 +230,7 @@ def main():
     env = RosEnv(log_dir=args.out, use_here=True, master_timeout=60.0, prefix="rbd-demo-home.")
     bridge_port = free_port()
     launch_args = ["rbd_bringup", "sim.launch", "lidar_columns:=%d" % args.columns, "bridge_port:=%d" % bridge_port,
-                   "rviz:=%s" % str(args.visual).lower()] + args.launch_args
+                   "rviz:=%s" % str(args.visual).lower(), "gui:=%s" % str(args.visual).lower()] + args.launch_args
     say("starting the simulated system: roslaunch %s (master %s)" % (" ".join(launch_args), env.uri))
     env.launch(*launch_args, name="roslaunch")
     monitor = link = None
@@ -214,8 +241,6 @@ def main():
         wait_for(lambda: rospy.has_param("/rbd_sim/lcm_url"), 60.0, 0.2)
         monitor = Monitor(rospy.get_param("/rbd_sim/lcm_url"))
         env.start(["rosbag", "record", "-q", "-O", os.path.join(args.out, "demo.bag")] + BAG_TOPICS, name="rosbag")
-        if args.visual:
-            env.start(["rbd-gui", "--port", str(bridge_port)], name="gui")
 
         from rbd_local.link import RobotLink
 
@@ -226,6 +251,13 @@ def main():
         if not monitor.wait_state(("EMERGENCY_STOP",), 60.0):
             raise RuntimeError("controller did not come up in EMERGENCY_STOP")
         wait_for(lambda: monitor.pose is not None, 30.0, 0.1)
+        # The robot's real inputs while it stands ready (as for a preflight), for
+        # `robot.launch replay:=OUT/recording` (rbd_bringup README "Replay"; ~8 MB/s at 1024 columns).
+        if args.record_seconds > 0:
+            say("recording %.0f s of the robot's inputs (OUT/recording)" % args.record_seconds)
+            code, out = env.run_to_exit(["rosrun", "rbd_bringup", "record", os.path.join(args.out, "recording"),
+                                         "--duration", str(args.record_seconds)], timeout=args.record_seconds + 60.0)
+            say(out.strip().splitlines()[-1] if code == 0 and out.strip() else "the recording failed: %s" % out[-500:])
         audience = Audience(link, os.path.join(ROOT, "rbd_local", ".cache"))
 
         say("operator releases the e-stop (GUI path: bridge -> /rbd_controller/em_stop)")
@@ -237,6 +269,8 @@ def main():
         t_start = time.monotonic()
         completed = []
         for i, trick in enumerate(tricks):
+            if trick == TAUGHT[1]:
+                audience.teach(seed=500)
             taken = False
             for attempt in range(5):
                 monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0)
@@ -268,7 +302,7 @@ def main():
     with monitor.lock:
         report = build_report(tricks, completed, monitor.contacts.contacts, monitor.contacts.min_clearance,
                               monitor.state_log, start_pose, monitor.pose,
-                              reaction_times(monitor.onsets, monitor.commands), 0.1, duration)
+                              reaction_times(monitor.onsets, monitor.commands), 0.1, duration, GESTURE_INPUT)
         plot_run(monitor.path, monitor.people_log, monitor.stop_points, os.path.join(args.out, "run.png"))
     write_report(report, args.out)
     print(render_text(report), flush=True)

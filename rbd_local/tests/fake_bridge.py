@@ -19,6 +19,7 @@ class FakeBridge:
         self.published = []  # (topic, msg)
         self.advertised = []
         self.subscribed = {}  # topic -> type
+        self.subscribe_ops = []  # the subscribe ops as received (throttle_rate, queue_length, ...)
         self.service_calls = []  # (service, args)
         self.service_handler = lambda service, args: (True, {"success": True, "message": "ok"})
         self.connections = 0
@@ -117,6 +118,7 @@ class FakeBridge:
                     elif op == "subscribe":
                         self._subs[ws][msg["topic"]] = msg.get("id")
                         self.subscribed[msg["topic"]] = msg.get("type")
+                        self.subscribe_ops.append(msg)
                     elif op == "unsubscribe":
                         self._subs[ws].pop(msg["topic"], None)
                     elif op == "call_service":

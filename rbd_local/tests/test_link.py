@@ -60,11 +60,12 @@ def test_em_stop_calls_the_service_and_reports_the_answer(fake_bridge):
     link, _ = _link(fake_bridge)
     try:
         assert link.wait_connected(10)
-        assert link.em_stop(True) == (True, "ok")
+        # (answers are under test here, not speed: a generous timeout for a loaded machine)
+        assert link.em_stop(True, timeout=10) == (True, "ok")
         fake_bridge.service_handler = lambda s, a: (True, {"success": False, "message": "refused"})
-        assert link.em_stop(False) == (False, "refused")
+        assert link.em_stop(False, timeout=10) == (False, "refused")
         fake_bridge.service_handler = lambda s, a: (False, "service not available")
-        ok, msg = link.em_stop(True)
+        ok, msg = link.em_stop(True, timeout=10)
         assert not ok and msg
         assert [c for c in fake_bridge.service_calls] == [
             (EM_STOP_SERVICE, {"data": True}), (EM_STOP_SERVICE, {"data": False}), (EM_STOP_SERVICE, {"data": True}),
@@ -273,3 +274,103 @@ def test_link_thread_survives_an_exception_in_a_connection_attempt(fake_bridge, 
         assert calls["n"] >= 2
     finally:
         link.stop()
+
+
+# ------------------------------------------------------------- the robot's tricks (teach mode)
+TRICKS = {"walk": [{"name": "walk forward 0.6 m", "x": 0.6}, {"name": "return", "x": 0.0}],
+          "bow": [{"name": "bow: nose down", "pitch": 0.35}, {"name": "stand up", "pitch": 0.0}]}
+
+
+def test_get_tricks_reads_the_navigation_parameter_through_rosapi(fake_bridge):
+    import json
+
+    from rbd_local.link import TRICKS_PARAM
+
+    answers = {"value": json.dumps(TRICKS)}
+
+    def handler(service, args):
+        if service == "/rosapi/get_param":
+            return (True, answers) if isinstance(answers, dict) else (False, answers)
+        return True, {}
+
+    fake_bridge.service_handler = handler
+    link, _got = _link(fake_bridge)
+    try:
+        assert link.wait_connected(10)
+        assert link.get_tricks(5.0) == {"walk": ["walk forward 0.6 m", "return"], "bow": ["bow: nose down", "stand up"]}
+        assert ("/rosapi/get_param", {"name": TRICKS_PARAM}) in fake_bridge.service_calls
+        answers = {"value": json.dumps({"walk": [{"x": 1.0}]})}  # a step without a name
+        with pytest.raises(ValueError, match="has no name"):
+            link.get_tricks(5.0)
+        answers = {"value": "null"}  # rosapi's answer for a parameter that is not set
+        with pytest.raises(ValueError, match="not set"):
+            link.get_tricks(5.0)
+        answers = "parameter /rbd_navigation/tricks is not allowed by this bridge's allow-list"
+        with pytest.raises(ValueError, match="allow-list"):
+            link.get_tricks(5.0)
+    finally:
+        link.stop()
+    with pytest.raises(ConnectionError):
+        link.get_tricks(1.0)
+
+
+# ------------------------------------------------------------------------- the robot's camera
+def _jpeg_msg(value, secs, nsecs=0, fmt="bgr8; jpeg compressed bgr8", size=(64, 48)):
+    import base64
+
+    import cv2
+    import numpy as np
+
+    img = np.full((size[1], size[0], 3), value, np.uint8)
+    ok, buf = cv2.imencode(".jpg", img)
+    assert ok
+    return {"header": {"seq": 0, "stamp": {"secs": secs, "nsecs": nsecs}, "frame_id": "zed2_left_camera_optical_frame"},
+            "format": fmt, "data": base64.b64encode(buf.tobytes()).decode("ascii")}
+
+
+def test_camera_frames_arrive_throttled_newest_only_and_decoded(fake_bridge):
+    import threading
+
+    from rbd_local.gestures.robot_camera import RobotCameraSource
+    from rbd_local.link import CAMERA_TOPIC
+
+    source = RobotCameraSource(idle_timeout_s=5.0)
+    link, _got = _link(fake_bridge, on_camera=source.push, camera_throttle_ms=33)
+    try:
+        assert link.wait_connected(10)
+        assert fake_bridge.wait_for(lambda: CAMERA_TOPIC in fake_bridge.subscribed)
+        op = [o for o in fake_bridge.subscribe_ops if o["topic"] == CAMERA_TOPIC][0]
+        assert op["type"] == "sensor_msgs/CompressedImage"
+        assert op["throttle_rate"] == 33 and op["queue_length"] == 1  # the bridge keeps only the newest
+        now = int(time.time())
+        fake_bridge.push(CAMERA_TOPIC, _jpeg_msg(40, now, 0))
+        assert wait_for(lambda: source.received == 1)
+        t, frame = next(iter(source))
+        assert t == 0.0 and frame.shape == (48, 64, 3) and abs(float(frame.mean()) - 40) < 3
+        # two frames arrive while the loop is busy: only the newer one is shown
+        fake_bridge.push(CAMERA_TOPIC, _jpeg_msg(80, now, 100_000_000))
+        fake_bridge.push(CAMERA_TOPIC, _jpeg_msg(120, now, 200_000_000))
+        assert wait_for(lambda: source.received == 3)
+        t, frame = next(source)
+        assert t == pytest.approx(0.2) and abs(float(frame.mean()) - 120) < 3
+        assert source.dropped == 1
+        # broken messages are skipped (counted), never a crash; an older stamp is not shown
+        bads = ({"format": "rgb8", "data": _jpeg_msg(1, now)["data"]}, {"format": "jpeg", "data": "@@@"},
+                {"format": "jpeg", "data": "AAAA"}, _jpeg_msg(9, now, 100_000_000))
+        for i, bad in enumerate(bads):
+            got = []
+            source.push(bad)
+            reader = threading.Thread(target=lambda out=got: out.append(next(source, None)), daemon=True)
+            reader.start()
+            assert wait_for(lambda n=i + 1: source.bad == n), "the bad frame was not seen and skipped"
+            fake_bridge.push(CAMERA_TOPIC, _jpeg_msg(200, now + 1 + i, 0))
+            reader.join(10)
+            assert got and got[0] is not None, "the source stalled after a bad frame"
+            assert abs(float(got[0][1].mean()) - 200) < 3
+        assert source.bad == len(bads)
+        st = source.stats()
+        assert st["received"] >= 7 and st["shown"] == 6 and st["transport_ms"]["median"] is not None
+    finally:
+        source.close()
+        link.stop()
+    assert next(source, "end") == "end"  # a closed source ends the iteration

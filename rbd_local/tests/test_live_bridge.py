@@ -153,3 +153,70 @@ def test_gesture_reaches_rbd_gestrec_and_estop_reaches_rbd_controller(ros_system
         assert "data: True" in echo.stdout, echo.stdout
     finally:
         link.stop()
+
+
+HAVE_TEACH_CAMERA = _has_launch("rbd_navigation", "rbd_navigation.launch") and _has_launch("rbd_sim", "sensors.launch")
+
+
+@pytest.mark.skipif(not HAVE_TEACH_CAMERA, reason="rbd_navigation / rbd_sim not in this sourced workspace")
+def test_tricks_and_the_robot_camera_through_the_real_bridge(ros_system, hand_photos, tmp_path):
+    """Teach mode's trick list and ``rbd-gesture --robot-camera`` through rbd_bridge.launch's allow-list.
+
+    The tricks come from rbd_navigation's node (its YAML loaded by its launch file) through
+    rosapi; the camera is rbd_sim's simulated ZED2 left image playing a real-photo clip of a
+    hand moved right; ``rbd-gesture`` recognises ``swipe_right`` in the robot's camera and the
+    stand-in controller receives ``walk``.
+    """
+    import json
+    import signal
+
+    import cv2
+    import yaml
+
+    from rbd_local.gestures.photo_clip import moving_photo_frames, write_clip
+
+    clip = str(tmp_path / "visitor.avi")
+    frames = moving_photo_frames(cv2.imread(hand_photos["handSrc.jpg"]), "right", distance=0.4, hold_s=1.0)
+    write_clip(frames, clip)
+    nav = ros_system.run(["rospack", "find", "rbd_navigation"]).stdout.strip()
+    with open(os.path.join(nav, "config", "tricks.yaml")) as fh:
+        tricks = yaml.safe_load(fh)["tricks"]
+    ros_system.spawn(["roslaunch", "rbd_navigation", "rbd_navigation.launch"])
+    ros_system.spawn(["rosrun", "rbd_sim", "zed2_camera", "_video:=" + clip, "_rate:=30"])
+    peer = Lines(ros_system.spawn([sys.executable, os.path.join(HERE, "ros_peer.py")], stdout=subprocess.PIPE))
+    assert peer.wait(lambda x: x == "READY", 30), "ROS peer did not start"
+    ros_system.wait_bridge()
+    link = RobotLink("127.0.0.1", ros_system.ws_port, retry_s=0.3).start()
+    try:
+        assert link.wait_connected(20)
+        deadline = time.monotonic() + 30
+        got = None
+        while got is None and time.monotonic() < deadline:
+            try:
+                got = link.get_tricks(5.0)
+            except ValueError:  # rbd_navigation still starting: its parameter is not set yet
+                time.sleep(0.3)
+        assert got == {name: [s["name"] for s in steps] for name, steps in tricks.items()}
+    finally:
+        link.stop()
+    env = dict(ros_system.env, PYTHONPATH=os.path.join(os.path.dirname(HERE), "src"))
+    app = subprocess.Popen([sys.executable, "-m", "rbd_local.gesture_app", "--robot-camera", "--headless",
+                            "--host", "127.0.0.1", "--port", str(ros_system.ws_port), "--max-seconds", "90",
+                            "--stats"], env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                           start_new_session=True)
+    out = Lines(app)
+    try:
+        assert out.wait(lambda x: '"command": "walk"' in x, 90), out.lines[-5:]
+        # the clip loops: the next performance is sent too (the very first message on a topic the
+        # bridge has just advertised may go out before ROS connected the subscriber)
+        assert peer.wait(lambda x: x == "GESTURE walk", 30), ("walk did not reach ROS", out.lines[-5:])
+    finally:
+        if app.poll() is None:
+            os.killpg(app.pid, signal.SIGINT)  # rbd-gesture prints its statistics and exits
+        app.wait(30)
+    assert out.wait(lambda x: x.startswith('{"stats"'), 5), out.lines[-5:]
+    stats = json.loads([x for x in out.lines if x.startswith('{"stats"')][-1])["stats"]
+    cam = stats["robot_camera"]
+    assert cam["shown"] >= 20 and cam["bad"] == 0, cam
+    assert 0 <= cam["transport_ms"]["median"] <= cam["end_to_end_ms"]["median"], cam
+    print("ROBOT_CAMERA_ONE_HOST", json.dumps(stats))

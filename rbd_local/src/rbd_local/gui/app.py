@@ -1,11 +1,14 @@
-"""The operator window: e-stop, state colour, next five moves, last gesture, connection.
+"""The operator window: e-stop, state colour, next five moves, last gesture, connection, teach mode.
 
 The window never touches the network itself. It is given a *backend* with
 
 - ``em_stop(engage: bool, timeout: float) -> (bool, str)`` (may block; run off the UI thread),
 - ``connected`` (bool property) and ``address`` (str),
+- optionally ``get_tricks(timeout) -> {trick: [step names]}`` (may block) for the Teach panel,
 
-which is :class:`rbd_local.link.RobotLink` in the app and a fake in tests. Robot data arrives
+which is :class:`rbd_local.link.RobotLink` in the app and a fake in tests. The Teach panel
+(:mod:`rbd_local.gui.teach_panel`) also gets the app's
+:class:`~rbd_local.gestures.teach.TeachDesk` when gestures are recognised in the same process. Robot data arrives
 through the thread-safe ``post_*`` methods (called from the link's thread) and is applied on
 the Tk thread by a periodic poll.
 """
@@ -33,13 +36,18 @@ POLL_MS = 50
 class OperatorGui:
     """Builds the window in ``root`` and keeps it up to date."""
 
-    def __init__(self, root: ctk.CTk, backend: object, em_stop_timeout: float = 3.0) -> None:
+    def __init__(self, root: ctk.CTk, backend: object, em_stop_timeout: float = 3.0, teach_desk: object = None,
+                 mapped_tricks: tuple = (), no_camera_hint: str = "") -> None:
         """Create the widgets.
 
         Args:
             root: the CustomTkinter root window.
             backend: see the module docstring.
             em_stop_timeout: time allowed for an e-stop call, reconnection included [s].
+            teach_desk: the app's :class:`~rbd_local.gestures.teach.TeachDesk` (None: no gesture
+                source in this process; the Teach panel says so).
+            mapped_tricks: tricks the built-in gestures trigger (the Teach panel preselects another).
+            no_camera_hint: the Teach panel's text when there is no desk.
         """
         self.root = root
         self.backend = backend
@@ -51,9 +59,10 @@ class OperatorGui:
         self.state = ""
         self.moves: list[str] = []
         root.title("RoboDog operator")
-        root.geometry("760x420")
+        root.geometry("1150x470")
         root.grid_columnconfigure(0, weight=1)
         root.grid_columnconfigure(1, weight=1)
+        root.grid_columnconfigure(2, weight=1)
         root.grid_rowconfigure(0, weight=1)
 
         left = ctk.CTkFrame(root)
@@ -95,6 +104,13 @@ class OperatorGui:
             lab.grid(row=2 + i, column=0, sticky="ew", padx=8, pady=3)
             self.move_labels.append(lab)
         self._show_moves([])
+
+        from rbd_local.gui.teach_panel import TeachPanel
+
+        teach = ctk.CTkFrame(root)
+        teach.grid(row=0, column=2, sticky="nsew", padx=8, pady=8)
+        self.teach_panel = TeachPanel(teach, getattr(backend, "get_tricks", None), teach_desk, mapped_tricks,
+                                      no_camera_hint)
         self._set_connected(bool(getattr(backend, "connected", False)))
         self.root.after(POLL_MS, self._poll)
 
@@ -148,6 +164,7 @@ class OperatorGui:
                 self.release_button.configure(state="normal")
         if self._release_armed_until and time.monotonic() > self._release_armed_until:
             self._disarm_release()
+        self.teach_panel.apply_pending()
 
     def _poll(self) -> None:
         try:
@@ -176,6 +193,8 @@ class OperatorGui:
                               text_color=("gray40", "gray70"))
 
     def _set_connected(self, up: bool) -> None:
+        if up and not getattr(self, "_connected", False):
+            self.teach_panel.reload_tricks()  # the robot's tricks, at every (re)connection
         self._connected = up
         address = getattr(self.backend, "address", "")
         if up:

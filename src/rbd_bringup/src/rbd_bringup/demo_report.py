@@ -50,6 +50,7 @@ def build_report(
     reactions: Sequence[float],
     scan_period: float,
     duration: float,
+    gesture_input: str = "",
 ) -> Dict:
     """Collect the run's figures into one JSON-able dictionary.
 
@@ -64,6 +65,7 @@ def build_report(
         reactions: software reaction times [s] (see :func:`reaction_times`).
         scan_period: LiDAR scan period [s].
         duration: wall time of the scripted part [s].
+        gesture_input: what the gestures were made from (said plainly in the report).
 
     Returns:
         The report.
@@ -91,6 +93,7 @@ def build_report(
         "reaction_p99_s": None if p99 is None else round(p99, 4),
         "reaction_goal_s": round(scan_period + 0.020, 4),
         "duration_s": round(duration, 1),
+        "gesture_input": gesture_input,
         "states": [{"t": round(t, 3), "state": s} for t, s in state_log],
     }
 
@@ -114,6 +117,8 @@ def render_text(report: Dict) -> str:
             report["reaction_goal_s"]),
         "duration:                %.1f s" % report["duration_s"],
     ]
+    if report.get("gesture_input"):
+        lines.append("gesture input:           %s" % report["gesture_input"])
     return "\n".join(lines) + "\n"
 
 

@@ -62,6 +62,18 @@ class TestGestrec(unittest.TestCase):
         with self.assertRaisesRegex(AssertionError, "no proof of rbd_gestrec rejecting the gesture"):
             self.check_unknown_filtered(WRONG_TOPIC, proof_timeout=2.0)
 
+    def test_a_trick_name_of_rbd_navigation_is_accepted(self):
+        # launch/rbd_gestrec.launch loads rbd_navigation's tricks.yaml: "bow" has no mapping
+        # entry in gestures.yaml, but it is a trick, so a taught gesture's "bow" is understood;
+        # "dance" is neither and is dropped (proved by the "spin" behind it coming through alone)
+        self.pubs[GESTURE_TOPIC].publish(String("dance"))
+        self.pubs[GESTURE_TOPIC].publish(String("bow"))
+        self.assertEqual(self.wait_command(), "bow")
+        self.pubs[GESTURE_TOPIC].publish(String("dance"))
+        self.pubs[GESTURE_TOPIC].publish(String("spin"))
+        self.assertEqual(self.wait_command(), "spin")
+        self.assertEqual(self.srv().command, "")
+
 
 if __name__ == "__main__":
     run_rostest("rbd_gestrec", "gestrec_wiring", TestGestrec)

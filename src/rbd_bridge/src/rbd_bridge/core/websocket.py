@@ -27,7 +27,7 @@ import logging
 import socket
 import struct
 import threading
-from typing import Any, Callable, Optional
+from typing import Any, Callable, List, Optional
 
 from wsproto import ConnectionType, WSConnection
 from wsproto.events import AcceptConnection, RejectConnection, RejectData, Request
@@ -467,6 +467,10 @@ class BridgeServer:
         if conn.out.dropped:
             _log.warning("client %d: %d outgoing frames dropped (slow client)", session.client_id, conn.out.dropped)
         _log.info("client %d disconnected (%d connected)", session.client_id, len(self.sessions))
+
+    def client_peers(self) -> List[str]:
+        """``host:port`` of every connected client (for the node's ``~stats``, read by preflight)."""
+        return sorted(conn.peer for conn in list(self._connections.values()))
 
     def _clients_changed(self) -> None:
         if self.on_clients is not None:
