@@ -53,8 +53,11 @@ def children(pid):
     """PIDs of the child processes of ``pid`` (Linux /proc)."""
     out = []
     for task in os.listdir("/proc/%d/task" % pid):
-        with open("/proc/%d/task/%s/children" % (pid, task)) as fh:
-            out += [int(c) for c in fh.read().split()]
+        try:
+            with open("/proc/%d/task/%s/children" % (pid, task)) as fh:
+                out += [int(c) for c in fh.read().split()]
+        except FileNotFoundError:  # the thread ended between listdir and open
+            continue
     return out
 
 

@@ -144,7 +144,9 @@ class MockA1Behaviour(unittest.TestCase):
         t_last = time.monotonic()
         time.sleep(1.0)
         stopped = self.gt.get()
-        coast = stopped[0] - at_last[0]
+        # Along the heading (an earlier test may have turned the robot: x alone goes negative then).
+        yaw = at_last[5]
+        coast = (stopped[0] - at_last[0]) * math.cos(yaw) + (stopped[1] - at_last[1]) * math.sin(yaw)
         rospy.loginfo("MEASURED coast after the last cmd_vel: %.3f m", coast)
         # 0.25 s gate + 0.05 s latency at 0.3 m/s + 0.03 m braking = 0.12 m; a 1 s gate would give 0.33 m.
         self.assertGreater(coast, 0.03, "was not moving?")
