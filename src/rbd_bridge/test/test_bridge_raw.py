@@ -6,10 +6,8 @@ import time
 
 import pytest
 from rbd_bridge_testing import WsClient as Client
-from rbd_bridge_testing import wait_until
+from rbd_bridge_testing import png_text, wait_until
 from websockets.exceptions import ConnectionClosed
-
-from rbd_bridge import encoding
 
 
 @pytest.fixture
@@ -146,7 +144,7 @@ def test_compressions_cbor_cbor_raw_png(client):
             assert header.frame_id == "tick" and frame["msg"]["secs"] > 0
         else:
             assert frame["op"] == "png"
-            inner = json.loads(encoding.png_decode(frame["data"]))
+            inner = json.loads(png_text(frame["data"]))
             assert inner["topic"] == "/echo/tick" and inner["msg"]["frame_id"] == "tick"
 
 

@@ -8,10 +8,9 @@ import time
 import pytest
 import rosgraph
 import roslibpy
-from rbd_bridge_testing import master_of, start_echo, wait_until
+from rbd_bridge_testing import master_of, png_text, start_echo, wait_until
 
-from rbd_bridge import encoding
-from rbd_bridge.rosapi import ROSAPI_TYPES
+from rbd_bridge.core.rosapi import ROSAPI_TYPES
 from rbd_testkit import free_port
 
 BRIDGE = "/rbd_bridge"
@@ -509,7 +508,7 @@ def test_png_compression_through_roslibpy(roslibpy_client):
     pub = roslibpy.Topic(roslibpy_client(), "/echo/in", "std_msgs/String")
     text = "compressed \u00e9 " * 10
     assert keep_publishing(pub, lambda i: {"data": text}, lambda: pngs.items)
-    frame = json.loads(encoding.png_decode(pngs.items[0]["data"]))
+    frame = json.loads(png_text(pngs.items[0]["data"]))
     assert frame == {"op": "publish", "topic": "/echo/out", "msg": {"data": text}}
     assert whole.items == []  # nothing came uncompressed
 

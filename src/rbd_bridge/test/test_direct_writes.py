@@ -13,7 +13,7 @@ import time
 from test_server import server  # noqa: F401  (fixture)
 from websockets.sync.client import connect
 
-from rbd_bridge.protocol import TopicMessage
+from rbd_bridge.core.fanout import TopicMessage
 from rbd_testkit import wait_for
 
 

@@ -25,7 +25,7 @@ from test_fuzz_json import NAMES, OPS, TYPES, json_values
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
-from rbd_bridge import encoding
+from rbd_bridge.core import encoding
 from rbd_testkit import RosEnv
 
 EXAMPLES = int(os.environ.get("RBD_FUZZ_LIVE_EXAMPLES", "25"))
