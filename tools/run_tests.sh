@@ -36,8 +36,9 @@ t_all=$(date +%s)
 # pytest files that start a simulated stack: the serial lane runs them after the rostests.
 serial_pytest=(tests/test_demo.py tests/test_soak.py tests/test_two_hosts.py tests/experiments
                tests/test_sim_gui.py src/rbd_bringup/test/test_robot_bringup.py src/rbd_bringup/test/test_replay.py)
-# A rostest file starts a simulated stack when it includes one of these launch files or plays a bag.
-sim_pattern='launch/(sim|mock_a1|sensors)\.launch|pkg="rosbag"'
+# A rostest file starts a simulated stack when it includes one of these launch files or plays a bag;
+# a file that measures rates or latencies says `make test: serial lane` in a comment.
+sim_pattern='launch/(sim|mock_a1|sensors)\.launch|pkg="rosbag"|make test: serial lane'
 
 phase() {  # phase NAME START: append the wall time since START to the phases table
   printf '%s\t%s\n' "$1" "$(( $(date +%s) - $2 ))" >> "$phases"
