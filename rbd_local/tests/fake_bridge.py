@@ -35,19 +35,20 @@ class FakeBridge:
         ready = threading.Event()
 
         def run():
-            self._loop = asyncio.new_event_loop()
-            asyncio.set_event_loop(self._loop)
+            loop = self._loop = asyncio.new_event_loop()
+            asyncio.set_event_loop(loop)
 
             async def main():
-                self._server = await websockets.serve(self._handle, "127.0.0.1", self.port)
+                # a client that does not answer the closing handshake holds stop() 2 s at most
+                self._server = await websockets.serve(self._handle, "127.0.0.1", self.port, close_timeout=2)
                 self.port = self._server.sockets[0].getsockname()[1]
                 ready.set()
                 await self._server.wait_closed()
 
             try:
-                self._loop.run_until_complete(main())
+                loop.run_until_complete(main())
             finally:
-                self._loop.close()
+                loop.close()
 
         self._thread = threading.Thread(target=run, daemon=True)
         self._thread.start()
@@ -60,19 +61,20 @@ class FakeBridge:
 
         async def shutdown():
             self._server.close()
-            for ws in list(self._clients):
-                await ws.close()
+            await asyncio.gather(*(ws.close() for ws in list(self._clients)), return_exceptions=True)
 
-        asyncio.run_coroutine_threadsafe(shutdown(), self._loop).result(5)
-        self._thread.join(5)
-        self._loop = None
+        # (generous: under load the closing handshakes of several clients take seconds)
+        try:
+            asyncio.run_coroutine_threadsafe(shutdown(), self._loop).result(20)
+            self._thread.join(20)
+        finally:
+            self._loop = None
 
     def kick_all(self):
         async def kick():
-            for ws in list(self._clients):
-                await ws.close()
+            await asyncio.gather(*(ws.close() for ws in list(self._clients)), return_exceptions=True)
 
-        asyncio.run_coroutine_threadsafe(kick(), self._loop).result(5)
+        asyncio.run_coroutine_threadsafe(kick(), self._loop).result(20)
 
     def push(self, topic, msg):
         """Send msg to every client subscribed to topic."""
