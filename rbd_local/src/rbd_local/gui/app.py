@@ -21,6 +21,8 @@ import time
 
 import customtkinter as ctk
 
+from rbd_local.gui import drain
+
 STATUS_COLOURS = {
     "emergency": "#c62828",  # red
     "collision": "#ef6c00",  # orange
@@ -150,11 +152,7 @@ class OperatorGui:
     # ------------------------------------------------------------- Tk thread only
     def apply_pending(self) -> None:
         """Apply every queued event now (the poll does this every 50 ms)."""
-        while True:
-            try:
-                kind, value = self._events.get_nowait()
-            except queue.Empty:
-                break
+        for kind, value in drain(self._events):
             if kind == "status":
                 self._show_status(value)
             elif kind == "state":

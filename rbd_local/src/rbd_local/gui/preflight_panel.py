@@ -20,6 +20,8 @@ import time
 
 import customtkinter as ctk
 
+from rbd_local.gui import drain
+
 STATUS_COLOURS = {"PASS": "#2e7d32", "FAIL": "#c62828", "SKIP": "#757575"}
 READY_COLOUR = "#2e7d32"
 NOT_READY_COLOUR = "#c62828"
@@ -114,11 +116,7 @@ class PreflightPanel:
 
     def apply_pending(self) -> None:
         """Apply queued inputs (the window's poll calls this)."""
-        while True:
-            try:
-                kind, value = self._events.get_nowait()
-            except queue.Empty:
-                break
+        for kind, value in drain(self._events):
             if kind == "run":
                 self._running = False
                 self._update_button()

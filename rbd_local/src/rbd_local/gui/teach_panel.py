@@ -18,6 +18,8 @@ import threading
 
 import customtkinter as ctk
 
+from rbd_local.gui import drain
+
 MOVES_PREVIEW = 5
 PHASE_COLOURS = {
     "starting": "#f9a825",
@@ -149,11 +151,7 @@ class TeachPanel:
 
     def apply_pending(self) -> None:
         """Apply queued inputs and the desk's state (the window's poll calls this)."""
-        while True:
-            try:
-                kind, value = self._events.get_nowait()
-            except queue.Empty:
-                break
+        for kind, value in drain(self._events):
             if kind == "tricks":
                 self._loading = False
                 self._show_tricks(value)
