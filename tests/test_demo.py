@@ -21,7 +21,10 @@ def test_demo_scenario(tmp_path):
     assert (out / "report.json").exists(), proc.stdout[-5000:]
     report = json.loads((out / "report.json").read_text())
     assert report["collisions_with_people"] == 0, report
-    assert report["tricks_completed"] == ["walk", "spin", "wiggle", "lie_down", "stroll"], proc.stdout[-5000:]
+    # "bow" is a gesture taught during the demo (teach mode) for a trick without a mapping entry;
+    # "stroll" is sent by the operator and a bag is put down on its way (issue 17)
+    assert report["tricks_completed"] == ["walk", "spin", "wiggle", "lie_down", "bow", "stroll"], proc.stdout[-5000:]
+    assert "real hand photos" in report["gesture_input"]
     assert report["collisions_with_obstacles"] == 0, report
     assert report["min_distance_to_obstacle_m"] > 0.0, report
     assert report["obstacles_avoided"] >= 1, proc.stdout[-5000:]

@@ -35,5 +35,5 @@ def test_rospack_lists_every_package():
     names = set(out.split())
     # rospack skips metapackages (robodog); every rbd package must be there.
     expected = {"rbd_msgs", "rbd_lidar", "rbd_controller", "rbd_pos_controller", "rbd_localization",
-                "rbd_navigation", "rbd_gestrec", "rbd_bridge", "rbd_a1_driver", "rbd_sim", "rbd_bringup"}
+                "rbd_navigation", "rbd_gestrec", "rbd_bridge", "rbd_a1_driver", "rbd_sim", "rbd_bringup", "rbd_testkit"}
     assert expected <= names, expected - names

@@ -2,45 +2,42 @@
 """`make demo`: the whole RoboDog system in simulation with a scripted audience.
 
 Starts a private ROS master and `rbd_bringup sim.launch`, plays the laptop app (rbd_local) for
-the audience: gestures go through the app's own recognition pipeline (MediaPipe on a clip made
-from a real hand photo for `walk` and `lie_down`; recorded key-point sequences for `spin` and
-`wiggle`) and through the rosbridge-compatible server to the robot. During the walk a person
-steps into the robot's way and leaves again. Then the operator sends `stroll` (2 m out and
-back) and a bag is put down on the robot's way: it stops, classifies the bag as static, steps
-back and walks around it, out and back (issue 17). Everything safety-related is measured on the
-simulator's ground truth and on the command stream the A1 receives over LCM.
+the audience: gestures go through the app's own recognition pipeline (MediaPipe on clips in
+which the real hand of an opencv-doc photo is moved along a generated gesture path) and through
+the rosbridge-compatible server to the robot. After the four built-in tricks a visitor teaches a
+new gesture (a checkmark, five shows) for the trick `bow` in teach mode and performs it; the
+app sends the trick's name, which rbd_gestrec accepts because `bow` is a trick of
+rbd_navigation. During the walk a person steps into the robot's way and leaves again. Then the
+operator sends `stroll` (2 m out and back) and a bag is put down on the robot's way: it stops,
+classifies the bag as static, steps back and walks around it, out and back (issue 17).
+Everything safety-related is measured on the simulator's ground truth and on the command
+stream the A1 receives over LCM.
 
-Writes OUT/report.txt, OUT/report.json, OUT/run.png and OUT/demo.bag.
+Writes OUT/report.txt, OUT/report.json, OUT/run.png, OUT/demo.bag and OUT/recording (the robot's
+inputs while it stands ready, before the release: `roslaunch rbd_bringup robot.launch
+replay:=OUT/recording`).
 """
 
 import argparse
 import math
 import os
-import shutil
-import signal
-import socket
-import subprocess
 import sys
-import tempfile
 import threading
 import time
 
+from rbd_testkit import RosEnv, free_port, restore_sigint, wait_for
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-TRICKS = ["walk", "spin", "wiggle", "lie_down", "stroll"]
+TRICKS = ["walk", "spin", "wiggle", "lie_down"]
 OPERATOR_TRICKS = {"stroll"}  # sent as a command by the operator (no hand gesture of its own)
 GESTURE_OF = {"walk": "swipe_right", "spin": "circle", "wiggle": "wave", "lie_down": "push_down"}
-PHOTO_MOTION = {"walk": "right", "lie_down": "down"}  # gestures a moving real photo can show
+TAUGHT = ("checkmark", "bow")  # the gesture a visitor teaches, and its trick
+GESTURE_INPUT = ("MediaPipe on clips of the real hand photos of opencv-doc moved along generated gesture "
+                 "paths (real hand images, generated motion); 'bow' taught from 5 such clips in teach mode")
 BAG_TOPICS = ["/rbd_sim/ground_truth", "/rbd_sim/obstacles", "/rbd_controller/state", "/rbd_controller/path_queue",
               "/rbd_pos_controller/status", "/rbd_lidar/state", "/cmd_vel", "/rbd_gestrec/gesture", "/scan",
               "/rbd_localization/pose", "/odometry/filtered", "/zed2/zed_node/pose", "/rbd_controller/path",
               "/rbd_controller/avoidance", "/rbd_controller/detour", "/rbd_controller/blocking_points"]
-
-
-def free_port():
-    """A TCP port on 127.0.0.1 that is free right now."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def say(msg):
@@ -172,12 +169,7 @@ class Monitor:
 
     def wait_state(self, states, timeout):
         """Block until the controller is in one of states; False on timeout."""
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if self.state in states:
-                return True
-            time.sleep(0.05)
-        return False
+        return wait_for(lambda: self.state in states, timeout)
 
     def close(self):
         """Stop the LCM listener."""
@@ -185,7 +177,7 @@ class Monitor:
 
 
 class Audience:
-    """The laptop app's gesture pipeline feeding the robot link."""
+    """The laptop app's gesture pipeline feeding the robot link, shown real-photo clips."""
 
     def __init__(self, link, cache_dir):
         from rbd_local.gestures.config import load_config
@@ -197,20 +189,51 @@ class Audience:
         self.cfg = cfg
         self.link = link
         self.cache_dir = cache_dir
-        self.photo = None
+        self._sprites = None
 
-    def _photo(self):
-        if self.photo is None:
-            import cv2
-
+    def sprites(self):
+        """Hand sprites of the two real photos (loaded once)."""
+        if self._sprites is None:
+            from rbd_local.evaluation import load_sprites
             from rbd_local.testdata import fetch_hand_photos
 
-            self.photo = cv2.imread(fetch_hand_photos(self.cache_dir)["handSrc.jpg"])
-        return self.photo
+            photos = fetch_hand_photos(self.cache_dir)
+            self._sprites = load_sprites([photos["handSrc.jpg"], photos["handDst.jpg"]])
+        return self._sprites
+
+    def clip(self, gesture, seed):
+        """Frames of one baseline real-photo clip of ``gesture``."""
+        import numpy as np
+
+        from rbd_local.gestures import realclips
+
+        return realclips.make_clip(self.sprites(), gesture, realclips.BASELINE, np.random.default_rng(seed))[1]
+
+    def teach(self, seed):
+        """A visitor shows the new gesture five times; the app learns it (teach mode)."""
+        import numpy as np
+
+        from rbd_local.gestures.detector import HandDetector
+        from rbd_local.gestures.realclips import track_clip
+        from rbd_local.gestures.teach import extract_show
+
+        gesture, trick = TAUGHT
+        windows = []
+        with HandDetector(model_complexity=self.cfg["model_complexity"]) as det:
+            for i in range(5):
+                frames = self.clip(gesture, seed + i)
+                kps = track_clip(det, frames)
+                w = extract_show(np.arange(len(frames)) / 30.0, kps, self.model.window_s, self.model.samples)
+                if w is not None:
+                    windows.append(w)
+        t0 = time.monotonic()
+        report = self.model.teach(gesture, trick, np.stack(windows))
+        say("a visitor teaches %r -> %s from %d shows (learned in %.0f ms)"
+            % (gesture, trick, report["shows"], 1000 * (time.monotonic() - t0)))
 
     def show(self, trick, seed):
         """Perform the gesture for ``trick``; returns the commands the app sent."""
-        from rbd_local.gestures.recognizer import GestureRecognizer
+        from rbd_local.gestures.pipeline import GesturePipeline
 
         sent = []
 
@@ -218,84 +241,53 @@ class Audience:
             sent.append(command)
             self.link.send_gesture(command)
 
-        if trick in PHOTO_MOTION:
-            from rbd_local.gestures.photo_clip import moving_photo_frames
-            from rbd_local.gestures.pipeline import GesturePipeline
-
-            pipe = GesturePipeline(self.model, self.mapping, send=send, model_complexity=self.cfg["model_complexity"])
-            try:
-                frames = moving_photo_frames(self._photo(), PHOTO_MOTION[trick])
-                for i, frame in enumerate(frames):
-                    pipe.process(i / 30.0, frame)
-                    time.sleep(1.0 / 60.0)
-            finally:
-                pipe.close()
-            source = "MediaPipe on a moving real hand photo"
-        else:
-            from rbd_local.gestures import synthetic
-
-            rec = GestureRecognizer(self.model, None, self.cfg["min_consecutive"], self.cfg["cooldown_s"])
-            for t, kp in synthetic.stream(["static", GESTURE_OF[trick], "static"], seed):
-                d = rec.update(t, kp)
-                if d.fired and self.mapping.get(d.label):
-                    send(self.mapping[d.label])
-            source = "recorded key-point sequence"
-        say("audience shows %s (%s) -> app sent %s" % (GESTURE_OF[trick], source, sent or "nothing"))
+        gesture = TAUGHT[0] if trick == TAUGHT[1] else GESTURE_OF[trick]
+        pipe = GesturePipeline(self.model, self.mapping, send=send, model_complexity=self.cfg["model_complexity"])
+        try:
+            for i, frame in enumerate(self.clip(gesture, seed)):
+                pipe.process(i / 30.0, frame)
+                time.sleep(1.0 / 60.0)
+        finally:
+            pipe.close()
+        say("audience shows %s (MediaPipe on a real-photo clip) -> app sent %s" % (gesture, sent or "nothing"))
         return sent
 
 
 def main():
     """Run the demo; exit 0 when every trick completed with no contact."""
-    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
-        # started in the background by a non-interactive shell: SIGINT arrives ignored and
-        # would stay ignored in roslaunch, which then could not be stopped by SIGINT
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+    restore_sigint()  # started in the background, roslaunch would inherit SIGINT ignored
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "demo-output"))
-    ap.add_argument("--tricks", default=",".join(TRICKS))
+    ap.add_argument("--tricks", default=",".join(TRICKS + [TAUGHT[1], "stroll"]),
+                    help="tricks to show; %s is taught first (teach mode); %s is sent by the operator"
+                    % (TAUGHT[1], ", ".join(sorted(OPERATOR_TRICKS))))
     ap.add_argument("--intrude", default="walk", help="trick during which a person steps in ('' = none)")
     ap.add_argument("--bag", default="stroll", help="trick during which a bag is put down on the path ('' = none)")
     ap.add_argument("--columns", type=int, default=1024)
     ap.add_argument("--visual", action="store_true", help="open RViz (audience view) and the GUI")
+    ap.add_argument("--record-seconds", type=float, default=6.0,
+                    help="length of OUT/recording, the inputs for robot.launch replay:= (0 = none)")
     ap.add_argument("--trick-timeout", type=float, default=90.0)
     ap.add_argument("launch_args", nargs="*", help="extra sim.launch arguments, e.g. follow_localization:=true")
     args = ap.parse_args()
     tricks = [t for t in args.tricks.split(",") if t]
     os.makedirs(args.out, exist_ok=True)
 
-    home = tempfile.mkdtemp(prefix="rbd-demo-home.")
-    port, bridge_port = free_port(), free_port()
-    os.environ.update(ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOME=home,
-                      ROS_LOG_DIR=os.path.join(home, "log"), ROS_IP="127.0.0.1")
-    launch_log = open(os.path.join(args.out, "roslaunch.log"), "w")
-    cmd = ["roslaunch", "-p", str(port), "rbd_bringup", "sim.launch", "lidar_columns:=%d" % args.columns,
-           "bridge_port:=%d" % bridge_port, "rviz:=%s" % str(args.visual).lower()] + args.launch_args
-    say("starting the simulated system: %s" % " ".join(cmd))
-    launch = subprocess.Popen(cmd, stdout=launch_log, stderr=subprocess.STDOUT, start_new_session=True)
-    procs = [launch]
+    # A private master (own ROS_HOME, free port) that this process uses too; roslaunch.log in --out.
+    env = RosEnv(log_dir=args.out, use_here=True, master_timeout=60.0, prefix="rbd-demo-home.")
+    bridge_port = free_port()
+    launch_args = ["rbd_bringup", "sim.launch", "lidar_columns:=%d" % args.columns, "bridge_port:=%d" % bridge_port,
+                   "rviz:=%s" % str(args.visual).lower(), "gui:=%s" % str(args.visual).lower()] + args.launch_args
+    say("starting the simulated system: roslaunch %s (master %s)" % (" ".join(launch_args), env.uri))
+    env.launch(*launch_args, name="roslaunch")
     monitor = link = None
     try:
         import rospy
 
-        deadline = time.monotonic() + 150
-        while True:
-            try:
-                socket.create_connection(("127.0.0.1", port), 0.5).close()
-                break
-            except OSError as exc:
-                if time.monotonic() > deadline:
-                    raise RuntimeError("ROS master did not start") from exc
-                time.sleep(0.2)
         rospy.init_node("demo_audience", disable_signals=True)
-        deadline = time.monotonic() + 150
-        while not rospy.has_param("/rbd_sim/lcm_url") and time.monotonic() < deadline:
-            time.sleep(0.2)
+        wait_for(lambda: rospy.has_param("/rbd_sim/lcm_url"), 150.0, 0.2)
         monitor = Monitor(rospy.get_param("/rbd_sim/lcm_url"))
-        bag = subprocess.Popen(["rosbag", "record", "-q", "-O", os.path.join(args.out, "demo.bag")] + BAG_TOPICS,
-                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-        procs.append(bag)
-        if args.visual:
-            procs.append(subprocess.Popen(["rbd-gui", "--port", str(bridge_port)], start_new_session=True))
+        env.start(["rosbag", "record", "-q", "-O", os.path.join(args.out, "demo.bag")] + BAG_TOPICS, name="rosbag")
 
         from rbd_local.link import RobotLink
 
@@ -305,9 +297,14 @@ def main():
         say("laptop app connected to the bridge on port %d" % bridge_port)
         if not monitor.wait_state(("EMERGENCY_STOP",), 150.0):
             raise RuntimeError("controller did not come up in EMERGENCY_STOP")
-        deadline = time.monotonic() + 30
-        while monitor.pose is None and time.monotonic() < deadline:
-            time.sleep(0.1)
+        wait_for(lambda: monitor.pose is not None, 30.0, 0.1)
+        # The robot's real inputs while it stands ready (as for a preflight), for
+        # `robot.launch replay:=OUT/recording` (rbd_bringup README "Replay"; ~8 MB/s at 1024 columns).
+        if args.record_seconds > 0:
+            say("recording %.0f s of the robot's inputs (OUT/recording)" % args.record_seconds)
+            code, out = env.run_to_exit(["rosrun", "rbd_bringup", "record", os.path.join(args.out, "recording"),
+                                         "--duration", str(args.record_seconds)], timeout=args.record_seconds + 60.0)
+            say(out.strip().splitlines()[-1] if code == 0 and out.strip() else "the recording failed: %s" % out[-500:])
         audience = Audience(link, os.path.join(ROOT, "rbd_local", ".cache"))
 
         say("operator releases the e-stop (GUI path: bridge -> /rbd_controller/em_stop)")
@@ -319,6 +316,8 @@ def main():
         t_start = time.monotonic()
         completed = []
         for i, trick in enumerate(tricks):
+            if trick == TAUGHT[1]:
+                audience.teach(seed=500)
             taken = False
             for attempt in range(5):
                 monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0)
@@ -350,22 +349,14 @@ def main():
             link.stop()
         if monitor is not None:
             monitor.close()
-        for p in reversed(procs):
-            if p.poll() is None:
-                os.killpg(p.pid, signal.SIGINT)
-        for p in reversed(procs):
-            try:
-                p.wait(20)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
-        shutil.rmtree(home, ignore_errors=True)
+        env.close(timeout=20.0)
 
     from rbd_bringup.demo_report import build_report, plot_run, reaction_times, render_text, write_report
 
     with monitor.lock:
         report = build_report(tricks, completed, monitor.contacts.contacts, monitor.contacts.min_clearance,
                               monitor.state_log, start_pose, monitor.pose,
-                              reaction_times(monitor.onsets, monitor.commands), 0.1, duration,
+                              reaction_times(monitor.onsets, monitor.commands), 0.1, duration, GESTURE_INPUT,
                               avoidance_events=list(monitor.avoidance), obstacle_contacts=monitor.box_contacts,
                               min_obstacle_clearance=monitor.min_box_clearance)
         plot_run(monitor.path, monitor.people_log, monitor.stop_points, os.path.join(args.out, "run.png"),
@@ -386,16 +377,16 @@ def drop_bag(monitor):
     from rbd_msgs.srv import PlaceBox
 
     place = rospy.ServiceProxy("/rbd_sim/place_box", PlaceBox)
-    deadline = time.monotonic() + 20.0
     start = monitor.pose
-    while time.monotonic() < deadline:
-        x, y, yaw = monitor.pose
+
+    def walking_out():
+        x, y, _ = monitor.pose
         along = (x - start[0]) * math.cos(start[2]) + (y - start[1]) * math.sin(start[2])
         with monitor.lock:
             moving = monitor.commands and monitor.commands[-1][1] > 0.1
-        if moving and monitor.state == "EXECUTING" and along > 0.3:
-            break
-        time.sleep(0.05)
+        return moving and monitor.state == "EXECUTING" and along > 0.3
+
+    wait_for(walking_out, 20.0)
     x, y, yaw = monitor.pose
     # 0.5 m ahead of the footprint: outside the stop zone (0.37 m ahead of it), not dropped onto the robot.
     bx, by, byaw = box_ahead((x, y, yaw), 0.5, (0.4, 0.4), box_yaw=0.3)
@@ -423,13 +414,12 @@ def intrude(monitor):
 
     place = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
     # Wait until the robot really walks, then put the person 1.0 m ahead of it.
-    deadline = time.monotonic() + 15.0
-    while time.monotonic() < deadline:
+    def walking():
         with monitor.lock:
             moving = monitor.commands and monitor.commands[-1][1] > 0.1
-        if moving and monitor.state == "EXECUTING":
-            break
-        time.sleep(0.05)
+        return moving and monitor.state == "EXECUTING"
+
+    wait_for(walking, 15.0)
     x, y, yaw = monitor.pose
     px, py = x + 1.0 * math.cos(yaw), y + 1.0 * math.sin(yaw)
     say("a visitor steps in 1.0 m ahead of the walking robot at (%.2f, %.2f)" % (px, py))

@@ -11,7 +11,7 @@ set +u
 set -u
 ROS_HOME="$(mktemp -d /tmp/rbd-bench-home.XXXXXX)"
 export ROS_HOME ROS_LOG_DIR="$ROS_HOME/log"
-ROS_MASTER_URI="http://127.0.0.1:$(python3 tools/free_port.py)"
+ROS_MASTER_URI="http://127.0.0.1:$(python3 -c 'from rbd_testkit import free_port; print(free_port())')"
 export ROS_MASTER_URI ROS_IP=127.0.0.1
 mkdir -p bench-output
 status=0

@@ -15,21 +15,14 @@ ImageMagick's `import`.
 
 import argparse
 import os
-import signal
-import socket
 import subprocess
 import sys
 import tempfile
 import time
 
+from rbd_testkit import free_port, restore_sigint, stop_process, wait_for_port
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def free_port():
-    """A TCP port on 127.0.0.1 that is free right now."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def free_display():
@@ -87,12 +80,7 @@ def shoot_rviz(out, closeup=False):
 def stop_all(procs):
     """SIGINT each process group (newest first), SIGKILL what does not stop."""
     for p in reversed(procs):
-        if p.poll() is None:
-            os.killpg(p.pid, signal.SIGINT)
-            try:
-                p.wait(20)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
+        stop_process(p, timeout=20.0)
 
 
 def shoot_gui(out, delay=2.0):
@@ -117,15 +105,7 @@ def shoot_gui(out, delay=2.0):
         from std_msgs.msg import String
         from std_srvs.srv import SetBool
 
-        deadline = time.monotonic() + 60
-        while True:
-            try:
-                socket.create_connection(("127.0.0.1", port), 0.5).close()
-                break
-            except OSError:
-                if time.monotonic() > deadline:
-                    raise
-                time.sleep(0.2)
+        wait_for_port(port, 60.0)
         rospy.init_node("screenshot_operator", disable_signals=True)
         state = {"v": ""}
         rospy.Subscriber("/rbd_controller/state", String, lambda m: state.update(v=m.data), queue_size=10)
@@ -157,10 +137,7 @@ def shoot_gui(out, delay=2.0):
 
 def main():
     """Take the screenshots asked for."""
-    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
-        # started in the background by a non-interactive shell: SIGINT arrives ignored and
-        # would stay ignored in roslaunch, which then could not be stopped by SIGINT
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+    restore_sigint()  # started in the background, roslaunch would inherit SIGINT ignored
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out", nargs="?", default=os.path.join(ROOT, "docs"))
     ap.add_argument("--only", choices=["rviz", "a1", "gui"])

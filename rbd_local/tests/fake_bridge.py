@@ -8,9 +8,9 @@ connection (link loss); ``stop``/``start`` on the same port simulate a bridge re
 import asyncio
 import json
 import threading
-import time
 
 import websockets
+from rbd_testkit import wait_for
 
 
 class FakeBridge:
@@ -19,6 +19,7 @@ class FakeBridge:
         self.published = []  # (topic, msg)
         self.advertised = []
         self.subscribed = {}  # topic -> type
+        self.subscribe_ops = []  # the subscribe ops as received (throttle_rate, queue_length, ...)
         self.service_calls = []  # (service, args)
         self.service_handler = lambda service, args: (True, {"success": True, "message": "ok"})
         self.connections = 0
@@ -34,19 +35,20 @@ class FakeBridge:
         ready = threading.Event()
 
         def run():
-            self._loop = asyncio.new_event_loop()
-            asyncio.set_event_loop(self._loop)
+            loop = self._loop = asyncio.new_event_loop()
+            asyncio.set_event_loop(loop)
 
             async def main():
-                self._server = await websockets.serve(self._handle, "127.0.0.1", self.port)
+                # a client that does not answer the closing handshake holds stop() 2 s at most
+                self._server = await websockets.serve(self._handle, "127.0.0.1", self.port, close_timeout=2)
                 self.port = self._server.sockets[0].getsockname()[1]
                 ready.set()
                 await self._server.wait_closed()
 
             try:
-                self._loop.run_until_complete(main())
+                loop.run_until_complete(main())
             finally:
-                self._loop.close()
+                loop.close()
 
         self._thread = threading.Thread(target=run, daemon=True)
         self._thread.start()
@@ -59,19 +61,20 @@ class FakeBridge:
 
         async def shutdown():
             self._server.close()
-            for ws in list(self._clients):
-                await ws.close()
+            await asyncio.gather(*(ws.close() for ws in list(self._clients)), return_exceptions=True)
 
-        asyncio.run_coroutine_threadsafe(shutdown(), self._loop).result(5)
-        self._thread.join(5)
-        self._loop = None
+        # (generous: under load the closing handshakes of several clients take seconds)
+        try:
+            asyncio.run_coroutine_threadsafe(shutdown(), self._loop).result(20)
+            self._thread.join(20)
+        finally:
+            self._loop = None
 
     def kick_all(self):
         async def kick():
-            for ws in list(self._clients):
-                await ws.close()
+            await asyncio.gather(*(ws.close() for ws in list(self._clients)), return_exceptions=True)
 
-        asyncio.run_coroutine_threadsafe(kick(), self._loop).result(5)
+        asyncio.run_coroutine_threadsafe(kick(), self._loop).result(20)
 
     def push(self, topic, msg):
         """Send msg to every client subscribed to topic."""
@@ -84,14 +87,13 @@ class FakeBridge:
         asyncio.run_coroutine_threadsafe(send(), self._loop).result(5)
 
     def wait_for(self, predicate, timeout=10.0):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+        """The test kit's wait_for, with predicate evaluated under this bridge's lock."""
+
+        def locked():
             with self._lock:
-                if predicate():
-                    return True
-            time.sleep(0.02)
-        with self._lock:
-            return predicate()
+                return predicate()
+
+        return wait_for(locked, timeout, 0.02)
 
     def published_on(self, topic):
         with self._lock:
@@ -118,6 +120,7 @@ class FakeBridge:
                     elif op == "subscribe":
                         self._subs[ws][msg["topic"]] = msg.get("id")
                         self.subscribed[msg["topic"]] = msg.get("type")
+                        self.subscribe_ops.append(msg)
                     elif op == "unsubscribe":
                         self._subs[ws].pop(msg["topic"], None)
                     elif op == "call_service":

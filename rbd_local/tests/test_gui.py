@@ -4,30 +4,15 @@ import io
 import os
 import shutil
 import subprocess
-import time
 
 import pytest
+from xvfb import pump
 
 from rbd_local.link import EM_STOP_SERVICE, PATH_QUEUE_TOPIC, STATE_TOPIC, STATUS_TOPIC, RobotLink
 
 pytestmark = pytest.mark.skipif(shutil.which("Xvfb") is None, reason="Xvfb not installed")
 
 DOCS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "docs")
-
-
-@pytest.fixture(scope="module")
-def display():
-    from xvfb import Xvfb
-
-    x = Xvfb("1024x768x24").start()
-    old = os.environ.get("DISPLAY")
-    os.environ["DISPLAY"] = x.display
-    yield x.display
-    if old is None:
-        os.environ.pop("DISPLAY", None)
-    else:
-        os.environ["DISPLAY"] = old
-    x.stop()
 
 
 @pytest.fixture(scope="module")
@@ -57,17 +42,6 @@ def app(display):
     root.destroy()
 
 
-def pump(root, until, timeout=5.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        root.update()
-        if until():
-            return True
-        time.sleep(0.02)
-    root.update()
-    return until()
-
-
 def screen_pixel(widget):
     """Colour actually rendered at the centre of ``widget`` (X server screenshot)."""
     from PIL import Image
@@ -77,6 +51,12 @@ def screen_pixel(widget):
     y = widget.winfo_rooty() + 8
     png = subprocess.run(["import", "-window", "root", "png:-"], stdout=subprocess.PIPE, check=True, timeout=30).stdout
     return Image.open(io.BytesIO(png)).convert("RGB").getpixel((x, y))
+
+
+def em_stops(bridge):
+    """The e-stop calls the bridge received (the Teach panel also reads the tricks through rosapi)."""
+    with bridge._lock:
+        return [c for c in bridge.service_calls if c[0] == EM_STOP_SERVICE]
 
 
 def hex_rgb(colour):
@@ -126,27 +106,27 @@ def test_unknown_status_is_grey_not_a_crash(app):
 
 def test_estop_click_calls_the_service(app):
     bridge, gui, root = app["bridge"], app["gui"], app["root"]
-    n = len(bridge.service_calls)
+    n = len(em_stops(bridge))
     b = gui.estop_button
     root.update()
     x = b.winfo_rootx() + b.winfo_width() // 2
     y = b.winfo_rooty() + b.winfo_height() // 2
     subprocess.run(["xdotool", "mousemove", str(x), str(y), "click", "1"], check=True, timeout=10)
-    assert pump(root, lambda: len(bridge.service_calls) > n)
-    assert bridge.service_calls[n] == (EM_STOP_SERVICE, {"data": True})
+    assert pump(root, lambda: len(em_stops(bridge)) > n)
+    assert em_stops(bridge)[n] == (EM_STOP_SERVICE, {"data": True})
     assert pump(root, lambda: gui.message_label.cget("text") == "E-STOP ENGAGED")
 
 
 def test_release_needs_a_second_deliberate_click(app):
     bridge, gui, root = app["bridge"], app["gui"], app["root"]
-    n = len(bridge.service_calls)
+    n = len(em_stops(bridge))
     gui.release_button.invoke()
     pump(root, lambda: False, 0.6)
-    assert len(bridge.service_calls) == n, "one click must not release the e-stop"
+    assert len(em_stops(bridge)) == n, "one click must not release the e-stop"
     assert "Confirm" in gui.release_button.cget("text")
     gui.release_button.invoke()
-    assert pump(root, lambda: len(bridge.service_calls) > n)
-    assert bridge.service_calls[n] == (EM_STOP_SERVICE, {"data": False})
+    assert pump(root, lambda: len(em_stops(bridge)) > n)
+    assert em_stops(bridge)[n] == (EM_STOP_SERVICE, {"data": False})
     assert pump(root, lambda: gui.message_label.cget("text") == "e-stop released")
 
 
@@ -164,7 +144,7 @@ def test_next_five_moves_update_and_dequeue(app):
     assert pump(root, lambda: gui.shown_moves()[:3] == ["1. " + names[5], "2. " + names[6], ""])
 
 
-def test_screenshot_for_the_readme(app):
+def test_window_screenshot(app):
     from rbd_local.gui.screenshot import save_window
 
     bridge, gui, root = app["bridge"], app["gui"], app["root"]
@@ -176,19 +156,16 @@ def test_screenshot_for_the_readme(app):
     assert pump(root, lambda: gui.state_colour() == "#2e7d32" and gui.shown_moves()[4].startswith("5."))
     assert gui.gesture_label.cget("text") == "last gesture: swipe_right → walk (93 %)"
     pump(root, lambda: False, 0.3)
-    # Always saved under .cache/; docs/gui.png (committed, shown in the README) is refreshed
-    # when it is missing or RBD_UPDATE_DOCS=1, so a test run leaves the checkout clean.
+    # The README's screenshot (docs/gui.png, with teach mode) is made by test_gui_teach.py.
     cache = os.path.join(os.path.dirname(DOCS), ".cache")
     os.makedirs(cache, exist_ok=True)
     path = os.path.join(cache, "gui.png")
     save_window(root, path)
     from PIL import Image
 
-    assert Image.open(path).size[0] >= 600
-    docs_png = os.path.join(DOCS, "gui.png")
-    if os.environ.get("RBD_UPDATE_DOCS") == "1" or not os.path.exists(docs_png):
-        os.makedirs(DOCS, exist_ok=True)
-        shutil.copyfile(path, docs_png)
+    assert Image.open(path).size[0] >= 1000  # the three columns: controls, moves, teach panel
+    # without a gesture source in this window the Teach panel says how to get one
+    assert not gui.teach_panel.desk and "no camera" in gui.teach_panel.message_label.cget("text")
 
 
 def test_disconnected_is_obvious_and_estop_says_it_could_not(app):
@@ -206,7 +183,7 @@ def test_disconnected_is_obvious_and_estop_says_it_could_not(app):
     assert pump(root, lambda: "CONNECTED ws" in gui.connection_label.cget("text"), 10)
     gui.estop_button.invoke()
     assert pump(root, lambda: gui.message_label.cget("text") == "E-STOP ENGAGED", 10)
-    assert app["bridge"].service_calls == [(EM_STOP_SERVICE, {"data": True})]
+    assert em_stops(app["bridge"]) == [(EM_STOP_SERVICE, {"data": True})]
 
 
 def test_rbd_gui_entry_point_with_in_process_gesture_recognition(display, tmp_path, hand_photos):

@@ -3,6 +3,7 @@
 import time
 
 import pytest
+from rbd_testkit import wait_for
 
 from rbd_local.link import (
     EM_STOP_SERVICE,
@@ -25,19 +26,10 @@ def _link(bridge, **kw):
     return link.start(), got
 
 
-def _wait(pred, timeout=10.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if pred():
-            return True
-        time.sleep(0.02)
-    return pred()
-
-
 def test_gesture_heartbeat_and_subscriptions(fake_bridge):
     link, got = _link(fake_bridge)
     try:
-        assert link.wait_connected(10)
+        assert link.wait_connected(30)
         assert fake_bridge.wait_for(lambda: (GESTURE_TOPIC, "std_msgs/String") in fake_bridge.advertised)
         assert link.send_gesture("walk")
         assert fake_bridge.wait_for(lambda: fake_bridge.published_on(GESTURE_TOPIC) == [{"data": "walk"}])
@@ -57,7 +49,7 @@ def test_gesture_heartbeat_and_subscriptions(fake_bridge):
         fake_bridge.push(STATUS_TOPIC, {"nodata": 1})  # malformed: ignored, no crash
         fake_bridge.push(PATH_QUEUE_TOPIC, {"names": "x"})  # malformed: ignored
         fake_bridge.push(STATUS_TOPIC, {"data": "idle"})
-        assert _wait(lambda: got["status"] == ["running", "idle"])
+        assert wait_for(lambda: got["status"] == ["running", "idle"])
         assert got["state"] == ["EXECUTING"] and got["moves"] == [["a", "b", "c"]]
         assert link.connected
     finally:
@@ -67,12 +59,13 @@ def test_gesture_heartbeat_and_subscriptions(fake_bridge):
 def test_em_stop_calls_the_service_and_reports_the_answer(fake_bridge):
     link, _ = _link(fake_bridge)
     try:
-        assert link.wait_connected(10)
-        assert link.em_stop(True) == (True, "ok")
+        assert link.wait_connected(30)
+        # (answers are under test here, not speed: a generous timeout for a loaded machine)
+        assert link.em_stop(True, timeout=10) == (True, "ok")
         fake_bridge.service_handler = lambda s, a: (True, {"success": False, "message": "refused"})
-        assert link.em_stop(False) == (False, "refused")
+        assert link.em_stop(False, timeout=10) == (False, "refused")
         fake_bridge.service_handler = lambda s, a: (False, "service not available")
-        ok, msg = link.em_stop(True)
+        ok, msg = link.em_stop(True, timeout=10)
         assert not ok and msg
         assert [c for c in fake_bridge.service_calls] == [
             (EM_STOP_SERVICE, {"data": True}), (EM_STOP_SERVICE, {"data": False}), (EM_STOP_SERVICE, {"data": True}),
@@ -84,14 +77,14 @@ def test_em_stop_calls_the_service_and_reports_the_answer(fake_bridge):
 def test_reconnects_after_link_loss_and_bridge_restart(fake_bridge):
     link, got = _link(fake_bridge)
     try:
-        assert link.wait_connected(10)
+        assert link.wait_connected(30)
         fake_bridge.kick_all()
-        assert _wait(lambda: got["conn"][-1:] == [True] and False in got["conn"])
-        assert link.wait_connected(10)
+        assert wait_for(lambda: got["conn"][-1:] == [True] and False in got["conn"])
+        assert link.wait_connected(30)
         assert fake_bridge.wait_for(lambda: fake_bridge.connections >= 2)
         port = fake_bridge.port
         fake_bridge.stop()
-        assert _wait(lambda: not link.connected)
+        assert wait_for(lambda: not link.connected)
         # while the bridge is gone: gestures are dropped at once (never delivered late), no blocking
         t0 = time.monotonic()
         assert link.send_gesture("spin") is False
@@ -102,10 +95,10 @@ def test_reconnects_after_link_loss_and_bridge_restart(fake_bridge):
 
         restarted = FakeBridge(port=port).start()
         try:
-            assert link.wait_connected(10), "no reconnection after the bridge came back"
+            assert link.wait_connected(30), "no reconnection after the bridge came back"
             assert restarted.wait_for(lambda: STATUS_TOPIC in restarted.subscribed)
             restarted.push(STATUS_TOPIC, {"data": "collision"})
-            assert _wait(lambda: got["status"][-1:] == ["collision"])
+            assert wait_for(lambda: got["status"][-1:] == ["collision"])
             link.send_gesture("wiggle")
             assert restarted.wait_for(lambda: restarted.published_on(GESTURE_TOPIC) == [{"data": "wiggle"}])
             time.sleep(0.3)
@@ -229,19 +222,19 @@ def test_silent_link_is_dropped_by_keepalive_and_stale_estop_never_arrives(fake_
     link = RobotLink("127.0.0.1", relay.port, retry_s=0.2, connect_timeout_s=1.0, keepalive_s=5.0,
                      on_connection=got["conn"].append).start()
     try:
-        assert link.wait_connected(10)
+        assert link.wait_connected(30)
         time.sleep(5.0)  # answered pings keep a quiet but healthy link up
         assert link.connected and got["conn"] == [True]
         relay.silent.set()
         t0 = time.monotonic()
         ok, msg = link.em_stop(True, timeout=0.5)  # written into the silent connection
         assert not ok
-        assert _wait(lambda: not link.connected, timeout=10.0), "silent link still reported connected"
+        assert wait_for(lambda: not link.connected, timeout=10.0), "silent link still reported connected"
         detected = time.monotonic() - t0
         assert detected < 7.0, "silence detected only after %.1f s" % detected
-        assert _wait(lambda: got["conn"][-1:] == [False], timeout=2.0)  # the app is told
+        assert wait_for(lambda: got["conn"][-1:] == [False], timeout=2.0)  # the app is told
         relay.silent.clear()  # the WLAN is back: a fresh connection, the old request is gone
-        assert link.wait_connected(10)
+        assert link.wait_connected(30)
         time.sleep(1.0)
         assert (EM_STOP_SERVICE, {"data": True}) not in fake_bridge.service_calls
     finally:
@@ -254,7 +247,7 @@ def test_keepalive_off_keeps_a_silent_link_open(fake_bridge):
     relay = SilentRelay(fake_bridge.port)
     link = RobotLink("127.0.0.1", relay.port, retry_s=0.2, connect_timeout_s=1.0, keepalive_s=0.0).start()
     try:
-        assert link.wait_connected(10)
+        assert link.wait_connected(30)
         relay.silent.set()
         time.sleep(7.0)
         assert link.connected
@@ -277,7 +270,191 @@ def test_link_thread_survives_an_exception_in_a_connection_attempt(fake_bridge, 
     monkeypatch.setattr(RobotLink, "_connect", flaky)
     link = RobotLink("127.0.0.1", fake_bridge.port, retry_s=0.2, connect_timeout_s=1.0).start()
     try:
-        assert link.wait_connected(10), "the link thread died with the first attempt"
+        assert link.wait_connected(30), "the link thread died with the first attempt"
         assert calls["n"] >= 2
+    finally:
+        link.stop()
+
+
+# ------------------------------------------------------------- the robot's tricks (teach mode)
+TRICKS = {"walk": [{"name": "walk forward 0.6 m", "x": 0.6}, {"name": "return", "x": 0.0}],
+          "bow": [{"name": "bow: nose down", "pitch": 0.35}, {"name": "stand up", "pitch": 0.0}]}
+
+
+def test_get_tricks_reads_the_navigation_parameter_through_rosapi(fake_bridge):
+    import json
+
+    from rbd_local.link import TRICKS_PARAM
+
+    answers = {"value": json.dumps(TRICKS)}
+
+    def handler(service, args):
+        if service == "/rosapi/get_param":
+            return (True, answers) if isinstance(answers, dict) else (False, answers)
+        return True, {}
+
+    fake_bridge.service_handler = handler
+    link, _got = _link(fake_bridge)
+    try:
+        assert link.wait_connected(30)
+        assert link.get_tricks(5.0) == {"walk": ["walk forward 0.6 m", "return"], "bow": ["bow: nose down", "stand up"]}
+        assert ("/rosapi/get_param", {"name": TRICKS_PARAM}) in fake_bridge.service_calls
+        answers = {"value": json.dumps({"walk": [{"x": 1.0}]})}  # a step without a name
+        with pytest.raises(ValueError, match="has no name"):
+            link.get_tricks(5.0)
+        answers = {"value": "null"}  # rosapi's answer for a parameter that is not set
+        with pytest.raises(ValueError, match="not set"):
+            link.get_tricks(5.0)
+        answers = "parameter /rbd_navigation/tricks is not allowed by this bridge's allow-list"
+        with pytest.raises(ValueError, match="allow-list"):
+            link.get_tricks(5.0)
+    finally:
+        link.stop()
+    with pytest.raises(ConnectionError):
+        link.get_tricks(1.0)
+
+
+# ------------------------------------------------------------------------- the robot's camera
+def _jpeg_msg(value, secs, nsecs=0, fmt="bgr8; jpeg compressed bgr8", size=(64, 48)):
+    import base64
+
+    import cv2
+    import numpy as np
+
+    img = np.full((size[1], size[0], 3), value, np.uint8)
+    ok, buf = cv2.imencode(".jpg", img)
+    assert ok
+    return {"header": {"seq": 0, "stamp": {"secs": secs, "nsecs": nsecs}, "frame_id": "zed2_left_camera_optical_frame"},
+            "format": fmt, "data": base64.b64encode(buf.tobytes()).decode("ascii")}
+
+
+def test_camera_frames_arrive_throttled_newest_only_and_decoded(fake_bridge):
+    import threading
+
+    from rbd_local.gestures.robot_camera import RobotCameraSource
+    from rbd_local.link import CAMERA_TOPIC
+
+    source = RobotCameraSource(idle_timeout_s=5.0)
+    link, _got = _link(fake_bridge, on_camera=source.push, camera_throttle_ms=33)
+    try:
+        assert link.wait_connected(30)
+        assert fake_bridge.wait_for(lambda: CAMERA_TOPIC in fake_bridge.subscribed)
+        op = [o for o in fake_bridge.subscribe_ops if o["topic"] == CAMERA_TOPIC][0]
+        assert op["type"] == "sensor_msgs/CompressedImage"
+        assert op["throttle_rate"] == 33 and op["queue_length"] == 1  # the bridge keeps only the newest
+        now = int(time.time())
+        fake_bridge.push(CAMERA_TOPIC, _jpeg_msg(40, now, 0))
+        assert wait_for(lambda: source.received == 1)
+        t, frame = next(iter(source))
+        assert t == 0.0 and frame.shape == (48, 64, 3) and abs(float(frame.mean()) - 40) < 3
+        # two frames arrive while the loop is busy: only the newer one is shown
+        fake_bridge.push(CAMERA_TOPIC, _jpeg_msg(80, now, 100_000_000))
+        fake_bridge.push(CAMERA_TOPIC, _jpeg_msg(120, now, 200_000_000))
+        assert wait_for(lambda: source.received == 3)
+        t, frame = next(source)
+        assert t == pytest.approx(0.2) and abs(float(frame.mean()) - 120) < 3
+        assert source.dropped == 1
+        # broken messages are skipped (counted), never a crash; an older stamp is not shown
+        bads = ({"format": "rgb8", "data": _jpeg_msg(1, now)["data"]}, {"format": "jpeg", "data": "@@@"},
+                {"format": "jpeg", "data": "AAAA"}, _jpeg_msg(9, now, 100_000_000))
+        for i, bad in enumerate(bads):
+            got = []
+            source.push(bad)
+            reader = threading.Thread(target=lambda out=got: out.append(next(source, None)), daemon=True)
+            reader.start()
+            assert wait_for(lambda n=i + 1: source.bad == n), "the bad frame was not seen and skipped"
+            fake_bridge.push(CAMERA_TOPIC, _jpeg_msg(200, now + 1 + i, 0))
+            reader.join(10)
+            assert got and got[0] is not None, "the source stalled after a bad frame"
+            assert abs(float(got[0][1].mean()) - 200) < 3
+        assert source.bad == len(bads)
+        st = source.stats()
+        assert st["received"] >= 7 and st["shown"] == 6 and st["transport_ms"]["median"] is not None
+    finally:
+        source.close()
+        link.stop()
+    assert next(source, "end") == "end"  # a closed source ends the iteration
+
+
+# ------------------------------------------------------------------------- the robot's preflight
+def test_preflight_test_reports_have_the_robots_message_fields():
+    import preflight_reports as pr
+
+    assert list(pr.report()) == pr.msg_fields("PreflightReport")
+    assert list(pr.report()["checks"][0]) == pr.msg_fields("PreflightCheck")
+    assert pr.msg_fields("PreflightCheck") == ["key", "name", "status", "value", "hint"]
+
+
+def test_run_preflight_calls_the_service_and_returns_the_report(fake_bridge):
+    import preflight_reports as pr
+
+    from rbd_local.link import PREFLIGHT_SERVICE
+
+    answers = {"report": pr.report()}
+
+    def handler(service, args):
+        if service == PREFLIGHT_SERVICE:
+            return (True, answers) if isinstance(answers, dict) else (False, answers)
+        return True, {}
+
+    fake_bridge.service_handler = handler
+    link, _got = _link(fake_bridge)
+    try:
+        assert link.wait_connected(30)
+        rep = link.run_preflight(5.0)
+        assert (PREFLIGHT_SERVICE, {"duration": 0.0}) in fake_bridge.service_calls
+        assert rep["ready"] is False and rep["duration"] == 3.0
+        assert abs(rep["stamp"] - 1764084662.25) < 1e-6
+        assert [(c["name"], c["status"]) for c in rep["checks"]] == [
+            ("A1 HighState", "PASS"), ("LiDAR /ouster/points", "FAIL"), ("LiDAR cloud layout", "SKIP")]
+        assert rep["checks"][1]["value"] == "no message in 3.0 s"
+        assert rep["checks"][1]["hint"].startswith("is ouster-ros running")
+        assert rep["mounts_file"] == "/opt/robodog/mounts.yaml"
+        link.run_preflight(5.0, duration=6.0)
+        assert fake_bridge.service_calls[-1] == (PREFLIGHT_SERVICE, {"duration": 6.0})
+        with pytest.raises(ValueError):
+            link.run_preflight(5.0, duration=11.0)  # refused before anything is sent
+        assert fake_bridge.service_calls[-1] == (PREFLIGHT_SERVICE, {"duration": 6.0})
+        # the robot without preflight_server: rbd_bridge answers result false with its reason
+        answers = "service /preflight/run does not exist"
+        with pytest.raises(ValueError, match="does not exist.*preflight_server"):
+            link.run_preflight(5.0)
+        answers = {"report": dict(pr.report(), checks=[pr.check("x", "X", "MAYBE", "")])}
+        with pytest.raises(ValueError, match="malformed"):
+            link.run_preflight(5.0)
+    finally:
+        link.stop()
+    with pytest.raises(ConnectionError, match="no connection"):
+        link.run_preflight(1.0)
+
+
+def test_run_preflight_without_a_bridge_fails_at_once():
+    link = RobotLink("127.0.0.1", 9, retry_s=0.2, connect_timeout_s=0.3).start()
+    try:
+        t0 = time.monotonic()
+        with pytest.raises(ConnectionError, match="no connection"):
+            link.run_preflight(5.0)
+        assert time.monotonic() - t0 < 1.0
+    finally:
+        link.stop()
+
+
+def test_latched_preflight_report_reaches_the_callback(fake_bridge):
+    import preflight_reports as pr
+
+    from rbd_local.link import PREFLIGHT_TOPIC
+
+    reports = []
+    link, _got = _link(fake_bridge, on_preflight=reports.append)
+    try:
+        assert link.wait_connected(30)
+        assert fake_bridge.wait_for(lambda: PREFLIGHT_TOPIC in fake_bridge.subscribed)
+        assert fake_bridge.subscribed[PREFLIGHT_TOPIC] == "rbd_msgs/PreflightReport"
+        fake_bridge.push(PREFLIGHT_TOPIC, pr.report())
+        fake_bridge.push(PREFLIGHT_TOPIC, {"ready": "yes"})  # malformed: ignored, no crash
+        fake_bridge.push(PREFLIGHT_TOPIC, pr.all_pass())
+        assert wait_for(lambda: len(reports) == 2)
+        assert [r["ready"] for r in reports] == [False, True]
+        assert [c["status"] for c in reports[0]["checks"]] == ["PASS", "FAIL", "SKIP"]
     finally:
         link.stop()

@@ -108,7 +108,7 @@ def test_entry_points_exist():
 
     meta = tomllib.loads(open(os.path.join(PKG_ROOT, "pyproject.toml")).read())
     scripts = meta["project"]["scripts"]
-    assert set(scripts) == {"rbd-gesture", "rbd-gui", "rbd-record", "rbd-train"}
+    assert set(scripts) == {"rbd-gesture", "rbd-gui", "rbd-record", "rbd-train", "rbd-teach", "rbd-evaluate"}
     for target in scripts.values():
         module, func = target.split(":")
         assert callable(getattr(importlib.import_module(module), func))

@@ -1,4 +1,4 @@
-"""Start a private Xvfb on a free display (Xvfb picks it via -displayfd)."""
+"""A private Xvfb on a free display (Xvfb picks it via -displayfd), and pumping a Tk window."""
 
 import os
 import subprocess
@@ -41,3 +41,15 @@ class Xvfb:
                 self.proc.kill()
                 self.proc.wait()
             self.proc = None
+
+
+def pump(root, until, timeout=5.0):
+    """Run the Tk event loop of ``root`` until ``until()`` is true or ``timeout`` passed; return it."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        root.update()
+        if until():
+            return True
+        time.sleep(0.02)
+    root.update()
+    return until()

@@ -14,6 +14,7 @@ stacks and builds the table. The position experiments reuse `rbd_pos_controller`
 """
 
 import argparse
+import functools
 import json
 import math
 import os
@@ -29,7 +30,9 @@ sys.path.insert(0, HERE)
 import analysis  # noqa: E402
 import matplotlib  # noqa: E402
 import thesis  # noqa: E402
-from stack import Stack, free_port  # noqa: E402
+
+import rbd_testkit  # noqa: E402
+from rbd_testkit import RosEnv, free_port  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -47,14 +50,8 @@ def yaw_of(q):
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
-def wait_for(predicate, timeout, period=0.02):
-    """Poll predicate until true or timeout [s]; returns its last value."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(period)
-    return bool(predicate())
+# The kit's wait_for, polling at 50 Hz.
+wait_for = functools.partial(rbd_testkit.wait_for, step=0.02)
 
 
 class Truth:
@@ -186,8 +183,8 @@ def start_pos_controller(ctx):
 
     if ctx.pos_started:
         return
-    ctx.stack.launch("pos_controller", "rbd_pos_controller", "rbd_pos_controller.launch",
-                     "pose_topic:=/rbd_sim/ground_truth_pose", "profile:=sim_tuned")
+    ctx.stack.launch("rbd_pos_controller", "rbd_pos_controller.launch", "pose_topic:=/rbd_sim/ground_truth_pose",
+                     "profile:=sim_tuned", name="pos_controller")
     rospy.wait_for_service("/rbd_pos_controller/set_position", timeout=60.0)
     ctx.pos_started = True
 
@@ -603,12 +600,12 @@ class Context:
 
 def start_stack(kind, out, seed, columns):
     """Start the stack of `kind` (ground truth may take a few seconds more)."""
-    stack = Stack(os.path.join(out, "logs", kind))
+    stack = RosEnv(log_dir=os.path.join(out, "logs", kind), use_here=True, prefix="rbd-exp-home.")
     if kind == "control":
-        stack.launch("mock_a1", "rbd_sim", "mock_a1.launch", "seed:=%d" % seed)
+        stack.launch("rbd_sim", "mock_a1.launch", "seed:=%d" % seed, name="mock_a1")
     else:
-        stack.launch("sim", "rbd_bringup", "sim.launch", "localization:=false", "rviz:=false", "gui:=false",
-                     "seed:=%d" % seed, "lidar_columns:=%d" % columns, "bridge_port:=%d" % free_port())
+        stack.launch("rbd_bringup", "sim.launch", "localization:=false", "rviz:=false", "gui:=false",
+                     "seed:=%d" % seed, "lidar_columns:=%d" % columns, "bridge_port:=%d" % free_port(), name="sim")
     return stack
 
 
@@ -657,7 +654,7 @@ def main():
             if "error" not in result:  # the result next to the thesis value
                 print(thesis.render_table(thesis.rows({name: result})), flush=True)
     finally:
-        stack.close()
+        stack.close(timeout=25.0)  # roslaunch itself escalates SIGINT -> SIGTERM after 15 s
     return 1 if failed else 0
 
 

@@ -26,7 +26,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
 import experiments  # noqa: E402
-from stack import Stack, free_port  # noqa: E402
+
+from rbd_testkit import RosEnv, free_port  # noqa: E402
 
 TARGET_RADIUS = 1.0
 TARGET_SURFACE_X = 1.2
@@ -57,12 +58,12 @@ def main():
     ap.add_argument("--columns", type=int, default=512)
     args = ap.parse_args()
     log_dir = os.path.join(os.path.dirname(os.path.abspath(args.out)), "logs-" + os.path.basename(args.out))
-    stack = Stack(log_dir)
+    stack = RosEnv(log_dir=log_dir, use_here=True, prefix="rbd-exp-home.")
     result = {"mounts": os.path.abspath(args.mounts)}
     try:
-        stack.launch("sim", "rbd_bringup", "sim.launch", "localization:=false", "rviz:=false", "gui:=false",
+        stack.launch("rbd_bringup", "sim.launch", "localization:=false", "rviz:=false", "gui:=false",
                      "seed:=1", "lidar_columns:=%d" % args.columns, "bridge_port:=%d" % free_port(),
-                     "mounts:=" + os.path.abspath(args.mounts))
+                     "mounts:=" + os.path.abspath(args.mounts), name="sim")
         import rospy
         import tf2_ros
 
@@ -91,7 +92,7 @@ def main():
             result[side + "_set"] = target
             zone.remove("fig23")
     finally:
-        stack.close()
+        stack.close(timeout=25.0)  # roslaunch itself escalates SIGINT -> SIGTERM after 15 s
     with open(args.out, "w") as fh:
         json.dump(result, fh, indent=2, sort_keys=True)
     return 0

@@ -7,7 +7,13 @@ talks to ``rbd_bridge`` (rosbridge v2 protocol) from its own background thread:
   heartbeat ``/rbd_local/heartbeat`` (std_msgs/Header, ~2 Hz);
 - calls ``/rbd_controller/em_stop`` (std_srvs/SetBool);
 - subscribes ``/rbd_pos_controller/status``, ``/rbd_controller/state`` (std_msgs/String) and
-  ``/rbd_controller/path_queue`` (rbd_msgs/PathQueue) and hands them to callbacks.
+  ``/rbd_controller/path_queue`` (rbd_msgs/PathQueue) and hands them to callbacks;
+- optionally subscribes the robot's camera (sensor_msgs/CompressedImage, by default the
+  ZED2's left image ``/zed2/zed_node/left/image_rect_color/compressed``), throttled by the
+  bridge, newest frame only;
+- reads the robot's tricks (``/rbd_navigation/tricks`` through rosapi) for teach mode;
+- runs the robot's preflight (``/preflight/run``, rbd_msgs/RunPreflight) and subscribes its
+  latched last report ``/preflight/report`` (rbd_msgs/PreflightReport) for the Preflight panel.
 
 Callers never block on the network: :meth:`RobotLink.send_gesture` only queues. A lost link
 is re-established by the background thread (a fresh connection every ``retry_s``); gestures
@@ -23,6 +29,7 @@ import time
 from typing import Callable
 
 import roslibpy
+from roslibpy.core import RosTimeoutError
 
 LOG = logging.getLogger("rbd_local.link")
 
@@ -32,6 +39,97 @@ EM_STOP_SERVICE = "/rbd_controller/em_stop"
 STATUS_TOPIC = "/rbd_pos_controller/status"
 STATE_TOPIC = "/rbd_controller/state"
 PATH_QUEUE_TOPIC = "/rbd_controller/path_queue"
+#: The ZED2 wrapper's left image through image_transport's compressed plugin.
+CAMERA_TOPIC = "/zed2/zed_node/left/image_rect_color/compressed"
+CAMERA_TYPE = "sensor_msgs/CompressedImage"
+#: rbd_navigation's tricks (its private parameter, loaded from config/tricks.yaml).
+TRICKS_PARAM = "/rbd_navigation/tricks"
+#: rbd_bringup's preflight_server (node ``/preflight``): runs the checks on demand (read-only).
+PREFLIGHT_SERVICE = "/preflight/run"
+PREFLIGHT_SERVICE_TYPE = "rbd_msgs/RunPreflight"
+#: The last report, latched.
+PREFLIGHT_TOPIC = "/preflight/report"
+PREFLIGHT_TYPE = "rbd_msgs/PreflightReport"
+PREFLIGHT_STATUSES = ("PASS", "FAIL", "SKIP")
+PREFLIGHT_MAX_DURATION_S = 10.0
+
+
+def tricks_from_param(value: object) -> dict:
+    """The trick names and their steps' names from the value of ``/rbd_navigation/tricks``.
+
+    Args:
+        value: the parameter as rosapi returns it: {trick: [{"name": ..., "x": ..., ...}]}.
+
+    Returns:
+        {trick: [step name, ...]} in the parameter's order.
+
+    Raises:
+        ValueError: when the value does not have that shape.
+    """
+    if not isinstance(value, dict) or not value:
+        raise ValueError("%s is not a mapping of tricks: %r" % (TRICKS_PARAM, value))
+    out = {}
+    for name, steps in value.items():
+        if not isinstance(steps, list) or not steps:
+            raise ValueError("%s/%s is not a list of steps" % (TRICKS_PARAM, name))
+        names = []
+        for i, step in enumerate(steps):
+            if not isinstance(step, dict) or not isinstance(step.get("name"), str):
+                raise ValueError("%s/%s[%d] has no name" % (TRICKS_PARAM, name, i))
+            names.append(step["name"])
+        out[str(name)] = names
+    return out
+
+
+def _stamp_seconds(stamp: object) -> float:
+    if not isinstance(stamp, dict):
+        raise ValueError("header.stamp is not a time: %r" % (stamp,))
+    secs, nsecs = stamp.get("secs"), stamp.get("nsecs", 0)
+    if not isinstance(secs, int) or not isinstance(nsecs, int):
+        raise ValueError("header.stamp is not a time: %r" % (stamp,))
+    return secs + nsecs * 1e-9
+
+
+def preflight_report_from_msg(msg: object) -> dict:
+    """A preflight report as the GUI shows it, from an rbd_msgs/PreflightReport message dict.
+
+    Args:
+        msg: the message as rosbridge sends it (``header``, ``ready``, ``duration``,
+            ``checks``: [{``key``, ``name``, ``status``, ``value``, ``hint``}], ``mounts``,
+            ``mounts_file``).
+
+    Returns:
+        {"ready": bool, "stamp": float (POSIX seconds, end of the observation; 0 if unset),
+        "duration": float [s], "checks": [{"key", "name", "status", "value", "hint"}] in the
+        robot's order, "mounts": [str], "mounts_file": str}.
+
+    Raises:
+        ValueError: when the message does not have that shape or a status is not PASS/FAIL/SKIP.
+    """
+    if not isinstance(msg, dict):
+        raise ValueError("preflight report is not a message: %r" % (msg,))
+    header = msg.get("header")
+    stamp = _stamp_seconds(header.get("stamp") if isinstance(header, dict) else None)
+    rows = msg.get("checks")
+    if not isinstance(rows, list) or not isinstance(msg.get("ready"), bool):
+        raise ValueError("preflight report without ready/checks: %r" % (msg,))
+    checks = []
+    for i, row in enumerate(rows):
+        if not isinstance(row, dict):
+            raise ValueError("preflight check %d is not a message" % i)
+        fields = {k: row.get(k, "") for k in ("key", "name", "status", "value", "hint")}
+        if not all(isinstance(v, str) for v in fields.values()) or fields["status"] not in PREFLIGHT_STATUSES:
+            raise ValueError("preflight check %d is malformed: %r" % (i, row))
+        checks.append(fields)
+    mounts = msg.get("mounts", [])
+    try:
+        duration = float(msg.get("duration", 0.0))
+    except (TypeError, ValueError):
+        duration = None
+    if duration is None or not isinstance(mounts, list):
+        raise ValueError("preflight report has a bad duration or mounts: %r" % (msg,))
+    return {"ready": msg["ready"], "stamp": stamp, "duration": duration, "checks": checks,
+            "mounts": [str(m) for m in mounts], "mounts_file": str(msg.get("mounts_file", ""))}
 
 
 class RobotLink:
@@ -50,6 +148,10 @@ class RobotLink:
         on_state: Callable[[str], None] = None,
         on_path_queue: Callable[[list], None] = None,
         on_connection: Callable[[bool], None] = None,
+        on_camera: Callable[[dict], None] = None,
+        camera_topic: str = CAMERA_TOPIC,
+        camera_throttle_ms: int = 0,
+        on_preflight: Callable[[dict], None] = None,
     ) -> None:
         """Configure the link (call :meth:`start` to connect).
 
@@ -70,6 +172,15 @@ class RobotLink:
             on_state: called with each ``/rbd_controller/state`` string.
             on_path_queue: called with the ``names`` list of each path-queue message.
             on_connection: called with True/False when the link comes up / goes down.
+            on_camera: called with each camera message (a dict with ``header``, ``format``
+                and base64 ``data``, as the bridge sends sensor_msgs/CompressedImage); None:
+                no camera subscription.
+            camera_topic: the camera's CompressedImage topic.
+            camera_throttle_ms: least time between camera messages the bridge sends [ms]
+                (0: every one); the bridge keeps only the newest frame for a slow link.
+            on_preflight: called with each report of the latched ``/preflight/report`` (the
+                last one arrives right after every connection), as
+                :func:`preflight_report_from_msg` returns it; None: no subscription.
 
         Raises:
             ValueError: on bad arguments.
@@ -78,6 +189,10 @@ class RobotLink:
             raise ValueError("host must be a non-empty string")
         if not isinstance(port, int) or not 0 < port < 65536:
             raise ValueError("port must be an integer in 1..65535, got %r" % (port,))
+        if on_camera is not None and (not isinstance(camera_topic, str) or not camera_topic.startswith("/")):
+            raise ValueError("camera_topic must be an absolute topic name, got %r" % (camera_topic,))
+        if not isinstance(camera_throttle_ms, int) or camera_throttle_ms < 0:
+            raise ValueError("camera_throttle_ms must be an integer >= 0")
         if heartbeat_hz < 0 or retry_s <= 0 or connect_timeout_s <= 0 or gesture_max_age_s <= 0 or keepalive_s < 0:
             raise ValueError(
                 "heartbeat_hz >= 0, retry_s > 0, connect_timeout_s > 0, gesture_max_age_s > 0 and "
@@ -96,6 +211,10 @@ class RobotLink:
             PATH_QUEUE_TOPIC: on_path_queue,
         }
         self._on_connection = on_connection
+        self._on_camera = on_camera
+        self._on_preflight = on_preflight
+        self.camera_topic = camera_topic
+        self.camera_throttle_ms = camera_throttle_ms
         self._outbox: queue.Queue = queue.Queue(maxsize=32)
         self._stop = threading.Event()
         self._wake = threading.Event()
@@ -206,6 +325,67 @@ class RobotLink:
         success = bool(response.get("success", False))
         return success, str(response.get("message", ""))
 
+    def get_tricks(self, timeout: float = 3.0) -> dict:
+        """The robot's tricks, read from ``/rbd_navigation/tricks`` through the bridge's rosapi.
+
+        Blocks the caller up to ``timeout`` (call it off the UI thread). The bridge must
+        allow reading the parameter (``params_glob`` of rbd_bridge.launch).
+
+        Returns:
+            {trick: [names of its steps]} (see :func:`tricks_from_param`).
+
+        Raises:
+            ConnectionError: when the link is down or the bridge does not answer in time.
+            ValueError: when the bridge refuses or the value is malformed.
+        """
+        ros = self._ros
+        if ros is None or not self.connected:
+            raise ConnectionError("no connection to %s" % self.address)
+        try:
+            value = roslibpy.Param(ros, TRICKS_PARAM).get(timeout=timeout)
+        except RosTimeoutError as exc:
+            raise ConnectionError("reading %s timed out after %.1f s" % (TRICKS_PARAM, timeout)) from exc
+        except Exception as exc:  # ServiceException (refused by the bridge) or a broken connection
+            raise ValueError("reading %s failed: %s" % (TRICKS_PARAM, exc)) from exc
+        if value is None:
+            raise ValueError("%s is not set on the robot (is rbd_navigation running?)" % TRICKS_PARAM)
+        return tricks_from_param(value)
+
+    def run_preflight(self, timeout: float = 20.0, duration: float = 0.0) -> dict:
+        """Run the robot's preflight now (``/preflight/run``) and return its report.
+
+        The checks only observe the robot's graph (nothing moves). Blocks the caller up to
+        ``timeout`` (call it off the UI thread); the robot observes for ``duration`` and then
+        probes the hosts' clocks, so allow several seconds more than ``duration``.
+
+        Args:
+            timeout: time allowed for the call [s].
+            duration: observation length [s] (0: the robot's default, 3 s; at most 10).
+
+        Returns:
+            the report (see :func:`preflight_report_from_msg`).
+
+        Raises:
+            ConnectionError: when the link is down or the robot does not answer in time.
+            ValueError: when the service is missing or refused (no preflight_server on the
+                robot, or the bridge does not allow it) or the answer is malformed.
+        """
+        if not 0.0 <= duration <= PREFLIGHT_MAX_DURATION_S:
+            raise ValueError("duration must be within 0..%g s, got %r" % (PREFLIGHT_MAX_DURATION_S, duration))
+        ros = self._ros
+        if ros is None or not self.connected:
+            raise ConnectionError("no connection to %s: preflight not run" % self.address)
+        try:
+            service = roslibpy.Service(ros, PREFLIGHT_SERVICE, PREFLIGHT_SERVICE_TYPE)
+            response = service.call(roslibpy.ServiceRequest({"duration": float(duration)}), timeout=timeout)
+        except RosTimeoutError as exc:
+            raise ConnectionError("%s did not answer within %.1f s" % (PREFLIGHT_SERVICE, timeout)) from exc
+        except Exception as exc:  # ServiceException: missing or refused; or a broken connection
+            raise ValueError("%s failed: %s (is rbd_bringup's preflight_server running and the service in the "
+                             "bridge's allow-list?)" % (PREFLIGHT_SERVICE, exc)) from exc
+        report = response.get("report") if hasattr(response, "get") else None  # a ServiceResponse (UserDict)
+        return preflight_report_from_msg(report)
+
     # ------------------------------------------------------------- worker thread
     _force = False
 
@@ -302,6 +482,16 @@ class RobotLink:
                 topic = roslibpy.Topic(ros, name, msg_type, reconnect_on_close=False)
                 topic.subscribe(self._make_handler(name))
                 self._subs.append(topic)
+            if self._on_camera is not None:
+                # queue_length 1: a bridge with a slow link sends the newest frame, not a backlog
+                topic = roslibpy.Topic(ros, self.camera_topic, CAMERA_TYPE, throttle_rate=self.camera_throttle_ms,
+                                       queue_length=1, reconnect_on_close=False)
+                topic.subscribe(self._camera_handler)
+                self._subs.append(topic)
+            if self._on_preflight is not None:
+                topic = roslibpy.Topic(ros, PREFLIGHT_TOPIC, PREFLIGHT_TYPE, queue_length=1, reconnect_on_close=False)
+                topic.subscribe(self._preflight_handler)
+                self._subs.append(topic)
         self._watch(ros)
         self.connect_count += 1
         self._connected_evt.set()
@@ -374,6 +564,26 @@ class RobotLink:
                 LOG.exception("callback for %s failed", name)
 
         return handle
+
+    def _camera_handler(self, msg: dict) -> None:
+        try:
+            if not isinstance(msg, dict) or not isinstance(msg.get("data"), str):
+                LOG.warning("malformed camera message ignored")
+                return
+            self._on_camera(msg)
+        except Exception:
+            LOG.exception("camera callback failed")
+
+    def _preflight_handler(self, msg: dict) -> None:
+        try:
+            report = preflight_report_from_msg(msg)
+        except ValueError as exc:
+            LOG.warning("malformed preflight report ignored: %s", exc)
+            return
+        try:
+            self._on_preflight(report)
+        except Exception:
+            LOG.exception("preflight callback failed")
 
     def _drain(self, send: bool) -> None:
         while True:

@@ -1,7 +1,7 @@
 """Fixtures for rbd_bridge integration tests: a private master, the echo peer, real bridges.
 
 One master + echo node + bridge per test module (starting them costs seconds); every
-process is stopped by PID by the repo-root RosEnv helper.
+process is stopped by PID by the test kit's RosEnv.
 """
 
 import os
@@ -12,14 +12,23 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from rbd_bridge_testing import OPEN, ROOTCONF, start_bridge, start_echo  # noqa: E402
+from rbd_bridge_testing import OPEN, make_tutorial_types, start_bridge, start_echo, use_tutorial_types  # noqa: E402
+
+from rbd_testkit import RosEnv  # noqa: E402
+
+
+@pytest.fixture(scope="session")
+def tutorial_types(tmp_path_factory):
+    """actionlib_tutorials/Fibonacci* and rospy_tutorials/AddTwoInts, generated once per session."""
+    return make_tutorial_types(str(tmp_path_factory.mktemp("tutorial_types")))
 
 
 @pytest.fixture(scope="module")
-def open_bridge():
-    """Master + echo peer (50 Hz tick) + a bridge with everything allowed."""
-    env = ROOTCONF.RosEnv()
+def open_bridge(tutorial_types):
+    """Master + echo peer (50 Hz tick) + a bridge with everything allowed (tutorial types importable)."""
+    env = RosEnv()
     try:
+        use_tutorial_types(env, tutorial_types)
         start_echo(env, tick_rate=50.0)
         port, proc = start_bridge(env, **OPEN)
         yield types.SimpleNamespace(env=env, port=port, proc=proc, url="ws://127.0.0.1:%d" % port)

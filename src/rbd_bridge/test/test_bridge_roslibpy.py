@@ -6,11 +6,12 @@ import threading
 import time
 
 import pytest
+import rosgraph
 import roslibpy
-from rbd_bridge_testing import master_of, start_echo, wait_until
+from rbd_bridge_testing import master_of, png_text, start_echo, wait_until
 
-from rbd_bridge import encoding
-from rbd_bridge.rosapi import ROSAPI_TYPES
+from rbd_bridge.core.rosapi import ROSAPI_TYPES
+from rbd_testkit import free_port
 
 BRIDGE = "/rbd_bridge"
 
@@ -162,12 +163,25 @@ def test_call_service_success_failure_and_missing_service(roslibpy_client):
 
 
 def _service_gone(master, name):
-    """True once the master no longer knows the service."""
+    """True once the master answers that no node provides the service.
+
+    Only that answer counts: any other failure (the master unreachable, a timeout) raises, so a
+    wait on this never passes because the question could not be asked.
+    """
     try:
         master.lookupService(name)
         return False
-    except Exception:
-        return True
+    except rosgraph.masterapi.Error as err:  # the master's ERROR code (-1)
+        if "no provider" in str(err):
+            return True
+        raise
+
+
+def test_service_gone_needs_the_masters_answer():
+    # An unreachable master is no proof that a service is gone.
+    master = rosgraph.Master("/rbd_bridge_test", master_uri="http://127.0.0.1:%d" % free_port())
+    with pytest.raises(OSError):
+        _service_gone(master, "/web/negate")
 
 
 def test_client_hosted_service_is_a_ros_service_and_disappears_with_its_client(roslibpy_client, open_bridge):
@@ -248,9 +262,16 @@ def test_rosapi_calls_roslibpy_uses(roslibpy_client):
     assert has.call(roslibpy.ServiceRequest({"name": "/rbd_test/value"}), timeout=10) == {"exists": True}
     ros.delete_param("/rbd_test/value")
     assert has.call(roslibpy.ServiceRequest({"name": "/rbd_test/value"}), timeout=10) == {"exists": False}
+    # no fixture advertises an action server; another test's leftovers may still be
+    # registered, so the truth is the topic list: every prefix with all five topics
+    names = ros.get_topics()
+    suffixes = ("/goal", "/cancel", "/status", "/feedback", "/result")
+    prefixes = {name.rsplit("/", 1)[0] for name in names}
+    expected = sorted(p for p in prefixes if all(p + suffix in names for suffix in suffixes))
     servers = []
     ros.get_action_servers(servers.append)
-    assert wait_until(lambda: servers, 10) and servers[0] == {"action_servers": []}
+    assert wait_until(lambda: servers, 10)
+    assert sorted(servers[0]["action_servers"]) == expected
     pubs = roslibpy.Service(ros, "/rosapi/publishers", "rosapi/Publishers").call(
         roslibpy.ServiceRequest({"topic": "/echo/tick"}), timeout=10
     )
@@ -487,7 +508,7 @@ def test_png_compression_through_roslibpy(roslibpy_client):
     pub = roslibpy.Topic(roslibpy_client(), "/echo/in", "std_msgs/String")
     text = "compressed \u00e9 " * 10
     assert keep_publishing(pub, lambda i: {"data": text}, lambda: pngs.items)
-    frame = json.loads(encoding.png_decode(pngs.items[0]["data"]))
+    frame = json.loads(png_text(pngs.items[0]["data"]))
     assert frame == {"op": "publish", "topic": "/echo/out", "msg": {"data": text}}
     assert whole.items == []  # nothing came uncompressed
 

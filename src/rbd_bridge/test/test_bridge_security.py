@@ -3,15 +3,17 @@
 import json
 import os
 import subprocess
+import threading
 import time
 
 import pytest
 import roslibpy
-from rbd_bridge_testing import ROOTCONF, master_of, start_bridge, wait_until
+from rbd_bridge_testing import master_of, start_bridge, wait_until
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
-from rbd_bridge.security import make_mac
+from rbd_bridge.core.security import make_mac
+from rbd_testkit import RosEnv
 
 SECRET = "0123456789abcdef"
 
@@ -19,7 +21,7 @@ SECRET = "0123456789abcdef"
 @pytest.fixture(scope="module")
 def robodog():
     """Master + the bridge exactly as rbd_bridge.launch starts it (RoboDog allow-list)."""
-    env = ROOTCONF.RosEnv()
+    env = RosEnv()
     try:
         port, _ = start_bridge(env, launch="rbd_bridge.launch")
         secret_file = os.path.join(env.home, "secret")
@@ -29,6 +31,20 @@ def robodog():
         yield env, port, auth_port
     finally:
         env.close()
+
+
+@pytest.fixture(scope="module")
+def habits(robodog):
+    """A bridge launched with globs as a rosbridge_websocket.launch user would give them."""
+    env = robodog[0]
+    port, _ = start_bridge(
+        env,
+        node_name="rbd_bridge_habits",
+        topics_glob="[*]",
+        services_glob="[/rbd_test/*]",
+        params_glob="[/rbd_test/*]",
+    )
+    return port
 
 
 def start_auth(env, secret_file):
@@ -99,8 +115,10 @@ def test_rosapi_lists_only_allowed_names(robodog):
     ros = roslibpy.Ros("127.0.0.1", port, transport="asyncio")
     ros.run(timeout=15)
     try:
+        # The allowed topic exists in the graph because this test advertises it (not an earlier test).
+        roslibpy.Topic(ros, "/rbd_gestrec/gesture", "std_msgs/String").advertise()
         assert wait_until(lambda: "/rbd_gestrec/gesture" in ros.get_topics(), 10)
-        assert "/rosout" not in ros.get_topics()
+        assert "/rosout" not in ros.get_topics()  # every node publishes it: live, but not allowed
         services = ros.get_services()
         assert "/rosapi/topics" in services and not [s for s in services if s.startswith("/rbd_bridge/")]
         with pytest.raises(roslibpy.core.ServiceException, match="allow-list"):
@@ -125,15 +143,37 @@ def auth_frame(t, secret=SECRET):
     }
 
 
+def test_rosbridge_launch_habits_rosapi_added_and_given_params_writable(habits):
+    """Issue 18 item 5: a user-given services_glob keeps /rosapi/*, a given params_glob is writable."""
+    ros = roslibpy.Ros("127.0.0.1", habits, transport="asyncio")
+    ros.run(timeout=15)
+    try:
+        assert "/rbd_test/some_topic" not in ros.get_topics()  # rosapi answers although not in the glob
+        assert "/rosapi/topics" in ros.get_services()
+        ros.set_param("/rbd_test/gain", 2.5)
+        assert ros.get_param("/rbd_test/gain") == 2.5
+        ros.delete_param("/rbd_test/gain")
+        assert ros.get_param("/rbd_test/gain") is None
+        with pytest.raises(roslibpy.core.ServiceException, match="allow-list"):
+            ros.set_param("/elsewhere", 1)
+        with pytest.raises(roslibpy.core.ServiceException, match="allow-list"):
+            roslibpy.Service(ros, "/other/service", "std_srvs/Trigger").call(roslibpy.ServiceRequest(), timeout=10)
+    finally:
+        ros.close()
+
+
 def test_auth_required_then_everything_works(robodog):
     env, _, auth_port = robodog
     url = "ws://127.0.0.1:%d" % auth_port
+    # issue 18 item 7: as rosbridge, any other op before auth ends the connection
+    for first in ({"op": "call_service", "id": "before", "service": "/rosapi/get_time"}, {"op": "set_level"}):
+        ws = connect(url, compression=None, open_timeout=15)
+        ws.send(json.dumps(first))
+        with pytest.raises(ConnectionClosed) as info:
+            ws.recv(timeout=10)
+        assert info.value.rcvd is not None and info.value.rcvd.code == 1008
     ws = connect(url, compression=None, open_timeout=15)
     try:
-        ws.send(json.dumps({"op": "set_level", "level": "error"}))
-        ws.send(json.dumps({"op": "call_service", "id": "before", "service": "/rosapi/get_time"}))
-        status = json.loads(ws.recv(timeout=10))
-        assert status["op"] == "status" and "not authenticated" in status["msg"]
         ws.send(json.dumps(auth_frame(int(time.time()))))
         ws.send(json.dumps({"op": "call_service", "id": "after", "service": "/rosapi/get_time"}))
         reply = json.loads(ws.recv(timeout=10))
@@ -149,6 +189,21 @@ def test_auth_required_then_everything_works(robodog):
     ros.run(timeout=15)
     try:
         assert abs(ros.get_time()["secs"] - time.time()) < 5
+    finally:
+        ros.close()
+
+
+def test_roslibpy_without_auth_is_disconnected(robodog):
+    """Issue 18 item 7 with roslibpy: a client that does not authenticate is disconnected."""
+    _, _, auth_port = robodog
+    ros = roslibpy.Ros("127.0.0.1", auth_port, transport="asyncio")
+    ros.run(timeout=15)
+    closed = threading.Event()
+    ros.factory.on("close", lambda proto: closed.set())
+    try:
+        assert ros.is_connected
+        ros.send_on_ready(roslibpy.Message({"op": "call_service", "id": "x", "service": "/rosapi/get_time"}))
+        assert closed.wait(10), "the unauthenticated connection stayed open"
     finally:
         ros.close()
 

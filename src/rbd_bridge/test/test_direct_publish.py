@@ -11,7 +11,7 @@ import time
 import pytest
 from rospy.exceptions import TransportTerminated
 
-from rbd_bridge.ros_backend import _Cork, _DirectConnection
+from rbd_bridge.ros.fastpath import _Cork, _DirectConnection
 
 
 class FakeTransport:
@@ -154,7 +154,7 @@ def test_writes_held_by_the_cork_leave_in_one_send_in_order():
     a, b = socket.socketpair()
     counting = CountingSocket(a)
     cork = _Cork()
-    conn = _DirectConnection(FakeTransport(counting), queue_size=10, cork=cork)
+    conn = _DirectConnection(FakeTransport(counting), queue_size=100, cork=cork)
     other = []  # a write from another thread is not held
     cork.thread = threading.get_ident()
     for i in range(30):
@@ -170,6 +170,25 @@ def test_writes_held_by_the_cork_leave_in_one_send_in_order():
     assert read_all(b, 1 + 120) == b"T" + b"".join(b"c%03d" % i for i in range(30))
     conn.uncork()  # nothing held: nothing sent
     assert counting.sends == 2
+    a.close()
+    b.close()
+
+
+def test_a_corked_burst_beyond_queue_size_leaves_in_one_send_then_message_by_message():
+    # rospy keeps the newest queue_size messages of each read: a write never holds more
+    # than the client's queue_size publishes, the rest of the burst goes one by one
+    a, b = socket.socketpair()
+    counting = CountingSocket(a)
+    cork = _Cork()
+    conn = _DirectConnection(FakeTransport(counting), queue_size=10, cork=cork)
+    cork.thread = threading.get_ident()
+    for i in range(30):
+        assert conn.write_data(b"c%03d" % i)
+    assert counting.sends == 1 + 20  # the first ten together when the eleventh came, then each
+    cork.thread = None
+    conn.uncork()
+    assert counting.sends == 21  # nothing was left held
+    assert read_all(b, 120) == b"".join(b"c%03d" % i for i in range(30))
     a.close()
     b.close()
 

@@ -1,10 +1,11 @@
-"""Subscribed ROS connections read by the bridge's event loop (``~direct_reads``) and the fallback.
+"""The opt-in rospy fast path (``rbd_bridge.ros.fastpath``): direct reads, their fallback, and without it.
 
-Two real bridges on one master with the echo peer: one with direct reads (the default), one
-whose take-overs are made to fail (``test_fail_direct_reads``), so rospy's receive threads
-serve it. Both must deliver the same messages; the node's ``~stats`` service tells which
-path carried them (it counts in the paths themselves, so a bridge that claims direct reads
-but does not use them fails here).
+Three real bridges on one master with the echo peer: one with the fast path and direct
+reads (the defaults), one whose take-overs are made to fail (``test_fail_direct_reads``),
+so rospy's receive threads serve it, and one with ``rospy_fast_path:=false`` (plain rospy
+publishers and subscribers). All must deliver the same messages; the node's ``~stats``
+service tells which path carried them (it counts in the paths themselves, so a bridge that
+claims direct reads but does not use them fails here).
 """
 
 import json
@@ -13,18 +14,22 @@ import time
 import types
 
 import pytest
-from rbd_bridge_testing import OPEN, ROOTCONF, WsClient, start_bridge, start_echo, wait_until
+from rbd_bridge_testing import OPEN, WsClient, probe_call, start_bridge, start_echo, start_probe, wait_until
 from std_msgs.msg import String
+
+from rbd_testkit import RosEnv, stop_process
 
 
 @pytest.fixture(scope="module")
 def bridges():
-    env = ROOTCONF.RosEnv()
+    env = RosEnv()
     try:
         start_echo(env, tick_rate=50.0)
         direct, _ = start_bridge(env, node_name="bridge_direct", **OPEN)
         fallback, _ = start_bridge(env, node_name="bridge_fallback", test_fail_direct_reads="true", **OPEN)
-        yield types.SimpleNamespace(env=env, direct=direct, fallback=fallback)
+        plain, _ = start_bridge(env, node_name="bridge_plain", rospy_fast_path="false", **OPEN)
+        start_probe(env, "probe", subs=["/plain/immediate:std_msgs/String:100"])
+        yield types.SimpleNamespace(env=env, direct=direct, fallback=fallback, plain=plain)
     finally:
         env.close()
 
@@ -116,6 +121,24 @@ def test_a_failed_take_over_falls_back_to_rospy_with_the_same_messages(bridges):
         client.close()
 
 
+def test_without_the_fast_path_plain_rospy_carries_the_same(bridges):
+    client = _exercise(bridges.plain)
+    try:
+        stats = client.stats("bridge_plain")
+        assert stats["rospy_fast_path"] is False and stats["direct_reads"] is False
+        assert stats["direct_read_connections"] == 0 and stats["direct_read_fallbacks"] == 0
+        assert stats["rospy_read_messages"] >= 20 + 50 + 1
+        # publishes right after advertise still reach a subscriber that connects afterwards
+        client.send({"op": "advertise", "topic": "/plain/immediate", "type": "std_msgs/String"})
+        for i in range(5):
+            client.send({"op": "publish", "topic": "/plain/immediate", "msg": {"data": "p%d" % i}})
+        assert wait_until(lambda: probe_call(bridges.env, "probe")["/plain/immediate"]["count"] >= 5, 10)
+        got = probe_call(bridges.env, "probe")["/plain/immediate"]["messages"]
+        assert [m["data"] for m in got] == ["p%d" % i for i in range(5)]
+    finally:
+        client.close()
+
+
 def test_a_vanishing_publisher_closes_its_direct_connection_and_a_new_one_is_read(bridges):
     client = Client(bridges.direct)
     pub_cmd = ["rostopic", "pub", "-r", "20", "/direct/vanish", "std_msgs/String", "data: alive"]
@@ -124,7 +147,7 @@ def test_a_vanishing_publisher_closes_its_direct_connection_and_a_new_one_is_rea
         client.send({"op": "subscribe", "topic": "/direct/vanish", "type": "std_msgs/String"})
         assert client.recv_until(_published("/direct/vanish"), timeout=20)["msg"] == {"data": "alive"}
         open_with = client.stats("bridge_direct")["direct_read_open"]
-        ROOTCONF.stop_process(publisher)
+        stop_process(publisher)
         assert wait_until(lambda: client.stats("bridge_direct")["direct_read_open"] == open_with - 1, timeout=15)
         bridges.env.start(pub_cmd)
         assert client.recv_until(_published("/direct/vanish"), timeout=20)["msg"] == {"data": "alive"}

@@ -13,17 +13,16 @@ import time
 from test_server import server  # noqa: F401  (fixture)
 from websockets.sync.client import connect
 
-from rbd_bridge.protocol import TopicMessage
+from rbd_bridge.core.fanout import TopicMessage
+from rbd_testkit import wait_for
 
 
 def _wait_session(srv, timeout=5.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
+    def subscribed():
         sessions = list(srv.sessions.values())
-        if sessions and sessions[0].subs:
-            return sessions[0]
-        time.sleep(0.01)
-    raise AssertionError("no subscribed session")
+        return sessions[0] if sessions and sessions[0].subs else None
+
+    return wait_for(subscribed, timeout, 0.01, what="a subscribed session")
 
 
 def test_direct_and_loop_writes_interleave_as_whole_frames_in_order(server):  # noqa: F811

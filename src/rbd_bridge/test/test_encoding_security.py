@@ -5,10 +5,10 @@ import math
 import struct
 
 import pytest
+from rbd_bridge_testing import png_text
 
-from rbd_bridge import encoding
-from rbd_bridge.msgconv import TypedArray
-from rbd_bridge.security import (
+from rbd_bridge.core import encoding
+from rbd_bridge.core.security import (
     ROBODOG_PUBLISH,
     AuthError,
     Policy,
@@ -17,6 +17,7 @@ from rbd_bridge.security import (
     parse_glob_list,
     policy_from_params,
 )
+from rbd_bridge.core.types import TypedArray
 
 cbor2 = pytest.importorskip("cbor2")
 
@@ -62,12 +63,12 @@ def test_cbor_decoder_rejects_garbage(garbage):
 
 def test_png_roundtrip_and_fragments():
     text = json.dumps({"op": "publish", "topic": "/t", "msg": {"data": "x" * 1000}})
-    data = encoding.png_encode(text)
-    assert encoding.png_decode(data) == text
+    decoded = png_text(encoding.png_encode(text))
+    assert decoded.rstrip("\n") == text and json.loads(decoded) == json.loads(text)  # newline padding
     parts = encoding.fragment(text, 100, "id1")
     assert len(parts) == (len(text) + 99) // 100
     assert "".join(json.loads(p)["data"] for p in parts) == text
-    assert encoding.fragment("short", 100, "x") == ["short"]
+    assert [json.loads(p)["total"] for p in encoding.fragment("short", 100, "x")] == [1]
     assert json.loads(encoding.json_dumps({"v": [math.inf, 1.0]})) == {"v": [None, 1.0]}
 
 
@@ -98,8 +99,27 @@ def test_topics_glob_opens_both_directions_and_direction_overrides():
     policy = policy_from_params(lambda name, default: values.get(name, default))
     assert policy.may_publish("/cmd_vel")
     assert policy.may_subscribe("/only") and not policy.may_subscribe("/other")
-    assert policy.may_read_param("/p/x") and not policy.may_write_param("/p/x")
     assert isinstance(policy, Policy)
+
+
+def test_launch_habits_of_rosbridge():
+    # rosbridge_websocket adds /rosapi/* to a given services_glob, and rosapi writes the
+    # parameters of a given params_glob; RoboDog's default has no parameters at all
+    def policy(**values):
+        return policy_from_params(lambda name, default: values.get(name, default))
+
+    given = policy(services_glob="[/echo/*]", params_glob="[/p/*]")
+    assert given.may_call("/echo/x") and given.may_call("/rosapi/topics") and not given.may_call("/other")
+    assert given.may_read_param("/p/x") and given.may_write_param("/p/x")
+    assert not given.may_read_param("/q") and not given.may_write_param("/q")
+    read_only = policy(params_glob="[/p/*]", params_writable="false")
+    assert read_only.may_read_param("/p/x") and not read_only.may_write_param("/p/x")
+    assert policy(params_glob="[/p/*]", params_writable=False).may_write_param("/p/x") is False
+    closed = policy(services_glob="[]")
+    assert not closed.may_call("/rosapi/topics")  # an empty list stays empty, as in rosbridge
+    robodog = policy()
+    assert robodog.may_call("/rosapi/topics") and robodog.may_call("/rbd_controller/em_stop")
+    assert not robodog.may_read_param("/run_id") and not robodog.may_write_param("/run_id")
 
 
 def test_mac_check_like_rosauth():

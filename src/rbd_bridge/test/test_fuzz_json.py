@@ -20,10 +20,12 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_protocol import FakeBackend, Timers
 
-from rbd_bridge import encoding
-from rbd_bridge.msgconv import ConversionError, dict_to_msg, get_message_class, msg_to_dict
-from rbd_bridge.protocol import OutQueue, Session
-from rbd_bridge.security import Policy
+from rbd_bridge.core import encoding
+from rbd_bridge.core.outqueue import OutQueue
+from rbd_bridge.core.security import Policy
+from rbd_bridge.core.session import Session
+from rbd_bridge.core.types import ConversionError
+from rbd_bridge.ros.msgconv import dict_to_msg, get_message_class, msg_to_dict
 
 EXAMPLES = int(os.environ.get("RBD_FUZZ_EXAMPLES", "100"))
 FUZZ = settings(

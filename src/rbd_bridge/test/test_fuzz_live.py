@@ -20,12 +20,13 @@ import time
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from rbd_bridge_testing import ROOTCONF, master_of, start_bridge, wait_for_service, wait_until
+from rbd_bridge_testing import master_of, start_bridge, wait_for_service, wait_until
 from test_fuzz_json import NAMES, OPS, TYPES, json_values
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
-from rbd_bridge import encoding
+from rbd_bridge.core import encoding
+from rbd_testkit import RosEnv
 
 EXAMPLES = int(os.environ.get("RBD_FUZZ_LIVE_EXAMPLES", "25"))
 
@@ -56,7 +57,7 @@ TWIST = {"linear": {"x": 1.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.
 @pytest.fixture(scope="module")
 def robot():
     """Master + watcher (stand-in robot) + the bridge as rbd_bridge.launch starts it."""
-    env = ROOTCONF.RosEnv()
+    env = RosEnv()
     try:
         log = os.path.join(env.home, "watcher.log")
         env.start([sys.executable, "-c", WATCHER, log])

@@ -10,16 +10,9 @@ from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import CameraInfo, Image, PointCloud2, PointField
 from std_msgs.msg import Duration, Float64, Header, Int64, String, UInt8MultiArray, UInt64
 
-from rbd_bridge import encoding
-from rbd_bridge.msgconv import (
-    ConversionError,
-    dict_to_msg,
-    get_message_class,
-    get_service_class,
-    message_typedefs,
-    msg_to_dict,
-    normalize_type,
-)
+from rbd_bridge.core import encoding
+from rbd_bridge.core.types import ConversionError, TypedArray, normalize_type
+from rbd_bridge.ros.msgconv import dict_to_msg, get_message_class, get_service_class, message_typedefs, msg_to_dict
 
 NOW = genpy.Time(1234, 5678)
 
@@ -151,7 +144,7 @@ def test_roundtrip_serializes_with_genpy():
 
 def test_binary_mode_for_cbor_keeps_bytes_and_typed_arrays():
     out = msg_to_dict(CameraInfo(D=[1.0, math.nan]), binary=True)
-    assert isinstance(out["D"], encoding.TypedArray) and out["D"].kind == "float64"
+    assert isinstance(out["D"], TypedArray) and out["D"].kind == "float64"
     assert isinstance(msg_to_dict(Image(data=b"\x01"), binary=True)["data"], bytes)
 
 

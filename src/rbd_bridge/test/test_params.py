@@ -2,7 +2,7 @@
 
 import pytest
 
-from rbd_bridge.params import ParamError, number
+from rbd_bridge.core.params import ParamError, number
 
 
 @pytest.mark.parametrize("unset", [None, "None", "none", "", "  ", "null", "default"])

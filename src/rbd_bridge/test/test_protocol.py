@@ -4,13 +4,17 @@ import json
 import time
 
 import pytest
+from rbd_bridge_testing import png_text
 
-from rbd_bridge import encoding
-from rbd_bridge.protocol import Backend, BridgeError, OutQueue, Session, TopicMessage
-from rbd_bridge.security import Policy, make_mac
+from rbd_bridge.core import encoding
+from rbd_bridge.core.fanout import ReplayWindow, TopicMessage
+from rbd_bridge.core.outqueue import OutQueue
+from rbd_bridge.core.security import Policy, make_mac
+from rbd_bridge.core.session import Session
+from rbd_bridge.core.types import BridgeError
 
 
-class FakeBackend(Backend):
+class FakeBackend:
     def __init__(self):
         self.calls = []
         self.pending = {}
@@ -339,7 +343,7 @@ def test_fragment_size_and_compressions_on_delivery():
         else:
             png = json.loads(frame)
             assert png["op"] == "png"
-            assert json.loads(encoding.png_decode(png["data"]))["msg"] == {"data": "hi"}
+            assert json.loads(png_text(png["data"]))["msg"] == {"data": "hi"}
 
 
 def test_incoming_fragments_reassemble_in_any_order_and_bad_ones_are_dropped():
@@ -396,10 +400,14 @@ def test_auth_required_before_anything_else():
     secret = "0123456789abcdef"
     policy = Policy(None, None, None, None, secret=secret)
     wall = 1000.0
+    # as rosbridge: any op but auth on an unauthenticated connection closes it
+    for first in ('{"op": "set_level", "level": "error"}', '{"op": "subscribe", "topic": "/t"}'):
+        session, backend, out, _, closed = make(policy, wall=lambda: wall)
+        session.receive(first)
+        session.receive('{"op": "subscribe", "topic": "/t"}')
+        assert closed == [(1008, "authentication required")] and drain(out) == []
+        assert backend.calls == [("closed", 1)]  # released at once, nothing done in ROS
     session, backend, out, _, closed = make(policy, wall=lambda: wall)
-    session.receive('{"op": "set_level", "level": "error"}')
-    session.receive('{"op": "subscribe", "topic": "/t"}')
-    assert backend.calls == [] and "not authenticated" in drain(out)[0]["msg"]
     mac = make_mac(secret, "client", "dest", "rand", 1000, "admin", 2000)
     good = {
         "op": "auth",
@@ -420,7 +428,7 @@ def test_auth_required_before_anything_else():
         s2, b2, _, _, closed2 = make(policy, wall=lambda: wall)
         s2.receive(json.dumps(bad))
         s2.receive('{"op": "subscribe", "topic": "/t"}')
-        assert not s2.authenticated and closed2 and b2.calls == []
+        assert not s2.authenticated and closed2 and b2.calls == [("closed", 1)]
 
 
 @pytest.mark.parametrize("level", ["info"])
@@ -429,3 +437,24 @@ def test_info_level_reports_successes(level):
     session.receive('{"op": "set_level", "level": "%s"}' % level)
     session.receive('{"op": "subscribe", "id": "s1", "topic": "/t"}')
     assert drain(out) == [{"op": "status", "level": "info", "id": "s1", "msg": "subscribed to /t"}]
+
+
+def test_replay_window_keeps_the_newest_publishes_for_one_window():
+    now = [10.0]
+    window = ReplayWindow(1.0, 3, latch=False, clock=lambda: now[0])
+    for i in range(5):
+        window.record(i)
+    assert window.replay() == [2, 3, 4]  # bounded: the newest limit messages
+    now[0] = 10.999
+    assert window.replay() == [2, 3, 4]
+    now[0] = 11.0  # closed: nothing for later subscribers, nothing kept
+    assert window.replay() == []
+    window.record(5)
+    assert list(window.messages) == []
+    latched = ReplayWindow(1.0, 10, latch=True, clock=lambda: 0.0)
+    latched.record("a")
+    latched.record("b")
+    assert latched.replay() == ["a"]  # rospy's latch resends "b" itself
+    off = ReplayWindow(0, 10, latch=False, clock=lambda: 0.0)
+    off.record("x")
+    assert off.replay() == []

@@ -4,8 +4,8 @@ import json
 
 import pytest
 
-from rbd_bridge.rosapi import RosApi, RosApiError
-from rbd_bridge.security import Policy
+from rbd_bridge.core.rosapi import RosApi, RosApiError
+from rbd_bridge.core.security import Policy
 
 ACTION = ["/goal", "/cancel", "/status", "/feedback", "/result"]
 
@@ -105,7 +105,7 @@ def test_action_servers_need_all_five_topics():
     no_status = ["/nostatus" + s for s in ("/goal", "/cancel", "/feedback", "/result")]
     at_root = list(ACTION)  # "/goal" etc. have no action namespace
     topics = complete + incomplete + no_status + at_root + ["/dock_extra/goal", "/chatter"]
-    graph = FakeGraph(topic_types=[(t, "some_msgs/Thing") for t in topics])
+    graph = FakeGraph(topic_types=[(t, "some_msgs/Thing") for t in topics], pubs=[(t, ["/n"]) for t in topics])
     assert make_api(graph).call("/rosapi/action_servers", {}) == {"action_servers": ["/arm/move", "/dock"]}
     # only topics the allow-list shows count
     hidden = make_api(graph, publish_globs=["/dock/*"], subscribe_globs=["/arm/*"])
@@ -113,6 +113,26 @@ def test_action_servers_need_all_five_topics():
     partly = make_api(graph, publish_globs=["/dock/goal", "/dock/cancel", "/dock/status"], subscribe_globs=[])
     assert partly.call("/rosapi/action_servers", {}) == {"action_servers": []}
     assert make_api(FakeGraph()).call("/rosapi/action_servers", None) == {"action_servers": []}
+
+
+def test_topics_are_those_with_a_publisher_or_subscriber_now():
+    # rosapi (ROS 1) compares the master's topic types with getSystemState: a topic whose
+    # last publisher and subscriber are gone keeps its type in the master but is not listed;
+    # a live topic whose type the master does not know is listed with type ""
+    graph = FakeGraph(
+        topic_types=[("/gone", "std_msgs/String"), ("/pub", "std_msgs/Int32"), ("/sub", "std_msgs/Bool")],
+        pubs=[("/pub", ["/talker"]), ("/gone", [])],
+        subs=[("/sub", ["/listener"]), ("/untyped", ["/listener"])],
+    )
+    assert make_api(graph).call("/rosapi/topics", {}) == {
+        "topics": ["/pub", "/sub", "/untyped"],
+        "types": ["std_msgs/Int32", "std_msgs/Bool", ""],
+    }
+    assert make_api(graph).call("/rosapi/topic_type", {"topic": "/gone"}) == {"type": ""}
+    assert make_api(graph, subscribe_globs=["/sub"], publish_globs=[]).call("/rosapi/topics", {}) == {
+        "topics": ["/sub"],
+        "types": ["std_msgs/Bool"],
+    }
 
 
 def test_get_param_returns_json_and_handles_defaults():

@@ -8,19 +8,26 @@ import time
 
 import pytest
 from websockets.exceptions import ConnectionClosed
+from websockets.frames import Frame, Opcode
 from websockets.sync.client import connect
 
-from rbd_bridge.protocol import Backend, TopicMessage
-from rbd_bridge.security import Policy
-from rbd_bridge.server import BridgeServer, unmask
+from rbd_bridge.core.fanout import TopicMessage
+from rbd_bridge.core.security import Policy
+from rbd_bridge.core.websocket import BridgeServer
 
 
-class EchoBackend(Backend):
+class EchoBackend:
     """publish on /loop comes straight back to every subscriber of /loop."""
 
     def __init__(self):
         self.sessions = set()
         self.closed = []
+
+    def begin_batch(self):
+        pass
+
+    def end_batch(self):
+        pass
 
     def advertise(self, session, topic, type_name, latch, queue_size):
         pass
@@ -60,11 +67,6 @@ def server(request):
     loop.close()
 
 
-def test_unmask_matches_the_definition():
-    payload, mask = bytes(range(200)), b"\x01\x80\xff\x10"
-    assert unmask(payload, mask) == bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
-
-
 def test_fragmented_client_messages_and_big_server_frames(server):
     _, _, port = server
     ws = connect("ws://127.0.0.1:%d" % port, compression=None, max_size=None)
@@ -100,6 +102,55 @@ def test_non_websocket_http_is_refused_and_unmasked_frames_close(server):
         data += chunk
     assert data[:1] == b"\x88" and data[2:4] == (1002).to_bytes(2, "big") and b"masked" in data
     s.close()
+
+
+def test_invalid_utf8_in_a_text_frame_closes_with_1007(server):
+    _, backend, port = server
+    ws = connect("ws://127.0.0.1:%d" % port, compression=None)
+    ws.send(json.dumps({"op": "subscribe", "topic": "/loop"}))  # a valid frame first: the session is up
+    assert wait_for(lambda: backend.sessions)
+    ws.socket.sendall(Frame(Opcode.TEXT, b'{"op": "\xff\xfe"}').serialize(mask=True))  # made by websockets
+    with pytest.raises(ConnectionClosed) as info:
+        ws.recv(timeout=5)
+    assert info.value.rcvd is not None and info.value.rcvd.code == 1007  # RFC 6455 section 8.1
+
+
+def test_common_frames_then_the_stream_handed_to_wsproto(server):
+    """Frames made by websockets: the fast path's frames (a big one over several reads), then a
+    fragmented message hands the stream to wsproto mid-read; every message once, in order,
+    pings answered before and after, invalid UTF-8 closes with 1007 on the wsproto side too."""
+    _, backend, port = server
+    ws = connect("ws://127.0.0.1:%d" % port, compression=None, max_size=None)
+    ws.send(json.dumps({"op": "subscribe", "topic": "/loop"}))
+    assert wait_for(lambda: backend.sessions)
+    assert ws.ping(b"before").wait(5)
+
+    def pub(data):
+        return json.dumps({"op": "publish", "topic": "/loop", "msg": {"data": data}}).encode()
+
+    big = "a" * 70000
+    frames = [
+        Frame(Opcode.TEXT, pub(big)),
+        Frame(Opcode.BINARY, pub("b")),
+        Frame(Opcode.TEXT, pub("c")[:7], fin=False),  # fragmented: wsproto from here on
+        Frame(Opcode.CONT, pub("c")[7:]),
+        Frame(Opcode.TEXT, pub("d")),
+    ]
+    ws.socket.sendall(b"".join(f.serialize(mask=True) for f in frames))
+    got = [json.loads(ws.recv(timeout=5))["msg"]["data"] for _ in range(4)]
+    assert got == [big, "b", "c", "d"]
+    assert ws.ping(b"after").wait(5)
+    ws.socket.sendall(Frame(Opcode.TEXT, b'{"op": "\xff"}').serialize(mask=True))
+    with pytest.raises(ConnectionClosed) as info:
+        ws.recv(timeout=5)
+    assert info.value.rcvd is not None and info.value.rcvd.code == 1007
+
+
+def wait_for(predicate, timeout=5.0):
+    deadline = time.monotonic() + timeout
+    while not predicate() and time.monotonic() < deadline:
+        time.sleep(0.02)
+    return predicate()
 
 
 def test_oversized_message_closes_with_1009(server):

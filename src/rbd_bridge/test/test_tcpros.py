@@ -8,7 +8,7 @@ import threading
 
 import pytest
 
-from rbd_bridge.tcpros import FramingError, LoopReader, TcprosFramer
+from rbd_bridge.core.tcpros import FramingError, LoopReader, TcprosFramer
 
 
 def _stream(payloads):

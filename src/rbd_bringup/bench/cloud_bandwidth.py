@@ -12,21 +12,12 @@ Writes OUTDIR/cloud_bandwidth.json and prints one row per mode.
 """
 
 import argparse
-import importlib.util
 import json
 import os
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-
-
-def root_conftest() -> object:
-    """The repository's conftest.py (private master, processes stopped by PID)."""
-    spec = importlib.util.spec_from_file_location("rbd_root_conftest", os.path.join(ROOT, "conftest.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from rbd_testkit import RosEnv, stop_process
 
 
 def cpu_seconds(pid: int) -> float:
@@ -54,7 +45,7 @@ class Counter:
             self.msgs += 1
 
 
-def run_mode(columns: int, hz: int, seconds: float, ros: object, conf: object) -> dict:
+def run_mode(columns: int, hz: int, seconds: float, ros: RosEnv) -> dict:
     """Measure one mode against the private master; returns the row."""
     import rospy
 
@@ -91,7 +82,7 @@ def run_mode(columns: int, hz: int, seconds: float, ros: object, conf: object) -
         return row
     finally:
         for p in reversed(procs):
-            conf.stop_process(p)
+            stop_process(p)
 
 
 def main() -> int:
@@ -102,8 +93,7 @@ def main() -> int:
     ap.add_argument("--modes", default="1024x10,2048x10")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
-    conf = root_conftest()
-    ros = conf.RosEnv()
+    ros = RosEnv()
     rows = []
     try:
         ros.use_in_this_process()
@@ -112,7 +102,7 @@ def main() -> int:
         rospy.init_node("cloud_bandwidth", anonymous=True, disable_signals=True)
         for mode in args.modes.split(","):
             columns, hz = (int(v) for v in mode.split("x"))
-            rows.append(run_mode(columns, hz, args.seconds, ros, conf))
+            rows.append(run_mode(columns, hz, args.seconds, ros))
     finally:
         ros.close()
     print("cloud_bandwidth: simulated OS1 (lab world), cloud_decimator defaults, %.0f s per mode" % args.seconds)

@@ -1,4 +1,4 @@
-"""Helpers of rbd_bringup's launch tests: stand-in driver packages, the root conftest's RosEnv.
+"""Helpers of rbd_bringup's launch tests: stand-in driver packages (the private master: rbd_testkit).
 
 Neither ouster-ros nor zed-ros-wrapper is in Debian. The stand-ins are catkin packages named
 ``ouster_ros`` and ``zed_wrapper`` in a temporary directory put first on ROS_PACKAGE_PATH. Their
@@ -11,12 +11,10 @@ loading ``params/common.yaml`` (pos_tracking publish_tf / publish_map_tf true, a
 and a ``<camera_name>_description`` URDF parameter while ``publish_urdf`` is true.
 """
 
-import importlib.util
 import os
 import stat
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 
 #: ouster-ros sensor.launch (master, c39f875): argument -> default (None: required).
 OUSTER_SENSOR_ARGS = [
@@ -48,16 +46,6 @@ general:
     camera_name:                zed
     base_frame:                 'base_link'
 """
-
-
-def _root_conftest():
-    spec = importlib.util.spec_from_file_location("rbd_root_conftest", os.path.join(ROOT, "conftest.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-ROOTCONF = _root_conftest()
 
 
 def _package(root, name):

@@ -25,27 +25,20 @@ import rosgraph
 import rospy
 import tf2_ros
 import yaml
-from bringup_testing import ROOTCONF
 from diagnostic_msgs.msg import DiagnosticArray
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState, PointCloud2
 from std_msgs.msg import String
 
 from rbd_msgs.msg import CollisionState
+from rbd_testkit import RosEnv, free_port, stop_process, wait_for, wait_for_port
 
 PKG = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MOUNTS = os.path.join(PKG, "config", "mounts.yaml")
 NAMES = ["%s_%s_joint" % (leg, j) for leg in ("FR", "FL", "RR", "RL") for j in ("hip", "thigh", "calf")]
-
-
-def wait_for(predicate, timeout, period=0.05):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        value = predicate()
-        if value:
-            return value
-        time.sleep(period)
-    return predicate()
+EXPECTED_NODES = {"/rbd_a1_driver", "/rbd_lidar", "/ekf_localization", "/map_correction", "/robot_state_publisher",
+                  "/joint_state_fallback", "/cloud_decimator", "/rbd_controller", "/rbd_pos_controller",
+                  "/rbd_navigation", "/rbd_gestrec", "/rbd_bridge", "/zed2/zed_node"}
 
 
 def free_udp_port():
@@ -82,7 +75,7 @@ def start_xvfb():
     with os.fdopen(r, "rb") as fh:
         display = fh.readline().decode().strip()
     if not display:
-        ROOTCONF.stop_process(proc)
+        stop_process(proc)
         raise RuntimeError("Xvfb did not report a display")
     return proc, ":" + display
 
@@ -127,10 +120,10 @@ class Robot:
 
 @pytest.fixture(scope="module")
 def robot(standin_path):
-    env = ROOTCONF.RosEnv()
+    env = RosEnv()
     env.env["ROS_PACKAGE_PATH"] = standin_path
     lcm_url = "udpm://239.255.76.67:%d?ttl=0" % free_udp_port()
-    bridge_port = ROOTCONF.free_port()
+    bridge_port = free_port()
     sim = os.path.join(subprocess.check_output(["rospack", "find", "rbd_sim"], universal_newlines=True).strip(),
                        "launch")
     try:
@@ -148,22 +141,23 @@ def robot(standin_path):
                    "lcm_url:=" + lcm_url, "bridge_port:=%d" % bridge_port])
         env.use_in_this_process()
         rospy.init_node("bringup_test", anonymous=True, disable_signals=True)
-        yield Robot(env, bridge_port)
+        robot = Robot(env, bridge_port)
+        # Every test starts with the whole robot side up, whichever runs first (Python nodes take
+        # tens of seconds to start on a loaded 2-core machine).
+        assert wait_for(lambda: EXPECTED_NODES <= robot.nodes(), 90.0, 0.5), EXPECTED_NODES - robot.nodes()
+        yield robot
     finally:
         env.close()
 
 
 def test_robot_launch_comes_up_in_emergency_stop_with_its_inputs_flowing(robot):
-    expected = {"/rbd_a1_driver", "/rbd_lidar", "/ekf_localization", "/map_correction", "/robot_state_publisher",
-                "/joint_state_fallback", "/cloud_decimator", "/rbd_controller", "/rbd_pos_controller",
-                "/rbd_navigation", "/rbd_gestrec", "/rbd_bridge", "/zed2/zed_node"}
-    assert wait_for(lambda: expected <= robot.nodes(), 90.0, 0.5), expected - robot.nodes()
+    assert EXPECTED_NODES <= robot.nodes(), EXPECTED_NODES - robot.nodes()
     assert wait_for(lambda: robot.states, 30.0)
     assert robot.states[0] == "EMERGENCY_STOP"
     # The driver hears the (mock) A1; the zone sees the (simulated) OS1 and is not stale.
     assert wait_for(lambda: robot.odom, 30.0), "no /rbd_a1_driver/odom: HighState not arriving"
     assert wait_for(lambda: len([s for s in robot.lidar if not s.stale and not s.error]) >= 3, 30.0)
-    ROOTCONF.wait_for_port(robot.bridge_port, 30.0)
+    wait_for_port(robot.bridge_port, 30.0)
     # The mounts of the calibration file, published by the URDF.
     with open(MOUNTS) as fh:
         mounts = yaml.safe_load(fh)
@@ -241,7 +235,7 @@ def test_laptop_rviz_reads_the_thinned_cloud(robot):
         assert [f.name for f in cloud.fields] == ["x", "y", "z", "range"]
     finally:
         if rviz is not None:
-            ROOTCONF.stop_process(rviz)
-        ROOTCONF.stop_process(xvfb)
+            stop_process(rviz)
+        stop_process(xvfb)
     # RViz gone: the decimator lets go of the full cloud again.
     assert wait_for(lambda: "/cloud_decimator" not in robot.subscribers("/ouster/points"), 10.0, 0.2)

@@ -136,6 +136,7 @@ Measurement::Measurement()
 
 Ekf::Ekf()
     : state_(StateVector::Zero()),
+      initial_state_(StateVector::Zero()),
       covariance_(StateMatrix::Identity() * 1e-9),
       initial_covariance_(StateMatrix::Identity() * 1e-9),
       process_noise_(StateMatrix::Identity() * 0.01),
@@ -153,6 +154,15 @@ void Ekf::setInitialEstimateCovariance(const StateMatrix& p0) {
   if (!initialized_) covariance_ = p0;
 }
 
+void Ekf::setInitialState(const StateVector& x0) {
+  initial_state_ = x0;
+  if (!initialized_) {
+    state_ = x0;
+    wrapStateAngles();
+    if (two_d_mode_) enforceTwoD();
+  }
+}
+
 void Ekf::setTwoDMode(bool enabled) {
   two_d_mode_ = enabled;
   if (two_d_mode_) enforceTwoD();
@@ -164,7 +174,7 @@ void Ekf::setDebug(bool enabled, std::ostream* stream) {
 }
 
 void Ekf::reset() {
-  state_.setZero();
+  state_ = initial_state_;
   covariance_ = initial_covariance_;
   initialized_ = false;
   last_update_time_ = 0.0;
@@ -290,7 +300,17 @@ CorrectResult Ekf::correctSubset(const Measurement& meas, const std::array<int, 
     if (debugOn()) *debug_stream_ << "reject " << meas.source << ": innovation covariance not PD\n";
     return CorrectResult::kInvalid;
   }
-  const VecM s_inv_innov = llt.solve(innovation);
+  // S^-1 explicitly: a fixed 3x3/6x6 inverse is a short unrolled computation, while solving for
+  // a matrix right-hand side (K = P H^T S^-1) goes through Eigen's general blocked
+  // triangular solver (its packing and blocking set-up cost more than the whole update).
+  MatM s_inv(m, m);
+  if (M == Eigen::Dynamic) {
+    s_inv = llt.solve(MatM::Identity(m, m));
+  } else {
+    s_inv = s.inverse();
+  }
+  s_inv = (0.5 * (s_inv + s_inv.transpose())).eval();
+  const VecM s_inv_innov = s_inv * innovation;
   last_squared_mahalanobis_ = innovation.dot(s_inv_innov);
   const double gate = meas.mahalanobis_threshold;
   if (gate < std::sqrt(std::numeric_limits<double>::max()) && last_squared_mahalanobis_ > gate * gate) {
@@ -301,8 +321,8 @@ CorrectResult Ekf::correctSubset(const Measurement& meas, const std::array<int, 
     return CorrectResult::kRejected;
   }
 
-  // K = P H^T S^-1 (S symmetric, so K^T = S^-1 H P).
-  const MatNM k = llt.solve(pht.transpose()).transpose();
+  // K = P H^T S^-1.
+  const MatNM k = pht.lazyProduct(s_inv);
   state_.noalias() += k * innovation;
 
   // Joseph form P' = (I - K H) P (I - K H)^T + K R K^T with H = rows idx of the identity:

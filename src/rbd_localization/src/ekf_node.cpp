@@ -1,6 +1,6 @@
 #include "rbd_localization/ekf_node.h"
 
-#include <geometry_msgs/TransformStamped.h>
+#include <std_msgs/String.h>
 
 #include <algorithm>
 #include <cmath>
@@ -29,37 +29,68 @@ geometry_msgs::Quaternion toQuaternionMsg(const Eigen::Quaterniond& q) {
   return m;
 }
 
-const char* typeName(SensorType t) {
-  switch (t) {
-    case SensorType::kImu:
-      return "imu";
-    case SensorType::kPose:
-      return "pose";
-    case SensorType::kOdom:
-      return "odom";
-    case SensorType::kTwist:
-      return "twist";
+bool anyOf(const std::array<bool, STATE_SIZE>& v, int first, int count) {
+  for (int i = first; i < first + count; ++i) {
+    if (v[i]) return true;
   }
-  return "?";
+  return false;
 }
 
 // Measurements older than the filter by more than this are dropped rather than fused.
 constexpr double kMaxMeasurementAge = 1.0;
 
+// Messages a subscriber holds at least (2 s of a 500 Hz IMU): inputs are handled once per cycle,
+// and a cycle that runs late (load, simulated time) must not lose any. r_l drops what exceeds
+// <sensor>_queue_size per cycle; this node fuses more, never less.
+constexpr int kMinSubscriberQueue = 1000;
+
+uint32_t subscriberQueue(int queue_size) {
+  return queue_size == 0 ? 0u : static_cast<uint32_t>(std::max(queue_size, kMinSubscriberQueue));
+}
+
 }  // namespace
 
 EkfNode::EkfNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh), pnh_(pnh) {}
 
+template <class M>
+ros::Subscriber EkfNode::subscribeSensor(const SensorConfig& cfg,
+                                         const boost::function<void(const boost::shared_ptr<M const>&)>& cb) {
+  ros::SubscribeOptions ops;
+  ops.template init<M>(cfg.topic, subscriberQueue(cfg.queue_size), cb);
+  ops.transport_hints = ros::TransportHints().tcpNoDelay(cfg.nodelay);
+  ops.callback_queue = &sensor_queue_;
+  return nh_.subscribe(ops);
+}
+
 bool EkfNode::init(std::string* error) {
-  if (!loadFilterParams(pnh_, &params_, error)) return false;
+  std::vector<std::string> warnings;
+  if (!loadFilterParams(pnh_, &params_, &warnings, error)) return false;
+  for (const std::string& w : warnings) ROS_WARN("ekf: %s", w.c_str());
+
   ekf_.setProcessNoiseCovariance(params_.process_noise_covariance);
   ekf_.setInitialEstimateCovariance(params_.initial_estimate_covariance);
   ekf_.setTwoDMode(params_.two_d_mode);
-  ekf_.setDebug(params_.debug, &debug_log_);
+  ekf_.setInitialState(params_.initial_state);
+  if (params_.debug && !params_.debug_out_file.empty()) {
+    debug_file_.open(params_.debug_out_file.c_str());
+    if (!debug_file_.is_open()) {
+      ROS_WARN("ekf: cannot write debug_out_file %s; the filter trace goes to the DEBUG log",
+               params_.debug_out_file.c_str());
+    }
+  }
+  ekf_.setDebug(params_.debug,
+                debug_file_.is_open() ? static_cast<std::ostream*>(&debug_file_) : &debug_log_);
+  enabled_ = !params_.disabled_at_startup;
 
   tf_buffer_.reset(new tf2_ros::Buffer());
-  tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, nh_));
+  needs_dynamic_tf_ = params_.world_frame != params_.odom_frame && params_.publish_tf;  // map -> odom
+  ensureTfListener("start-up");
   odom_pub_ = nh_.advertise<nav_msgs::Odometry>("odometry/filtered", 20);
+  if (params_.publish_acceleration) {
+    accel_pub_ = nh_.advertise<geometry_msgs::AccelWithCovarianceStamped>("accel/filtered", 20);
+  }
+  config_pub_ = pnh_.advertise<std_msgs::String>("effective_config", 1, true);
+  enable_srv_ = pnh_.advertiseService("enable", &EkfNode::enableService, this);
   diagnostics_.reset(new diagnostic_updater::Updater(nh_, pnh_));
   diagnostics_->setHardwareID("none");
   diagnostics_->add("Filter", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { diagnoseFilter(s); });
@@ -68,52 +99,61 @@ bool EkfNode::init(std::string* error) {
   for (size_t i = 0; i < params_.sensors.size(); ++i) {
     SensorState& s = sensors_[i];
     s.cfg = params_.sensors[i];
-    const ros::TransportHints hints = ros::TransportHints().tcpNoDelay(s.cfg.nodelay);
     switch (s.cfg.type) {
-      case SensorType::kImu:
-        s.sub = nh_.subscribe<sensor_msgs::Imu>(
-            s.cfg.topic, s.cfg.queue_size,
-            [this, i](const sensor_msgs::Imu::ConstPtr& m) { imuCallback(m, i); }, ros::VoidConstPtr(),
-            hints);
+      case SensorType::kImu: {
+        s.orientation_as_pose =
+            (s.cfg.relative || s.cfg.differential) && anyOf(s.cfg.update_vector, ORIENTATION_OFFSET, 3);
+        if (s.orientation_as_pose) {
+          s.orientation_cfg = s.rest_cfg = s.cfg;
+          for (int k = 0; k < STATE_SIZE; ++k) {
+            const bool orientation = k >= ORIENTATION_OFFSET && k < POSITION_V_OFFSET;
+            s.orientation_cfg.update_vector[k] = orientation && s.cfg.update_vector[k];
+            if (orientation) s.rest_cfg.update_vector[k] = false;
+          }
+        }
+        s.sub = subscribeSensor<sensor_msgs::Imu>(
+            s.cfg, [this, i](const sensor_msgs::Imu::ConstPtr& m) { imuCallback(m, i); });
         break;
+      }
       case SensorType::kPose:
-        s.sub = nh_.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
-            s.cfg.topic, s.cfg.queue_size,
-            [this, i](const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& m) { poseCallback(m, i); },
-            ros::VoidConstPtr(), hints);
+        s.sub = subscribeSensor<geometry_msgs::PoseWithCovarianceStamped>(
+            s.cfg,
+            [this, i](const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& m) { poseCallback(m, i); });
         break;
       case SensorType::kOdom:
-        s.sub = nh_.subscribe<nav_msgs::Odometry>(
-            s.cfg.topic, s.cfg.queue_size,
-            [this, i](const nav_msgs::Odometry::ConstPtr& m) { odomCallback(m, i); }, ros::VoidConstPtr(),
-            hints);
+        s.sub = subscribeSensor<nav_msgs::Odometry>(
+            s.cfg, [this, i](const nav_msgs::Odometry::ConstPtr& m) { odomCallback(m, i); });
         break;
       case SensorType::kTwist:
-        s.sub = nh_.subscribe<geometry_msgs::TwistWithCovarianceStamped>(
-            s.cfg.topic, s.cfg.queue_size,
-            [this, i](const geometry_msgs::TwistWithCovarianceStamped::ConstPtr& m) { twistCallback(m, i); },
-            ros::VoidConstPtr(), hints);
+        s.sub = subscribeSensor<geometry_msgs::TwistWithCovarianceStamped>(
+            s.cfg,
+            [this, i](const geometry_msgs::TwistWithCovarianceStamped::ConstPtr& m) { twistCallback(m, i); });
         break;
     }
     diagnostics_->add(s.cfg.name + " (" + s.sub.getTopic() + ")",
                       [this, i](diagnostic_updater::DiagnosticStatusWrapper& st) { diagnoseSensor(i, st); });
-    ROS_INFO("ekf: %s %s <- %s", typeName(s.cfg.type), s.cfg.name.c_str(), s.sub.getTopic().c_str());
+    ROS_INFO("ekf: %s %s <- %s", sensorTypeName(s.cfg.type), s.cfg.name.c_str(), s.sub.getTopic().c_str());
   }
-  needs_dynamic_tf_ = params_.world_frame != params_.odom_frame;
-  rotation_resolved_.assign(sensors_.size(), true);
-  for (size_t i = 0; i < sensors_.size(); ++i) {
-    const SensorConfig& c = sensors_[i].cfg;
-    bool pose_part = false, rotated_part = false;
-    for (int k = 0; k < 6; ++k) pose_part = pose_part || c.update_vector[k];
-    for (int k = 6; k < STATE_SIZE; ++k) rotated_part = rotated_part || c.update_vector[k];
-    if ((c.type == SensorType::kPose || c.type == SensorType::kOdom) && pose_part && !c.frame_is_world) {
-      needs_dynamic_tf_ = true;
-    }
-    if (c.type == SensorType::kImu || (c.type != SensorType::kPose && rotated_part))
-      rotation_resolved_[i] = false;
+  std_msgs::String config;
+  config.data =
+      effectiveConfigJson(params_, ekf_.processNoiseCovariance(), ekf_.initialEstimateCovariance(), warnings);
+  config_pub_.publish(config);
+  if (!enabled_) {
+    ROS_WARN("ekf: disabled_at_startup: waiting for %s/enable", pnh_.getNamespace().c_str());
   }
   start_time_ = ros::Time::now();
   timer_ = nh_.createTimer(ros::Duration(1.0 / params_.frequency), &EkfNode::periodicUpdate, this);
+  return true;
+}
+
+bool EkfNode::enableService(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  if (enabled_) {
+    ROS_WARN("ekf: enable called, but the filter is already enabled");
+  } else {
+    ROS_INFO("ekf: enabled");
+    enabled_ = true;
+    start_time_ = ros::Time::now();
+  }
   return true;
 }
 
@@ -129,44 +169,58 @@ void EkfNode::markInvalid(size_t idx, const std::string& why) {
   ROS_WARN_THROTTLE(2.0, "ekf: %s (%s): %s", s.cfg.name.c_str(), s.cfg.topic.c_str(), why.c_str());
 }
 
-bool EkfNode::staticRotation(const std::string& target, const std::string& source, Eigen::Matrix3d* out) {
-  if (source.empty() || source == target) {
-    out->setIdentity();
-    return true;
+void EkfNode::ensureTfListener(const std::string& why) {
+  if (tf_listener_) return;
+  // Without a transform_timeout no lookup waits, so the listener's messages can be handled with
+  // the sensors' in the filter cycle (no thread, no wake-ups of its own); a lookup that waits
+  // needs the listener's own thread to fill the buffer meanwhile.
+  if (params_.transform_timeout > 0.0) {
+    tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, nh_, true));
+  } else {
+    ros::NodeHandle tf_nh(nh_);
+    tf_nh.setCallbackQueue(&sensor_queue_);
+    tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, tf_nh, false));
   }
-  const std::string key = target + "<-" + source;
-  auto it = static_rotations_.find(key);
-  if (it != static_rotations_.end()) {
-    *out = it->second;
-    return true;
-  }
-  if (!tf_listener_) {  // released earlier; a new frame appeared
-    tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, nh_));
-    ROS_WARN("ekf: new sensor frame %s: TF listener restarted", source.c_str());
-  }
-  Eigen::Isometry3d t;
-  if (!lookup(target, source, ros::Time(0), &t)) return false;
-  static_rotations_[key] = t.linear();
-  *out = t.linear();
-  return true;
+  if (why != "start-up") ROS_WARN("ekf: TF listener restarted: %s", why.c_str());
 }
 
-void EkfNode::maybeReleaseTf(size_t resolved_sensor) {
-  if (rotation_resolved_[resolved_sensor]) return;
-  rotation_resolved_[resolved_sensor] = true;
-  if (needs_dynamic_tf_ || !tf_listener_) return;
-  for (bool r : rotation_resolved_) {
-    if (!r) return;
+void EkfNode::maybeReleaseTf() {
+  if (!tf_listener_ || needs_dynamic_tf_) return;
+  for (const SensorState& s : sensors_) {
+    if (!s.frames_ready) return;
   }
   tf_listener_.reset();
   ROS_INFO("ekf: all sensor frames resolved, TF listener released");
 }
 
+bool EkfNode::sensorRotation(size_t idx, const std::string& frame, Eigen::Matrix3d* out) {
+  SensorState& s = sensors_[idx];
+  if (s.has_rotation && frame == s.rotation_frame) {
+    *out = s.rotation;
+    return true;
+  }
+  if (frame.empty() || frame == params_.base_link_frame) {
+    out->setIdentity();
+  } else {
+    ensureTfListener("new frame " + frame + " for " + s.cfg.name);
+    Eigen::Isometry3d t;
+    if (!lookup(params_.base_link_frame, frame, ros::Time(0), &t)) return false;
+    *out = t.linear();
+  }
+  s.rotation_frame = frame;
+  s.rotation = *out;
+  s.has_rotation = true;
+  return true;
+}
+
 bool EkfNode::lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
                      Eigen::Isometry3d* out) {
   try {
+    // Only a lookup that may wait takes the timeout (tf2 refuses one without a listener thread).
     const geometry_msgs::TransformStamped ts =
-        tf_buffer_->lookupTransform(target, source, stamp, ros::Duration(params_.transform_timeout));
+        params_.transform_timeout > 0.0
+            ? tf_buffer_->lookupTransform(target, source, stamp, ros::Duration(params_.transform_timeout))
+            : tf_buffer_->lookupTransform(target, source, stamp);
     *out = toEigen(ts.transform);
     return true;
   } catch (const tf2::TransformException& ex) {
@@ -178,25 +232,39 @@ bool EkfNode::lookup(const std::string& target, const std::string& source, const
       } catch (const tf2::TransformException&) {
       }
     }
-    ROS_WARN_THROTTLE(2.0, "ekf: no transform %s <- %s: %s", target.c_str(), source.c_str(), ex.what());
+    if (!params_.silent_tf_failure) {
+      ROS_WARN_THROTTLE(2.0, "ekf: no transform %s <- %s: %s", target.c_str(), source.c_str(), ex.what());
+    }
     return false;
   }
 }
 
-void EkfNode::imuCallback(const sensor_msgs::Imu::ConstPtr& msg, size_t idx) {
+void EkfNode::countReceived(size_t idx) {
   SensorState& s = sensors_[idx];
   s.last_receive = ros::Time::now();
   ++s.received;
   ++s.window_received;
+  ++s.cycle_received;
+}
+
+void EkfNode::imuCallback(const sensor_msgs::Imu::ConstPtr& msg, size_t idx) {
+  countReceived(idx);
+  SensorState& s = sensors_[idx];
   Eigen::Matrix3d base_from_imu;
-  if (!staticRotation(params_.base_link_frame, msg->header.frame_id, &base_from_imu)) {
+  if (!sensorRotation(idx, msg->header.frame_id, &base_from_imu)) {
     markInvalid(idx, "no transform " + params_.base_link_frame + " <- " + msg->header.frame_id);
     return;
   }
-  maybeReleaseTf(idx);
+  s.frames_ready = true;
+  const double t = stampToTime(msg->header.stamp);
   std::string reason;
-  if (!imuMeasurements(*msg, base_from_imu, s.cfg, ekf_.state(), params_.gravitational_acceleration,
-                       stampToTime(msg->header.stamp), &queue_, &reason)) {
+  if (s.orientation_as_pose) {
+    PoseWithCov orientation;
+    if (imuOrientationPose(*msg, base_from_imu, &orientation))
+      fusePose(orientation, t, s.orientation_cfg, idx);
+  }
+  if (!imuMeasurements(*msg, base_from_imu, s.orientation_as_pose ? s.rest_cfg : s.cfg, ekf_.state(),
+                       params_.gravitational_acceleration, t, &queue_, &reason)) {
     markInvalid(idx, reason);
     return;
   }
@@ -211,7 +279,15 @@ void EkfNode::handlePose(const geometry_msgs::PoseWithCovariance& msg, const std
     markInvalid(idx, "pose with NaN/inf or zero quaternion");
     return;
   }
-  if (!s.cfg.frame_is_world && !frame.empty() && frame != params_.world_frame) {
+  // Differential poses become body-frame velocities, which no fixed world <- frame transform
+  // changes: like r_l, they are not transformed.
+  const bool transform =
+      !s.cfg.frame_is_world && !s.cfg.differential && !frame.empty() && frame != params_.world_frame;
+  if (transform) {
+    if (!needs_dynamic_tf_) {
+      needs_dynamic_tf_ = true;
+      ensureTfListener(s.cfg.name + " poses are in " + frame + ", not " + params_.world_frame);
+    }
     Eigen::Isometry3d world_from_frame;
     if (!lookup(params_.world_frame, frame, stamp, &world_from_frame)) {
       markInvalid(idx, "no transform " + params_.world_frame + " <- " + frame);
@@ -220,17 +296,21 @@ void EkfNode::handlePose(const geometry_msgs::PoseWithCovariance& msg, const std
     pose.pose = world_from_frame * pose.pose;
     pose.covariance = rotateCovariance(pose.covariance, world_from_frame.linear());
   }
-  if (s.cfg.relative) {
+  fusePose(pose, stampToTime(stamp), s.cfg, idx);
+}
+
+void EkfNode::fusePose(PoseWithCov pose, double t, const SensorConfig& cfg, size_t idx) {
+  SensorState& s = sensors_[idx];
+  if (cfg.relative) {
     if (!s.have_first) {
       s.first = pose;
       s.have_first = true;
     }
     pose.pose = s.first.pose.inverse() * pose.pose;
   }
-  const double t = stampToTime(stamp);
-  if (s.cfg.differential) {
+  if (cfg.differential) {
     Measurement m;
-    if (s.have_previous && differentialMeasurement(s.previous, pose, t - s.previous_time, s.cfg, t, &m)) {
+    if (s.have_previous && differentialMeasurement(s.previous, pose, t - s.previous_time, cfg, t, &m)) {
       enqueue(m, idx);
     }
     s.previous = pose;
@@ -238,35 +318,31 @@ void EkfNode::handlePose(const geometry_msgs::PoseWithCovariance& msg, const std
     s.have_previous = true;
     return;
   }
-  enqueue(poseMeasurement(pose, s.cfg, t), idx);
+  enqueue(poseMeasurement(pose, cfg, t), idx);
 }
 
 void EkfNode::poseCallback(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg, size_t idx) {
-  SensorState& s = sensors_[idx];
-  s.last_receive = ros::Time::now();
-  ++s.received;
-  ++s.window_received;
+  countReceived(idx);
   handlePose(msg->pose, msg->header.frame_id, msg->header.stamp, idx);
+  sensors_[idx].frames_ready = true;
 }
 
 void EkfNode::odomCallback(const nav_msgs::Odometry::ConstPtr& msg, size_t idx) {
+  countReceived(idx);
   SensorState& s = sensors_[idx];
-  s.last_receive = ros::Time::now();
-  ++s.received;
-  ++s.window_received;
-  bool pose_used = false;
-  for (int i = 0; i < 6; ++i) pose_used = pose_used || s.cfg.update_vector[i];
-  if (pose_used) handlePose(msg->pose, msg->header.frame_id, msg->header.stamp, idx);
-  bool twist_used = false;
-  for (int i = POSITION_V_OFFSET; i < POSITION_V_OFFSET + 6; ++i)
-    twist_used = twist_used || s.cfg.update_vector[i];
-  if (!twist_used) return;
+  if (anyOf(s.cfg.update_vector, POSITION_OFFSET, 6)) {
+    handlePose(msg->pose, msg->header.frame_id, msg->header.stamp, idx);
+  }
+  if (!anyOf(s.cfg.update_vector, POSITION_V_OFFSET, 6)) {
+    s.frames_ready = true;
+    return;
+  }
   Eigen::Matrix3d base_from_child;
-  if (!staticRotation(params_.base_link_frame, msg->child_frame_id, &base_from_child)) {
+  if (!sensorRotation(idx, msg->child_frame_id, &base_from_child)) {
     markInvalid(idx, "no transform " + params_.base_link_frame + " <- " + msg->child_frame_id);
     return;
   }
-  maybeReleaseTf(idx);
+  s.frames_ready = true;
   Measurement m;
   if (!twistMeasurement(msg->twist, base_from_child, s.cfg, stampToTime(msg->header.stamp), &m)) {
     markInvalid(idx, "twist with NaN/inf");
@@ -276,18 +352,15 @@ void EkfNode::odomCallback(const nav_msgs::Odometry::ConstPtr& msg, size_t idx) 
 }
 
 void EkfNode::twistCallback(const geometry_msgs::TwistWithCovarianceStamped::ConstPtr& msg, size_t idx) {
-  SensorState& s = sensors_[idx];
-  s.last_receive = ros::Time::now();
-  ++s.received;
-  ++s.window_received;
+  countReceived(idx);
   Eigen::Matrix3d base_from_frame;
-  if (!staticRotation(params_.base_link_frame, msg->header.frame_id, &base_from_frame)) {
+  if (!sensorRotation(idx, msg->header.frame_id, &base_from_frame)) {
     markInvalid(idx, "no transform " + params_.base_link_frame + " <- " + msg->header.frame_id);
     return;
   }
-  maybeReleaseTf(idx);
+  sensors_[idx].frames_ready = true;
   Measurement m;
-  if (!twistMeasurement(msg->twist, base_from_frame, s.cfg, stampToTime(msg->header.stamp), &m)) {
+  if (!twistMeasurement(msg->twist, base_from_frame, sensors_[idx].cfg, stampToTime(msg->header.stamp), &m)) {
     markInvalid(idx, "twist with NaN/inf");
     return;
   }
@@ -304,6 +377,23 @@ bool EkfNode::sensorStale(const SensorState& s, const ros::Time& now) const {
   return (now - s.last_receive).toSec() > params_.sensor_stale_timeout;
 }
 
+void EkfNode::drainSensorQueue() {
+  for (SensorState& s : sensors_) s.cycle_received = 0;
+  sensor_queue_.callAvailable(ros::WallDuration(0));
+  for (SensorState& s : sensors_) {
+    // A full subscriber queue drops its oldest messages (roscpp).
+    const uint32_t queue = subscriberQueue(s.cfg.queue_size);
+    if (queue > 0 && s.cycle_received >= queue) {
+      ++s.full_queue_cycles;
+      ROS_WARN_THROTTLE(
+          10.0,
+          "ekf: %s delivered %u messages (its whole subscriber queue) in one filter cycle: older "
+          "ones may have been dropped (the filter cycle ran seconds late)",
+          s.cfg.name.c_str(), queue);
+    }
+  }
+}
+
 void EkfNode::periodicUpdate(const ros::TimerEvent&) {
   const ros::Time now = ros::Time::now();
   // Time jumped backwards (bag loop, simulator restart): start over.
@@ -312,9 +402,19 @@ void EkfNode::periodicUpdate(const ros::TimerEvent&) {
     ekf_.reset();
     queue_.clear();
     queue_sensor_.clear();
+    for (SensorState& s : sensors_) s.have_first = s.have_previous = false;
     last_published_stamp_ = -1.0;
   }
   last_wall_check_ = now;
+
+  drainSensorQueue();
+  maybeReleaseTf();
+  if (!enabled_) {
+    queue_.clear();
+    queue_sensor_.clear();
+    diagnostics_->update();
+    return;
+  }
 
   bool processed = false;
   order_.resize(queue_.size());
@@ -333,7 +433,6 @@ void EkfNode::periodicUpdate(const ros::TimerEvent&) {
       case CorrectResult::kAccepted:
         ++s.accepted;
         processed = true;
-        last_measurement_time_ = meas.time;
         break;
       case CorrectResult::kRejected:
         ++s.rejected;
@@ -349,12 +448,18 @@ void EkfNode::periodicUpdate(const ros::TimerEvent&) {
   }
   queue_.clear();
   queue_sensor_.clear();
-  if (params_.debug && debug_log_.tellp() > 0) {
-    ROS_DEBUG_STREAM("ekf: " << debug_log_.str());
-    debug_log_.str("");
+  if (params_.debug) {
+    if (debug_file_.is_open()) {
+      debug_file_.flush();
+    } else if (debug_log_.tellp() > 0) {
+      ROS_DEBUG_STREAM("ekf: " << debug_log_.str());
+      debug_log_.str("");
+    }
   }
-  // No news within sensor_timeout: keep the estimate moving with the model (r_l behaviour).
-  if (ekf_.initialized() && !processed && now.toSec() - ekf_.lastUpdateTime() > params_.sensor_timeout) {
+  // No news within sensor_timeout (or always, with predict_to_current_time): keep the estimate
+  // moving with the model (r_l behaviour).
+  if (ekf_.initialized() && (params_.predict_to_current_time ||
+                             (!processed && now.toSec() - ekf_.lastUpdateTime() > params_.sensor_timeout))) {
     ekf_.predictTo(now.toSec());
   }
 
@@ -376,10 +481,10 @@ void EkfNode::publish() {
   const double t = ekf_.lastUpdateTime();
   const Eigen::Quaterniond q(rotationFromRpy(x(StateMemberRoll), x(StateMemberPitch), x(StateMemberYaw)));
 
-  nav_msgs::Odometry odom;
+  nav_msgs::Odometry& odom = odom_msg_;
   odom.header.stamp.fromSec(t);
   odom.header.frame_id = params_.world_frame;
-  odom.child_frame_id = params_.base_link_frame;
+  odom.child_frame_id = params_.base_link_output_frame;
   odom.pose.pose.position.x = x(StateMemberX);
   odom.pose.pose.position.y = x(StateMemberY);
   odom.pose.pose.position.z = x(StateMemberZ);
@@ -398,13 +503,26 @@ void EkfNode::publish() {
   }
   odom_pub_.publish(odom);
 
+  if (params_.publish_acceleration) {
+    geometry_msgs::AccelWithCovarianceStamped& accel = accel_msg_;
+    accel.header.stamp = odom.header.stamp;
+    accel.header.frame_id = params_.base_link_output_frame;
+    accel.accel.accel.linear.x = x(StateMemberAx);
+    accel.accel.accel.linear.y = x(StateMemberAy);
+    accel.accel.accel.linear.z = x(StateMemberAz);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c)
+        accel.accel.covariance[r * 6 + c] = p(POSITION_A_OFFSET + r, POSITION_A_OFFSET + c);
+    }
+    accel_pub_.publish(accel);
+  }
+
   if (!params_.publish_tf || t <= last_published_stamp_) return;
-  last_published_stamp_ = t;
-  geometry_msgs::TransformStamped tf;
+  geometry_msgs::TransformStamped& tf = tf_msg_;
   tf.header.stamp.fromSec(t + params_.transform_time_offset);
   if (params_.world_frame == params_.odom_frame) {
     tf.header.frame_id = params_.odom_frame;
-    tf.child_frame_id = params_.base_link_frame;
+    tf.child_frame_id = params_.base_link_output_frame;
     tf.transform.translation.x = x(StateMemberX);
     tf.transform.translation.y = x(StateMemberY);
     tf.transform.translation.z = x(StateMemberZ);
@@ -424,6 +542,7 @@ void EkfNode::publish() {
     tf.transform.translation.z = map_from_odom.translation().z();
     tf.transform.rotation = toQuaternionMsg(Eigen::Quaterniond(map_from_odom.linear()));
   }
+  last_published_stamp_ = t;
   tf_broadcaster_.sendTransform(tf);
 }
 
@@ -431,11 +550,12 @@ void EkfNode::diagnoseSensor(size_t idx, diagnostic_updater::DiagnosticStatusWra
   SensorState& s = sensors_[idx];
   const ros::Time now = ros::Time::now();
   stat.add("topic", s.sub.getTopic());
-  stat.add("type", typeName(s.cfg.type));
+  stat.add("type", sensorTypeName(s.cfg.type));
   stat.add("received", s.received);
   stat.add("accepted", s.accepted);
   stat.add("rejected", s.rejected);
   stat.add("invalid", s.invalid);
+  stat.add("cycles with a full queue", s.full_queue_cycles);
   stat.add("last message age [s]", s.received ? (now - s.last_receive).toSec() : -1.0);
   if (sensorStale(s, now)) {
     stat.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "stale: %s",
@@ -457,7 +577,10 @@ void EkfNode::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& stat) 
   stat.add("initialized", ekf_.initialized());
   stat.add("filter time", ekf_.lastUpdateTime());
   stat.add("world_frame", params_.world_frame);
-  if (!ekf_.initialized()) {
+  stat.add("TF listener", tf_listener_ ? "active" : "released");
+  if (!enabled_) {
+    stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "disabled: waiting for the enable service");
+  } else if (!ekf_.initialized()) {
     stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for the first measurement");
   } else if (!publishing_) {
     stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "all sensors stale: estimate not published");

@@ -123,6 +123,19 @@ bool twistMeasurement(const geometry_msgs::TwistWithCovariance& msg, const Eigen
   return true;
 }
 
+bool imuOrientationPose(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_from_imu, PoseWithCov* out) {
+  const auto& q = msg.orientation;
+  const Eigen::Quaterniond quat(q.w, q.x, q.y, q.z);
+  if (msg.orientation_covariance[0] == -1.0 || !quat.coeffs().allFinite() || quat.norm() < 1e-6) return false;
+  const Eigen::Matrix3d c = cov3(msg.orientation_covariance);
+  if (!c.allFinite()) return false;
+  out->pose = Eigen::Isometry3d::Identity();
+  out->pose.linear() = quat.normalized().toRotationMatrix() * base_from_imu.transpose();
+  out->covariance.setIdentity();
+  out->covariance.bottomRightCorner<3, 3>() = base_from_imu * c * base_from_imu.transpose();
+  return true;
+}
+
 bool imuMeasurements(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_from_imu,
                      const SensorConfig& cfg, const StateVector& state, double gravity, double time,
                      std::vector<Measurement>* out, std::string* reason) {

@@ -1,5 +1,5 @@
 // Differential pose handling (measurement_conversions): the RoboDog increment covariance and the
-// gate it gives to a jumping tracker such as the ZED2.
+// gate it gives to a jumping tracker such as the ZED2; the IMU orientation as a base pose.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -130,6 +130,34 @@ TEST(Differential, JumpIsGatedNormalMotionIsFused) {
   ASSERT_TRUE(
       differentialMeasurement(pose(0, 0, 0, variance), pose(0.02, 0.1, 0, variance), kDt, rl, kDt, &m));
   EXPECT_EQ(ekf2.processMeasurement(m), CorrectResult::kAccepted);
+}
+
+TEST(ImuOrientation, BaseOrientationThroughTheMountAndUnusableOrientationRefused) {
+  // IMU mounted yawed +90 deg on base_link; it reports its own orientation: yaw 120 deg, so the
+  // body is at 30 deg. Orientation covariance: 0.01 about the IMU's x, 0.04 about its y.
+  const Eigen::Matrix3d base_from_imu =
+      Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  sensor_msgs::Imu msg;
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(M_PI * 2 / 3, Eigen::Vector3d::UnitZ()));
+  msg.orientation.w = q.w();
+  msg.orientation.z = q.z();
+  msg.orientation_covariance[0] = 0.01;
+  msg.orientation_covariance[4] = 0.04;
+  msg.orientation_covariance[8] = 0.09;
+  PoseWithCov out;
+  ASSERT_TRUE(imuOrientationPose(msg, base_from_imu, &out));
+  const Eigen::Matrix3d r = out.pose.linear();
+  EXPECT_NEAR(std::atan2(r(1, 0), r(0, 0)), M_PI / 6, 1e-12);
+  EXPECT_NEAR(out.pose.translation().norm(), 0.0, 1e-12);
+  // The IMU's x axis is the body's y axis: 0.01 about body y, 0.04 about body x.
+  EXPECT_NEAR(out.covariance(3, 3), 0.04, 1e-12);
+  EXPECT_NEAR(out.covariance(4, 4), 0.01, 1e-12);
+  EXPECT_NEAR(out.covariance(5, 5), 0.09, 1e-12);
+  msg.orientation_covariance[0] = -1.0;  // "no orientation" (ouster-ros)
+  EXPECT_FALSE(imuOrientationPose(msg, base_from_imu, &out));
+  msg.orientation_covariance[0] = 0.01;
+  msg.orientation.w = msg.orientation.z = 0.0;
+  EXPECT_FALSE(imuOrientationPose(msg, base_from_imu, &out));
 }
 
 int main(int argc, char** argv) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 #include <sstream>
+#include <vector>
 
 #include "rbd_localization/ekf.h"
 
@@ -335,6 +336,64 @@ TEST(Ekf, ImuRatesAndPoseFuseToTruth) {
   EXPECT_NEAR(ekf.state()(StateMemberY), v / w * (1 - std::cos(yaw)), 0.03);
   EXPECT_NEAR(wrapAngle(ekf.state()(StateMemberYaw) - yaw), 0.0, 0.02);
   EXPECT_GT(accepted, 140);
+}
+
+TEST(Ekf, UpdateMatchesTheTextbookKalmanFormForEveryMeasurementSize) {
+  // x' = x + K (z - H x), P' = (I - K H) P (I - K H)^T + K R K^T with K = P H^T (H P H^T + R)^-1,
+  // computed here with dense H; sizes 3 and 6 take the fixed-size path, 4 and 9 the dynamic one.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const std::vector<int>& members : std::vector<std::vector<int>>{
+           {9, 10, 11}, {0, 1, 2, 3, 4, 5}, {0, 1, 6, 11}, {3, 4, 5, 9, 10, 11, 12, 13, 14}}) {
+    const int m = static_cast<int>(members.size());
+    Eigen::Matrix<double, STATE_SIZE, STATE_SIZE> a;
+    for (int i = 0; i < STATE_SIZE * STATE_SIZE; ++i) a(i) = u(rng);
+    const StateMatrix p = a * a.transpose() + StateMatrix::Identity() * 0.1;
+    StateVector x;
+    for (int i = 0; i < STATE_SIZE; ++i) x(i) = 0.1 * u(rng);  // angles far from the wrap
+    Ekf ekf;
+    ekf.setState(x, 0.0);
+    ekf.setCovariance(p);
+    Measurement meas;
+    meas.time = 0.0;
+    Eigen::MatrixXd b(m, m);
+    for (int i = 0; i < m * m; ++i) b(i) = u(rng);
+    const Eigen::MatrixXd r = b * b.transpose() + Eigen::MatrixXd::Identity(m, m) * 0.05;
+    Eigen::MatrixXd h = Eigen::MatrixXd::Zero(m, STATE_SIZE);
+    Eigen::VectorXd z(m);
+    for (int k = 0; k < m; ++k) {
+      h(k, members[k]) = 1.0;
+      z(k) = x(members[k]) + 0.2 * u(rng);
+      meas.values(members[k]) = z(k);
+      meas.update_vector[members[k]] = true;
+      for (int c = 0; c < m; ++c) meas.covariance(members[k], members[c]) = r(k, c);
+    }
+    ASSERT_EQ(ekf.correct(meas), CorrectResult::kAccepted) << m;
+    const Eigen::MatrixXd pd = p;
+    const Eigen::MatrixXd k = pd * h.transpose() * (h * pd * h.transpose() + r).inverse();
+    const Eigen::VectorXd x_expected = Eigen::VectorXd(x) + k * (z - h * Eigen::VectorXd(x));
+    const Eigen::MatrixXd i_kh = Eigen::MatrixXd::Identity(STATE_SIZE, STATE_SIZE) - k * h;
+    const Eigen::MatrixXd p_expected = i_kh * pd * i_kh.transpose() + k * r * k.transpose();
+    EXPECT_LT((Eigen::VectorXd(ekf.state()) - x_expected).cwiseAbs().maxCoeff(), 1e-9) << m;
+    EXPECT_LT((Eigen::MatrixXd(ekf.covariance()) - p_expected).cwiseAbs().maxCoeff(), 1e-9) << m;
+  }
+}
+
+TEST(Ekf, InitialStateFillsWhatTheFirstMeasurementDoesNotSet) {
+  Ekf ekf;
+  StateVector x0 = StateVector::Zero();
+  x0(StateMemberZ) = 0.3;
+  x0(StateMemberYaw) = 1.0;
+  x0(StateMemberVx) = 0.2;
+  ekf.setInitialState(x0);
+  EXPECT_FALSE(ekf.initialized());
+  EXPECT_EQ(ekf.processMeasurement(poseMeasurement(1.0, 2.0, 3.0, -0.5, 0.01)), CorrectResult::kAccepted);
+  EXPECT_EQ(ekf.state()(StateMemberX), 2.0);
+  EXPECT_EQ(ekf.state()(StateMemberYaw), -0.5);  // measured
+  EXPECT_EQ(ekf.state()(StateMemberZ), 0.3);     // from initial_state
+  EXPECT_EQ(ekf.state()(StateMemberVx), 0.2);
+  ekf.reset();
+  EXPECT_EQ(ekf.state(), x0);
 }
 
 int main(int argc, char** argv) {

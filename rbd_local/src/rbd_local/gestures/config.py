@@ -11,6 +11,15 @@ DEFAULT_MODEL = os.path.join(PACKAGE_DIR, "models", "gesture_model.npz")
 KNOWN_KEYS = ("gestures", "model", "threshold", "min_consecutive", "cooldown_s", "model_complexity", "bridge")
 
 
+def user_model_path() -> str:
+    """Where taught gestures are kept when no model file is configured.
+
+    ``$XDG_DATA_HOME/rbd_local/gesture_model.npz`` (``~/.local/share`` without XDG_DATA_HOME).
+    """
+    base = os.environ.get("XDG_DATA_HOME") or os.path.join(os.path.expanduser("~"), ".local", "share")
+    return os.path.join(base, "rbd_local", "gesture_model.npz")
+
+
 def load_config(path: str = None) -> dict:
     """Read and validate a configuration file; missing keys take the defaults.
 
@@ -18,7 +27,10 @@ def load_config(path: str = None) -> dict:
         path: YAML file, or None for the packaged default.
 
     Returns:
-        The configuration dictionary (``model`` resolved to a path).
+        The configuration dictionary. ``model`` is resolved to a path: the configured file,
+        else the user's model (:func:`user_model_path`, written by teach mode) if it exists,
+        else the shipped one. ``teach_model`` is where teach mode saves: the configured file,
+        else the user's model.
 
     Raises:
         ValueError: on unknown keys or invalid values, with the offending key named.
@@ -62,7 +74,12 @@ def load_config(path: str = None) -> dict:
         raise ValueError("bridge: needs host (string) and port (integer)")
     if not isinstance(bridge.get("port"), int) or not 0 < bridge["port"] < 65536:
         raise ValueError("bridge.port: must be an integer in 1..65535")
-    cfg["model"] = cfg.get("model") or DEFAULT_MODEL
+    configured = cfg.get("model") or ""
+    if configured and not isinstance(configured, str):
+        raise ValueError("model: must be a file name")
+    user = user_model_path()
+    cfg["model"] = configured or (user if os.path.isfile(user) else DEFAULT_MODEL)
+    cfg["teach_model"] = configured if configured and os.path.abspath(configured) != DEFAULT_MODEL else user
     return cfg
 
 

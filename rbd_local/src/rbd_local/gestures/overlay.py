@@ -8,10 +8,12 @@ SKELETON_BGR = (255, 200, 0)
 POINT_BGR = (0, 0, 255)
 FIRED_BGR = (0, 200, 0)
 TEXT_BGR = (255, 255, 255)
+TAUGHT_BGR = (0, 170, 255)
 
 
 def draw_overlay(
-    frame: np.ndarray, keypoints: np.ndarray | None, label: str, confidence: float, sent: str = ""
+    frame: np.ndarray, keypoints: np.ndarray | None, label: str, confidence: float, sent: str = "",
+    scores: dict = None, taught: list = None, teaching: str = "",
 ) -> np.ndarray:
     """Draw the hand and the classifier's view on a copy of ``frame``.
 
@@ -21,6 +23,9 @@ def draw_overlay(
         label: current class ("" while the window fills).
         confidence: its probability.
         sent: the command last sent (shown highlighted), or "".
+        scores: {gesture: confidence} of the current window (bars for the taught gestures).
+        taught: [(gesture, trick)] of the taught gestures, listed at the bottom left.
+        teaching: teach-mode instruction shown across the frame ("" when not teaching).
 
     Returns:
         The annotated image.
@@ -40,4 +45,20 @@ def draw_overlay(
     if sent:
         cv2.putText(out, "sent: " + sent, (out.shape[1] // 2, 24), cv2.FONT_HERSHEY_SIMPLEX, 0.8, FIRED_BGR, 2,
                     cv2.LINE_AA)
+    if taught:
+        h = out.shape[0]
+        top = h - 8 - 22 * len(taught)
+        cv2.rectangle(out, (0, top - 24), (300, h), (40, 40, 40), -1)
+        cv2.putText(out, "taught gestures", (8, top - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.55, TEXT_BGR, 1, cv2.LINE_AA)
+        for i, (name, trick) in enumerate(taught):
+            y = top + 22 * i + 16
+            conf = float((scores or {}).get(name, 0.0))
+            cv2.rectangle(out, (200, y - 12), (200 + int(90 * conf), y), TAUGHT_BGR, -1)
+            cv2.rectangle(out, (200, y - 12), (290, y), TEXT_BGR, 1)
+            cv2.putText(out, "%s -> %s" % (name, trick), (8, y), cv2.FONT_HERSHEY_SIMPLEX, 0.5, TEXT_BGR, 1,
+                        cv2.LINE_AA)
+    if teaching:
+        w = out.shape[1]
+        cv2.rectangle(out, (0, 40), (w, 84), (0, 90, 160), -1)
+        cv2.putText(out, "TEACH: " + teaching, (8, 70), cv2.FONT_HERSHEY_SIMPLEX, 0.6, TEXT_BGR, 2, cv2.LINE_AA)
     return out

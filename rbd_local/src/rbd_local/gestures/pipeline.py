@@ -63,11 +63,13 @@ class GesturePipeline:
         Raises:
             ValueError: if the mapping names classes the model lacks.
         """
-        self.unmapped = check_mapping(mapping, model.classes)
+        self.unmapped = check_mapping(mapping, model.classes + model.taught.names)
         self.mapping = dict(mapping)
         self.model = model
+        self.teach = None
         self.send = send
         self.detector = detector if detector is not None else HandDetector(model_complexity=model_complexity)
+        self.recognizer_args = (threshold, min_consecutive, cooldown_s)
         self.recognizer = GestureRecognizer(model, threshold, min_consecutive, cooldown_s)
         self.last_sent = ""
         self.last_gesture = ("", 0.0)
@@ -90,11 +92,17 @@ class GesturePipeline:
             found = None
         t1 = time.perf_counter()
         keypoints = found[0] if found is not None else None
+        if self.teach is not None and self.teach.active:
+            # teach mode: the shows feed the session; nothing is recognised or sent meanwhile
+            self.teach.feed(t, keypoints)
+            if not self.teach.active:
+                self.recognizer.reset()
+            return FrameResult(keypoints, Decision(), "", 1000 * (t1 - t0), 1000 * (time.perf_counter() - t1))
         decision = self.recognizer.update(t, keypoints)
         t2 = time.perf_counter()
         command = ""
         if decision.fired:
-            command = self.mapping.get(decision.label, "")
+            command = self.command_of(decision.label)
             self.last_gesture = (decision.label, decision.confidence)
             if command:
                 self.last_sent = command
@@ -102,10 +110,31 @@ class GesturePipeline:
                     self.send(command)
         return FrameResult(keypoints, decision, command, 1000 * (t1 - t0), 1000 * (t2 - t1))
 
+    def command_of(self, label: str) -> str:
+        """The trick of a gesture: a taught gesture's own trick, else the configured mapping ("" if none)."""
+        return self.model.taught.commands.get(label) or self.mapping.get(label, "")
+
+    def start_teach(self, session: object) -> None:
+        """Run a :class:`~rbd_local.gestures.teach.TeachSession` on the next frames (sending pauses)."""
+        self.teach = session
+        self.recognizer.reset()
+
+    def replace_model(self, model: GestureModel) -> None:
+        """Use another model from the next frame on (e.g. the model file after an undo).
+
+        Raises:
+            ValueError: if the mapping names classes the new model lacks.
+        """
+        self.unmapped = check_mapping(self.mapping, model.classes + model.taught.names)
+        self.model = model
+        self.recognizer = GestureRecognizer(model, *self.recognizer_args)
+
     def annotate(self, frame: np.ndarray, result: FrameResult) -> np.ndarray:
-        """The audience view of ``frame``: skeleton, class and confidence, last command sent."""
+        """The audience view of ``frame``: skeleton, class and confidence, taught gestures, last command sent."""
+        taught = [(n, self.model.taught.commands[n]) for n in self.model.taught.names]
+        teaching = self.teach.message if self.teach is not None and self.teach.active else ""
         return draw_overlay(frame, result.keypoints, result.decision.label, result.decision.confidence,
-                            self.last_sent)
+                            self.last_sent, scores=result.decision.scores, taught=taught, teaching=teaching)
 
     def close(self) -> None:
         """Release the detector."""

@@ -16,17 +16,17 @@ class Decision:
             when there is no full window yet.
         confidence: probability of ``label``'s class (0 when there is no window).
         fired: True exactly when a gesture is to be sent for this frame.
-        proba: class probabilities of the window, or None.
+        scores: {gesture: confidence} of every built-in and taught gesture, or None.
     """
 
-    __slots__ = ("label", "confidence", "fired", "proba")
+    __slots__ = ("label", "confidence", "fired", "scores")
 
-    def __init__(self, label: str = "", confidence: float = 0.0, fired: bool = False, proba: np.ndarray = None) -> None:
+    def __init__(self, label: str = "", confidence: float = 0.0, fired: bool = False, scores: dict = None) -> None:
         """Create a decision."""
         self.label = label
         self.confidence = confidence
         self.fired = fired
-        self.proba = proba
+        self.scores = scores
 
     def __repr__(self) -> str:
         """Readable form for logs."""
@@ -115,11 +115,10 @@ class GestureRecognizer:
             return Decision()
         try:
             window = features.resample(np.array(self._times), np.array(self._frames), self.model.samples)
-            proba = self.model.predict_proba(window)
+            label, conf, scores = self.model.classify(window, self.threshold)
         except ValueError:
             self.reset()  # degenerate key points: never a gesture
             return Decision()
-        label, conf = self.model.decide(proba, self.threshold)
         if label != NONE and label == self._streak_label:
             self._streak += 1
         else:
@@ -128,4 +127,4 @@ class GestureRecognizer:
         if fired:
             self._quiet_until = t + self.cooldown_s
             self.reset()
-        return Decision(label, conf, fired, proba)
+        return Decision(label, conf, fired, scores)

@@ -1,13 +1,18 @@
-"""The operator window: e-stop, state colour, next five moves, last gesture, connection.
+"""The operator window: e-stop, state colour, next five moves, last gesture, connection, teach mode, preflight.
 
 The window never touches the network itself. It is given a *backend* with
 
 - ``em_stop(engage: bool, timeout: float) -> (bool, str)`` (may block; run off the UI thread),
 - ``connected`` (bool property) and ``address`` (str),
+- optionally ``get_tricks(timeout) -> {trick: [step names]}`` (may block) for the Teach panel,
+- optionally ``run_preflight(timeout) -> report`` (may block) for the Preflight panel,
 
-which is :class:`rbd_local.link.RobotLink` in the app and a fake in tests. Robot data arrives
+which is :class:`rbd_local.link.RobotLink` in the app and a fake in tests. The Teach panel
+(:mod:`rbd_local.gui.teach_panel`) also gets the app's
+:class:`~rbd_local.gestures.teach.TeachDesk` when gestures are recognised in the same process. Robot data arrives
 through the thread-safe ``post_*`` methods (called from the link's thread) and is applied on
-the Tk thread by a periodic poll.
+the Tk thread by a periodic poll. The Teach and Preflight panels (:mod:`rbd_local.gui.preflight_panel`)
+share the third column as tabs ("Teach" shown first).
 """
 
 import queue
@@ -15,6 +20,8 @@ import threading
 import time
 
 import customtkinter as ctk
+
+from rbd_local.gui import drain
 
 STATUS_COLOURS = {
     "emergency": "#c62828",  # red
@@ -41,13 +48,18 @@ POLL_MS = 50
 class OperatorGui:
     """Builds the window in ``root`` and keeps it up to date."""
 
-    def __init__(self, root: ctk.CTk, backend: object, em_stop_timeout: float = 3.0) -> None:
+    def __init__(self, root: ctk.CTk, backend: object, em_stop_timeout: float = 3.0, teach_desk: object = None,
+                 mapped_tricks: tuple = (), no_camera_hint: str = "") -> None:
         """Create the widgets.
 
         Args:
             root: the CustomTkinter root window.
             backend: see the module docstring.
             em_stop_timeout: time allowed for an e-stop call, reconnection included [s].
+            teach_desk: the app's :class:`~rbd_local.gestures.teach.TeachDesk` (None: no gesture
+                source in this process; the Teach panel says so).
+            mapped_tricks: tricks the built-in gestures trigger (the Teach panel preselects another).
+            no_camera_hint: the Teach panel's text when there is no desk.
         """
         self.root = root
         self.backend = backend
@@ -59,9 +71,10 @@ class OperatorGui:
         self.state = ""
         self.moves: list[str] = []
         root.title("RoboDog operator")
-        root.geometry("760x420")
+        root.geometry("1150x520")
         root.grid_columnconfigure(0, weight=1)
         root.grid_columnconfigure(1, weight=1)
+        root.grid_columnconfigure(2, weight=1)
         root.grid_rowconfigure(0, weight=1)
 
         left = ctk.CTkFrame(root)
@@ -103,6 +116,19 @@ class OperatorGui:
             lab.grid(row=2 + i, column=0, sticky="ew", padx=8, pady=3)
             self.move_labels.append(lab)
         self._show_moves([])
+
+        from rbd_local.gui.preflight_panel import PreflightPanel
+        from rbd_local.gui.teach_panel import TeachPanel
+
+        self.tabs = ctk.CTkTabview(root)
+        self.tabs.grid(row=0, column=2, sticky="nsew", padx=8, pady=(0, 8))
+        teach = self.tabs.add("Teach")
+        preflight = self.tabs.add("Preflight")
+        # "Teach" is shown first (the first tab added). No tabs.set() here: its delayed clean-up would
+        # hide a tab chosen right after the window is built.
+        self.teach_panel = TeachPanel(teach, getattr(backend, "get_tricks", None), teach_desk, mapped_tricks,
+                                      no_camera_hint)
+        self.preflight_panel = PreflightPanel(preflight, getattr(backend, "run_preflight", None))
         self._set_connected(bool(getattr(backend, "connected", False)))
         self.root.after(POLL_MS, self._poll)
 
@@ -123,6 +149,10 @@ class OperatorGui:
         """A gesture was recognised and its command sent."""
         self._events.put(("gesture", (gesture, command, confidence)))
 
+    def post_preflight(self, report: dict) -> None:
+        """A preflight report (the robot's latched ``/preflight/report``)."""
+        self.preflight_panel.post_report(report)
+
     def post_connection(self, up: bool) -> None:
         """The link came up or went down."""
         self._events.put(("connection", bool(up)))
@@ -130,11 +160,7 @@ class OperatorGui:
     # ------------------------------------------------------------- Tk thread only
     def apply_pending(self) -> None:
         """Apply every queued event now (the poll does this every 50 ms)."""
-        while True:
-            try:
-                kind, value = self._events.get_nowait()
-            except queue.Empty:
-                break
+        for kind, value in drain(self._events):
             if kind == "status":
                 self._show_status(value)
             elif kind == "state":
@@ -157,6 +183,8 @@ class OperatorGui:
                 self.release_button.configure(state="normal")
         if self._release_armed_until and time.monotonic() > self._release_armed_until:
             self._disarm_release()
+        self.teach_panel.apply_pending()
+        self.preflight_panel.apply_pending()
 
     def _poll(self) -> None:
         try:
@@ -188,7 +216,10 @@ class OperatorGui:
                               text_color=("gray40", "gray70"))
 
     def _set_connected(self, up: bool) -> None:
+        if up and not getattr(self, "_connected", False):
+            self.teach_panel.reload_tricks()  # the robot's tricks, at every (re)connection
         self._connected = up
+        self.preflight_panel.set_connected(up)
         address = getattr(self.backend, "address", "")
         if up:
             self.connection_label.configure(text="● CONNECTED %s" % address, fg_color=CONNECTED_COLOUR)

@@ -12,6 +12,7 @@ which tells a stall of the machine from a pause of the driver. A 10 Hz e-stop fl
 rbd_controller (as in the real system, the driver's e-stop watchdog is armed).
 """
 
+import functools
 import math
 import os
 import signal
@@ -27,14 +28,15 @@ import lcm
 import rosgraph
 import rosnode
 import rospy
-import rostest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import Bool, String
 
+import rbd_testkit
 from rbd_msgs.srv import SetBodyPose
+from rbd_testkit.ros import run_rostest
 from rbd_wire_oracle import unitree as vendor
 
 PKG = "rbd_a1_driver"
@@ -78,13 +80,8 @@ def still(c):
     return tuple(c["velocity"]) == (0.0, 0.0) and c["yawSpeed"] == 0.0
 
 
-def wait_for(predicate, timeout, step=0.02):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline and not rospy.is_shutdown():
-        if predicate():
-            return True
-        time.sleep(step)
-    return bool(predicate())
+# The test kit's wait_for at 50 Hz, ending early when ROS shuts down.
+wait_for = functools.partial(rbd_testkit.wait_for, step=0.02, abort=rospy.is_shutdown)
 
 
 def read_log(path):
@@ -536,8 +533,25 @@ class DriverWire(unittest.TestCase):
         self.assertEqual(v["estop_gate_armed"], "true")
         self.assertEqual(v["remote_estop"], "ready")
         self.assertEqual(v["foot_force"], "[29, 30, 31, 32]")
-        self.assertTrue(100.0 < float(v["high_state_rate"]) <= 210.0, v["high_state_rate"])  # fake server: 200 Hz
-        self.assertTrue(200.0 < float(v["high_cmd_rate"]) <= 260.0, v["high_cmd_rate"])
+        # The rates against lcm-logger's record of the same interval (kernel receive times), not
+        # against fixed numbers: on a loaded 2-core machine a driver that sends 150 packets a
+        # second must say 150. The keep-alive process fills the driver's gaps on the wire and
+        # the driver counts only its own packets, so the wire may hold more HighCmd than it reports.
+        n = len(self.diag)
+        self.assertTrue(wait_for(lambda: len(self.diag) >= n + 2, 5.0), "no two more /diagnostics")
+        first, second = self.diag[n], self.diag[n + 1]
+        t0, t1 = first.header.stamp.to_sec(), second.header.stamp.to_sec()
+        events = self.events_until(t1)
+        v = {kv.key: kv.value for kv in second.status[0].values}
+        wire = {ch: sum(1 for t, c, _ in events if c == ch and t0 < t <= t1) / (t1 - t0)
+                for ch in (HIGH_CMD, HIGH_STATE)}
+        cmd, state = float(v["high_cmd_rate"]), float(v["high_state_rate"])
+        rospy.loginfo("MEASURED diagnostics rates: HighCmd %.1f/s reported, %.1f/s on the wire; HighState %.1f/s "
+                      "reported, %.1f/s on the wire", cmd, wire[HIGH_CMD], state, wire[HIGH_STATE])
+        self.assertGreater(wire[HIGH_STATE], 50.0)  # the fake server's 200 Hz stream flows
+        self.assertLess(abs(state - wire[HIGH_STATE]), 0.25 * wire[HIGH_STATE] + 10.0, (state, wire))
+        self.assertTrue(50.0 < cmd <= 1.1 * wire[HIGH_CMD] + 10.0, (cmd, wire))
+        self.assertLessEqual(cmd, 260.0)  # the driver's 250 Hz, never more
 
     def test_keepalive_from_the_first_second_with_no_gap_over_20ms(self):
         """The HighCmd stream on record from the driver's first packet on, through e-stop engage and
@@ -598,4 +612,4 @@ def machine_stalled(ref, a, b, slack=0.010):
 
 
 if __name__ == "__main__":
-    rostest.rosrun(PKG, "driver_wire", DriverWire)
+    run_rostest(PKG, "driver_wire", DriverWire)

@@ -8,9 +8,10 @@ import unittest
 
 import rosgraph
 import rospy
-import rostest
 from std_msgs.msg import String
 from websockets.sync.client import connect
+
+from rbd_testkit.ros import run_rostest
 
 
 class AllowListWiring(unittest.TestCase):
@@ -50,6 +51,33 @@ class AllowListWiring(unittest.TestCase):
         publishers = dict(rosgraph.Master("/allowlist_check").getSystemState()[0])
         self.assertNotIn("/cmd_vel", publishers)
 
+    def test_tricks_parameter_readable_not_writable(self):
+        """rbd_bridge.launch gives a params_glob: readable, yet read-only (rosbridge would allow writes)."""
+        rospy.set_param("/rbd_navigation/tricks", ["sit"])
+        ws = connect("ws://127.0.0.1:%d" % self.port, compression=None, open_timeout=15)
+        try:
+            for i, (service, args) in enumerate(
+                [
+                    ("/rosapi/get_param", {"name": "/rbd_navigation/tricks"}),
+                    ("/rosapi/set_param", {"name": "/rbd_navigation/tricks", "value": '["jump"]'}),
+                    ("/rosapi/delete_param", {"name": "/rbd_navigation/tricks"}),
+                    ("/rosapi/get_param", {"name": "/rbd_navigation/tricks"}),
+                ]
+            ):
+                ws.send(json.dumps({"op": "call_service", "id": "c%d" % i, "service": service, "args": args}))
+            replies = {}
+            while len(replies) < 4:
+                frame = json.loads(ws.recv(timeout=10))
+                replies[frame["id"]] = frame
+        finally:
+            ws.close()
+        self.assertTrue(replies["c0"]["result"])
+        self.assertEqual(json.loads(replies["c0"]["values"]["value"]), ["sit"])
+        self.assertFalse(replies["c1"]["result"])  # refused: the writes were answered, and failed
+        self.assertFalse(replies["c2"]["result"])
+        self.assertEqual(json.loads(replies["c3"]["values"]["value"]), ["sit"])
+        self.assertEqual(rospy.get_param("/rbd_navigation/tricks"), ["sit"])  # the master's truth
+
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_bridge", "bridge_allowlist", AllowListWiring)
+    run_rostest("rbd_bridge", "bridge_allowlist", AllowListWiring)

@@ -6,8 +6,8 @@ packets are decoded with the robot side's description of the wire (``rbd_sim.uni
 mock A1's), not with the driver's own layout module. This module is ROS-free; the clock and the
 sink for the samples are the caller's.
 
-Also holds the small helpers the rbd_bringup rostests share (``wait_for``, ``yaw_of``,
-``report_fault_result``).
+Also holds the small helpers the rbd_bringup rostests share (``yaw_of``, ``report_fault_result``);
+waiting comes from the test kit (``rbd_testkit.wait_for``).
 """
 
 import json
@@ -123,27 +123,6 @@ def stop_delay(samples: List[Sample], t0: float, t1: float, still: float) -> Opt
     if stop is None:
         return None
     return max(0.0, stop - t0)
-
-
-def wait_for(predicate: Callable[[], object], timeout: float, step: float = 0.05,
-             abort: Optional[Callable[[], bool]] = None) -> bool:
-    """Poll ``predicate`` until it is true or ``timeout`` seconds pass.
-
-    Args:
-        predicate: condition to wait for.
-        timeout: seconds.
-        step: polling period [s].
-        abort: stop waiting early when this returns true (e.g. ``rospy.is_shutdown``).
-
-    Returns:
-        The truth of the predicate at the end.
-    """
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline and not (abort is not None and abort()):
-        if predicate():
-            return True
-        time.sleep(step)
-    return bool(predicate())
 
 
 def yaw_of(q: object) -> float:

@@ -53,6 +53,7 @@ def build_report(
     avoidance_events: Sequence[str] = (),
     obstacle_contacts: Sequence[Tuple[float, str]] = (),
     min_obstacle_clearance: float = math.inf,
+    gesture_input: str = "",
 ) -> Dict:
     """Collect the run's figures into one JSON-able dictionary.
 
@@ -71,6 +72,7 @@ def build_report(
             "gave_up: ...", ...).
         obstacle_contacts: (time, obstacle) of every footprint contact with a placed box.
         min_obstacle_clearance: smallest footprint-to-box clearance seen [m].
+        gesture_input: what the gestures were made from (said plainly in the report).
 
     Returns:
         The report.
@@ -107,6 +109,7 @@ def build_report(
         "reaction_p99_s": None if p99 is None else round(p99, 4),
         "reaction_goal_s": round(scan_period + 0.020, 4),
         "duration_s": round(duration, 1),
+        "gesture_input": gesture_input,
         "states": [{"t": round(t, 3), "state": s} for t, s in state_log],
     }
 
@@ -150,6 +153,8 @@ def render_text(report: Dict) -> str:
             report["reaction_goal_s"]),
         "duration:                %.1f s" % report["duration_s"],
     ]
+    if report.get("gesture_input"):
+        lines.append("gesture input:           %s" % report["gesture_input"])
     return "\n".join(lines) + "\n"
 
 

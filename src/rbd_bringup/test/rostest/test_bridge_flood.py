@@ -17,13 +17,13 @@ import sys
 import time
 
 import rospy
-import rostest
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
 from test_faults import Faults, wait_for
 from websockets.sync.client import connect
 
 from rbd_bringup import a1_monitor
+from rbd_testkit.ros import run_rostest
 
 FLOOD_CLIENTS = 3
 FLOODER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "flood_bridge.py")
@@ -203,4 +203,4 @@ class BridgeFlood(Faults):
 
 if __name__ == "__main__":
     rospy.init_node("test_faults")
-    rostest.rosrun("rbd_bringup", "faults_" + rospy.get_param("~fault"), BridgeFlood)
+    run_rostest("rbd_bringup", "faults_" + rospy.get_param("~fault"), BridgeFlood)

@@ -22,14 +22,15 @@ import time
 import unittest
 
 import rospy
-import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry, Path
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
 
+import rbd_testkit
 from rbd_bringup import a1_monitor
+from rbd_testkit.ros import run_rostest
 
 
 def shifted(msg, dx, dy):
@@ -122,12 +123,7 @@ class Zed2Jump(unittest.TestCase):
 
     # ------------------------------------------------------------ helpers
     def wait_for(self, predicate, timeout):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not rospy.is_shutdown():
-            if predicate():
-                return True
-            time.sleep(0.05)
-        return predicate()
+        return rbd_testkit.wait_for(predicate, timeout, abort=rospy.is_shutdown)
 
     def speed(self):
         with self.lock:
@@ -212,4 +208,4 @@ class Zed2Jump(unittest.TestCase):
 
 if __name__ == "__main__":
     rospy.init_node("test_fault_zed2_jump")
-    rostest.rosrun("rbd_bringup", "test_fault_zed2_jump", Zed2Jump)
+    run_rostest("rbd_bringup", "test_fault_zed2_jump", Zed2Jump)

@@ -11,6 +11,7 @@ on the wire (HighState size) and in the driver's diagnostics before any fault.
 """
 
 import copy
+import functools
 import math
 import os
 import signal
@@ -23,7 +24,6 @@ import unittest
 import lcm
 import rosgraph
 import rospy
-import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
@@ -31,8 +31,10 @@ from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import Bool, Header, String
 from std_srvs.srv import SetBool
 
+import rbd_testkit
 from rbd_bringup import a1_monitor
 from rbd_msgs.srv import PressRemote
+from rbd_testkit.ros import run_rostest
 from rbd_wire_oracle import unitree as vendor
 
 TRUTH_STILL = 0.02  # ground-truth speed below this is "stopped" [m/s, rad/s]
@@ -43,16 +45,19 @@ def speed_of_twist(t):
     return max(math.hypot(t.linear.x, t.linear.y), abs(t.angular.z))
 
 
-def wait_for(predicate, timeout, step=0.05):
-    return a1_monitor.wait_for(predicate, timeout, step, abort=rospy.is_shutdown)
+# The kit's wait_for, ending early when ROS shuts down.
+wait_for = functools.partial(rbd_testkit.wait_for, abort=rospy.is_shutdown)
 
 
 def children(pid):
     """PIDs of the child processes of ``pid`` (Linux /proc)."""
     out = []
     for task in os.listdir("/proc/%d/task" % pid):
-        with open("/proc/%d/task/%s/children" % (pid, task)) as fh:
-            out += [int(c) for c in fh.read().split()]
+        try:
+            with open("/proc/%d/task/%s/children" % (pid, task)) as fh:
+                out += [int(c) for c in fh.read().split()]
+        except FileNotFoundError:  # the thread ended between listdir and open
+            continue
     return out
 
 
@@ -463,8 +468,9 @@ class Faults(unittest.TestCase):
         self.collision(True)
         t0 = time.monotonic()
         cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.0)
-        self.em_stop(True)
-        self.assertEqual(m.state, "EMERGENCY_STOP")
+        self.assertTrue(self.em_stop(True).success)
+        # the service answers before /rbd_controller/state reaches this node: wait for it
+        self.assertTrue(wait_for(lambda: m.state == "EMERGENCY_STOP", 2.0), m.state)
         self.collision(False)
         t1 = time.monotonic()
         time.sleep(1.5)
@@ -606,4 +612,4 @@ class Faults(unittest.TestCase):
 
 if __name__ == "__main__":
     rospy.init_node("test_faults")
-    rostest.rosrun("rbd_bringup", "faults_" + rospy.get_param("~fault").split()[0], Faults)
+    run_rostest("rbd_bringup", "faults_" + rospy.get_param("~fault").split()[0], Faults)

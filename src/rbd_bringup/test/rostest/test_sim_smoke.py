@@ -6,6 +6,7 @@ driver (standing angles, legs moving in the trick), and the status light: the LE
 in HighCmd, shown by the mock as /rbd_sim/led, red in EMERGENCY_STOP, the GUI's blue when idle.
 """
 
+import functools
 import math
 import os
 import time
@@ -14,7 +15,6 @@ import unittest
 import rosnode
 import rospkg
 import rospy
-import rostest
 import tf2_ros
 import yaml
 from nav_msgs.msg import Odometry
@@ -23,8 +23,9 @@ from std_msgs.msg import String
 from std_srvs.srv import SetBool
 from visualization_msgs.msg import Marker
 
-from rbd_bringup import a1_monitor
+import rbd_testkit
 from rbd_bringup.a1_monitor import yaw_of
+from rbd_testkit.ros import run_rostest
 
 EXPECTED_NODES = [
     "/mock_a1", "/rbd_a1_driver", "/os1_sim", "/zed2_sim", "/world", "/robot_state_publisher",
@@ -33,8 +34,8 @@ EXPECTED_NODES = [
 ]
 
 
-def wait_for(predicate, timeout, step=0.05):
-    return a1_monitor.wait_for(predicate, timeout, step, abort=rospy.is_shutdown)
+# The kit's wait_for, ending early when ROS shuts down.
+wait_for = functools.partial(rbd_testkit.wait_for, abort=rospy.is_shutdown)
 
 
 class SimSmoke(unittest.TestCase):
@@ -148,4 +149,4 @@ class SimSmoke(unittest.TestCase):
 
 if __name__ == "__main__":
     rospy.init_node("test_sim_smoke")
-    rostest.rosrun("rbd_bringup", "sim_smoke", SimSmoke)
+    run_rostest("rbd_bringup", "sim_smoke", SimSmoke)

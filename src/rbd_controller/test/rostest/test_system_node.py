@@ -8,30 +8,25 @@ import time
 import unittest
 
 import rospy
-import rostest
 from geometry_msgs.msg import PoseStamped, Vector3
 from nav_msgs.msg import Odometry, Path
 from std_msgs.msg import Bool, String
 from std_srvs.srv import SetBool
 
 from rbd_msgs.msg import ControllerState, PathQueue
+from rbd_testkit import stays_unchanged, wait_for
+from rbd_testkit.ros import RosoutWatcher, run_rostest
 
 CONTROL_PERIOD = 1.0 / 20.0  # rbd_pos_controller rate
 MARGIN = 0.25  # scheduling margin for a loaded machine [s]
 STILL = 1e-3  # |velocity| below this counts as standing still [m/s, rad/s]
+GESTURE_TOPIC = "/rbd_gestrec/gesture"
+WRONG_TOPIC = "/rbd_gestrec/gesture_typo"  # for the companion test of the negative checks
+HOLD = 1.0  # a gesture ignored: nothing may happen for this long after it was proven to arrive [s]
 
 
 def yaw_of(q):
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
-def wait_for(predicate, timeout, step=0.01):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(step)
-    return predicate()
 
 
 class World:
@@ -112,12 +107,89 @@ class TestControlSystem(unittest.TestCase):
             rospy.wait_for_service(name, timeout=60.0)
         cls.em_stop = rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)
         cls.collision = rospy.ServiceProxy("/rbd_controller/collision", SetBool)
-        cls.gesture = rospy.Publisher("/rbd_gestrec/gesture", String, queue_size=10)
-        assert wait_for(lambda: cls.w.truth is not None and cls.w.state and cls.gesture.get_num_connections() > 0, 30.0)
+        cls.publishers = {}
+        cls.gesture = cls.publisher(GESTURE_TOPIC)
+        cls.rosout = RosoutWatcher()
+        for node in ("/rbd_gestrec", "/rbd_controller"):
+            cls.rosout.wait_connected(node, 30.0)
+        assert wait_for(lambda: cls.w.truth is not None and cls.w.state and cls.w.estop is not None
+                        and cls.gesture.get_num_connections() > 0, 30.0)
+        # The first (latched) state and e-stop flag, before any test released anything.
+        cls.power_up = (cls.w.states[0], cls.w.estop)
+
+    @classmethod
+    def publisher(cls, topic):
+        if topic not in cls.publishers:
+            cls.publishers[topic] = rospy.Publisher(topic, String, queue_size=10)
+        return cls.publishers[topic]
 
     # -------------------------------------------------------------- helpers
-    def send_gesture(self, label):
-        self.gesture.publish(String(label))
+    def send_gesture(self, label, topic=GESTURE_TOPIC):
+        self.publisher(topic).publish(String(label))
+
+    def ready_waiting(self):
+        """Known state, whatever ran before: no stop, no trick, WAITING_FOR_GESTURE, past the flushing poll."""
+        self.em_stop(data=False)
+        self.collision(data=False)
+        self.wait_state("WAITING_FOR_GESTURE", 40.0)
+        time.sleep(0.5)  # past the first (flushing) gesture poll
+        self.assertEqual(self.w.state, "WAITING_FOR_GESTURE")
+
+    def engage_estop(self):
+        self.em_stop(data=True)
+        self.wait_state("EMERGENCY_STOP", 1.0)
+        self.assertTrue(wait_for(lambda: self.w.estop is True, 2.0), "latched /rbd_controller/estop")
+
+    def check_gesture_ignored_in_estop(self, topic=GESTURE_TOPIC, proof_timeout=10.0):
+        """In EMERGENCY_STOP, a gesture that reached rbd_gestrec changes nothing; released, it is dropped.
+
+        Proof that the gesture arrived: rbd_gestrec's own log line for it, then (after the release)
+        the controller's "dropping gesture" line. Published to a wrong topic, neither comes and this
+        check fails (test_negative_checks_fail_on_a_wrong_topic).
+        """
+        self.assertEqual(self.w.state, "EMERGENCY_STOP")
+        t0 = time.monotonic()
+        mark = self.rosout.mark()
+        stays_unchanged(
+            lambda: (self.w.state, self.w.moving_since(t0)),
+            lambda: self.rosout.find("gesture 'spin' -> command", node="/rbd_gestrec", since=mark),
+            HOLD,
+            send=lambda: self.send_gesture("spin", topic),
+            timeout=proof_timeout,
+            what="controller state and motion at the robot",
+            proof="rbd_gestrec taking the gesture",
+        )
+        n = len(self.w.states)
+        stays_unchanged(
+            lambda: (self.w.moving_since(t0), [s for s in self.w.states[n:] if s != "WAITING_FOR_GESTURE"]),
+            lambda: self.rosout.find("dropping gesture 'spin'", node="/rbd_controller", since=mark),
+            0.6,
+            send=lambda: self.em_stop(data=False),
+            timeout=proof_timeout,
+            what="motion and states after the release",
+            proof="the controller dropping the gesture made during the e-stop",
+        )
+        self.assertEqual(self.w.state, "WAITING_FOR_GESTURE")
+
+    def check_unknown_gesture_ignored(self, topic=GESTURE_TOPIC, proof_timeout=10.0):
+        """An unknown gesture that reached rbd_gestrec moves nothing and leaves the state as it was.
+
+        Proof that it arrived: rbd_gestrec's warning about it (throttled to one per 2 s: this is the
+        only unknown gesture this test sends). Published to a wrong topic, the proof never comes and
+        this check fails (test_negative_checks_fail_on_a_wrong_topic).
+        """
+        self.ready_waiting()
+        t0 = time.monotonic()
+        mark = self.rosout.mark()
+        stays_unchanged(
+            lambda: (self.w.state, self.w.moving_since(t0)),
+            lambda: self.rosout.find("unknown gesture 'backflip'", node="/rbd_gestrec", since=mark),
+            HOLD,
+            send=lambda: self.send_gesture("backflip", topic),
+            timeout=proof_timeout,
+            what="controller state and motion at the robot",
+            proof="rbd_gestrec rejecting the gesture",
+        )
 
     def wait_state(self, name, timeout=10.0):
         self.assertTrue(wait_for(lambda: self.w.state == name, timeout), "state %r, wanted %s" % (self.w.state, name))
@@ -152,17 +224,16 @@ class TestControlSystem(unittest.TestCase):
         self.assertLess(math.hypot(x - start[0], y - start[1]), 0.05)
         self.assertLess(abs(math.atan2(math.sin(yaw - start[2]), math.cos(yaw - start[2]))), math.radians(3.0))
 
-    # -------------------------------------------------------------- tests (run in name order)
-    def test_0_power_up_in_estop_ignores_gestures(self):
-        self.assertEqual(self.w.state, "EMERGENCY_STOP")
-        self.assertTrue(wait_for(lambda: self.w.estop is True, 5.0))
-        start = time.monotonic()
-        self.send_gesture("walk")
-        time.sleep(1.0)
-        self.assertEqual(self.w.state, "EMERGENCY_STOP")
-        self.assertEqual(self.w.moving_since(start), [])
+    # -------------------------------------------------------------- tests (any order: each sets up its state)
+    def test_power_up_in_estop(self):
+        self.assertEqual(self.power_up, ("EMERGENCY_STOP", True))
 
-    def test_1_cli_release_then_gesture_runs_trick(self):
+    def test_gesture_during_estop_is_ignored_then_dropped(self):
+        self.engage_estop()  # already engaged when this test runs first (power-up)
+        self.check_gesture_ignored_in_estop()
+
+    def test_cli_release_then_gesture_runs_trick(self):
+        self.engage_estop()
         out = subprocess.run(
             ["rosrun", "rbd_controller", "estop", "off"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=30
         )
@@ -170,8 +241,8 @@ class TestControlSystem(unittest.TestCase):
         self.wait_state("WAITING_FOR_GESTURE")
         self.assertTrue(wait_for(lambda: self.w.estop is False, 2.0))
         self.assertTrue(wait_for(lambda: self.w.body is not None and self.w.body.y < -0.1, 5.0), "attentive pitch")
-        time.sleep(0.5)
-        self.assertEqual(self.w.state, "WAITING_FOR_GESTURE", "the gesture made during the e-stop must be dropped")
+        time.sleep(0.5)  # past the first (flushing) gesture poll
+        self.assertEqual(self.w.state, "WAITING_FOR_GESTURE")
         start = self.w.pose()
         n = len(self.w.states)
         self.send_gesture("walk")
@@ -187,17 +258,19 @@ class TestControlSystem(unittest.TestCase):
         self.assert_back_at_start(start)
         self.assertEqual(len(self.w.queue.names), 0)
 
-    def test_2_unknown_gesture_no_motion(self):
-        self.wait_state("WAITING_FOR_GESTURE", 40.0)
-        t0 = time.monotonic()
-        self.send_gesture("backflip")
-        time.sleep(1.0)
-        self.assertEqual(self.w.state, "WAITING_FOR_GESTURE")
-        self.assertEqual(self.w.moving_since(t0), [])
+    def test_unknown_gesture_no_motion(self):
+        self.check_unknown_gesture_ignored()
 
-    def test_3_estop_in_every_motion_state_then_resume(self):
-        self.wait_state("WAITING_FOR_GESTURE", 40.0)
-        time.sleep(0.5)
+    def test_negative_checks_fail_on_a_wrong_topic(self):
+        """The two negative checks above fail, not pass, when their gesture goes to a wrong topic."""
+        with self.assertRaisesRegex(AssertionError, "no proof of rbd_gestrec rejecting the gesture"):
+            self.check_unknown_gesture_ignored(WRONG_TOPIC, proof_timeout=2.0)
+        self.engage_estop()
+        with self.assertRaisesRegex(AssertionError, "no proof of rbd_gestrec taking the gesture"):
+            self.check_gesture_ignored_in_estop(WRONG_TOPIC, proof_timeout=2.0)
+
+    def test_estop_in_every_motion_state_then_resume(self):
+        self.ready_waiting()
         start = self.w.pose()
         self.send_gesture("walk")
         for pos_state in ("LINEAR", "POST_ROTATION", "PRE_ROTATION"):
@@ -213,22 +286,13 @@ class TestControlSystem(unittest.TestCase):
         self.wait_state("WAITING_FOR_GESTURE", 40.0)
         self.assert_back_at_start(start)
 
-    def test_4_estop_while_waiting(self):
-        self.wait_state("WAITING_FOR_GESTURE", 40.0)
-        t0 = time.monotonic()
-        self.em_stop(data=True)
-        self.wait_state("EMERGENCY_STOP", 1.0)
-        self.send_gesture("spin")
-        time.sleep(1.0)
-        self.assertEqual(self.w.moving_since(t0), [])
-        self.em_stop(data=False)
-        self.wait_state("WAITING_FOR_GESTURE", 2.0)
-        time.sleep(0.6)
-        self.assertEqual(self.w.state, "WAITING_FOR_GESTURE")
+    def test_estop_while_waiting(self):
+        self.ready_waiting()
+        self.engage_estop()
+        self.check_gesture_ignored_in_estop()
 
-    def test_5_collision_stops_and_clear_resumes(self):
-        self.wait_state("WAITING_FOR_GESTURE", 40.0)
-        time.sleep(0.5)  # past the first (flushing) gesture poll
+    def test_collision_stops_and_clear_resumes(self):
+        self.ready_waiting()
         start = self.w.pose()
         self.send_gesture("walk")
         self.wait_moving_in("LINEAR")
@@ -250,4 +314,4 @@ class TestControlSystem(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_controller", "control_system_wiring", TestControlSystem)
+    run_rostest("rbd_controller", "control_system_wiring", TestControlSystem)

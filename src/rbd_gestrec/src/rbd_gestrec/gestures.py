@@ -1,6 +1,6 @@
 """Gesture -> command mapping and a one-shot "last gesture" slot. ROS-free."""
 
-from typing import Any, Dict, Mapping, Optional
+from typing import Any, Dict, List, Mapping, Optional
 
 
 class GestureConfigError(ValueError):
@@ -31,6 +31,44 @@ def parse_mapping(data: Any) -> Dict[str, str]:
             raise GestureConfigError("gestures.%s must map to a non-empty command string, got %r" % (label, command))
         mapping[label.strip()] = command.strip()
     return mapping
+
+
+def trick_names(data: Any) -> List[str]:
+    """Names of the tricks of rbd_navigation's tricks YAML (only the names are used here).
+
+    Args:
+        data: ``{"tricks": {name: steps}}``, the inner mapping, a list of names, or None.
+
+    Returns:
+        The trick names, stripped (empty for None).
+
+    Raises:
+        GestureConfigError: if the names are not non-empty strings.
+    """
+    if data is None:
+        return []
+    if isinstance(data, Mapping) and "tricks" in data:
+        data = data["tricks"]
+    names = list(data.keys()) if isinstance(data, Mapping) else data
+    if not isinstance(names, list):
+        raise GestureConfigError("tricks must be a mapping or a list of trick names, got %r" % (data,))
+    for name in names:
+        if not isinstance(name, str) or not name.strip():
+            raise GestureConfigError("trick names must be non-empty strings, got %r" % (name,))
+    return [name.strip() for name in names]
+
+
+def with_tricks(mapping: Mapping[str, str], tricks: List[str]) -> Dict[str, str]:
+    """The gesture mapping plus every trick name as a label for itself.
+
+    A laptop app that publishes a trick's own name (a gesture taught for that trick in teach
+    mode) is then understood without a mapping entry for it; labels of the mapping keep
+    their command.
+    """
+    out = dict(mapping)
+    for name in tricks:
+        out.setdefault(name, name)
+    return out
 
 
 class GestureBuffer:

@@ -7,12 +7,15 @@ import time
 import unittest
 
 import rospy
-import rostest
 from nav_msgs.msg import Odometry
 from std_srvs.srv import SetBool, SetBoolResponse
 
 from rbd_msgs.msg import CollisionState
 from rbd_msgs.srv import PlaceObstacle, SetBodyPose
+from rbd_testkit import wait_for
+from rbd_testkit.ros import run_rostest
+
+OBSTACLES = ("p", "b", "low")  # the names the tests place
 
 
 class SimLidarTest(unittest.TestCase):
@@ -49,14 +52,20 @@ class SimLidarTest(unittest.TestCase):
     def _gt(cls, msg: Odometry) -> None:
         cls.gt = msg
 
+    def setUp(self) -> None:
+        """Known state for every test, whatever ran before: neutral body, no test obstacle, zone clear."""
+        self.assertTrue(self.body(roll=0.0, pitch=0.0, yaw=0.0, body_height=0.0).success)
+        for name in OBSTACLES:
+            self.place(name=name, remove=True)  # success=False when it is not there
+        self._wait_clear()
+        wait_for(lambda: not self.calls or self.calls[-1][1] is False, 5.0, what="the clear call after a collision")
+
     def _wait_clear(self, timeout: float = 20.0) -> None:
-        end = time.time() + timeout
-        while time.time() < end and not rospy.is_shutdown():
+        def clear():
             with self.lock:
-                if self.states and not self.states[-1][1].collision:
-                    return
-            time.sleep(0.05)
-        self.fail("rbd_lidar never reported clear")
+                return self.states and not self.states[-1][1].collision
+
+        wait_for(clear, timeout, what="rbd_lidar reporting clear", abort=rospy.is_shutdown)
 
     def _pitch_roll(self) -> tuple:
         q = self.gt.pose.pose.orientation
@@ -64,7 +73,7 @@ class SimLidarTest(unittest.TestCase):
         pitch = math.asin(max(-1.0, min(1.0, 2 * (q.w * q.y - q.z * q.x))))
         return roll, pitch
 
-    def test_1_floor_in_every_body_pose(self) -> None:
+    def test_floor_in_every_body_pose(self) -> None:
         """The commanded body poses (attentive, wiggle, lie down) never trip the zone."""
         self._wait_clear()
         with self.lock:
@@ -86,7 +95,7 @@ class SimLidarTest(unittest.TestCase):
         bad = [(list(s.points), list(s.min_distance)) for s in seen if s.collision]
         self.assertEqual(bad, [], "floor tripped the zone")
 
-    def test_2_person_in_front(self) -> None:
+    def test_person_in_front(self) -> None:
         """A person 0.5 m ahead: collision on the first full scan, one service call; clear after removal."""
         self._wait_clear()
         x = self.gt.pose.pose.position.x
@@ -117,7 +126,7 @@ class SimLidarTest(unittest.TestCase):
         self.assertGreaterEqual(first_clear, 2)  # hysteresis: 3 clear scans
         self.assertEqual([c[1] for c in calls], [True, False])
 
-    def test_3_front_boundary(self) -> None:
+    def test_front_boundary(self) -> None:
         """A wide cylinder approaching in 10 mm steps trips the zone at 700 +- 80 mm."""
         self._wait_clear()
         x = self.gt.pose.pose.position.x
@@ -141,7 +150,7 @@ class SimLidarTest(unittest.TestCase):
             f.write("%.0f\n" % (tripped * 1000))
         self.assertLess(abs(tripped - 0.70), 0.08)
 
-    def test_4_low_obstacle(self) -> None:
+    def test_low_obstacle(self) -> None:
         """A low cylinder (0.2 m high) just ahead trips the zone; the floor alone never does.
 
         The floor fit must not absorb real low obstacles into the floor plane. The OS1-32's lowest
@@ -170,4 +179,4 @@ class SimLidarTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_lidar", "sim_lidar", SimLidarTest)
+    run_rostest("rbd_lidar", "sim_lidar", SimLidarTest)

@@ -47,6 +47,9 @@ class Ekf {
   void setProcessNoiseCovariance(const StateMatrix& q);
   /// Covariance the filter starts from (and returns to on reset()).
   void setInitialEstimateCovariance(const StateMatrix& p0);
+  /// Values of the members the first measurement does not set (and after reset()); r_l's
+  /// initial_state. The filter stays uninitialised until its first measurement.
+  void setInitialState(const StateVector& x0);
   /// Planar mode: z, roll, pitch and their rates/acceleration are held at zero and never fused.
   void setTwoDMode(bool enabled);
   /// Debug output goes to stream when enabled (null stream disables output).
@@ -60,6 +63,8 @@ class Ekf {
   void setCovariance(const StateMatrix& covariance);
 
   const StateVector& state() const { return state_; }
+  const StateMatrix& processNoiseCovariance() const { return process_noise_; }
+  const StateMatrix& initialEstimateCovariance() const { return initial_covariance_; }
   const StateMatrix& covariance() const { return covariance_; }
   bool initialized() const { return initialized_; }
   /// Time the state refers to [s].
@@ -89,6 +94,7 @@ class Ekf {
   bool debugOn() const { return debug_ && debug_stream_ != nullptr; }
 
   StateVector state_;
+  StateVector initial_state_;
   StateMatrix covariance_;
   StateMatrix initial_covariance_;
   StateMatrix process_noise_;

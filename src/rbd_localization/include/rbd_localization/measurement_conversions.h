@@ -43,6 +43,12 @@ bool differentialMeasurement(const PoseWithCov& previous, const PoseWithCov& cur
 bool twistMeasurement(const geometry_msgs::TwistWithCovariance& msg, const Eigen::Matrix3d& base_from_frame,
                       const SensorConfig& cfg, double time, Measurement* out);
 
+/// The IMU's orientation as the orientation of base_link in the IMU's world frame (position
+/// zero, position covariance identity), for relative/differential handling as a pose. False if
+/// the message carries no usable orientation (orientation_covariance[0] = -1, NaN/inf values or
+/// covariance, zero quaternion).
+bool imuOrientationPose(const sensor_msgs::Imu& msg, const Eigen::Matrix3d& base_from_imu, PoseWithCov* out);
+
 /// IMU -> up to three measurements (orientation, angular velocity, linear acceleration),
 /// each with its own gate, as r_l does. A part is skipped when its covariance[0] is -1
 /// (e.g. /ouster/imu orientation) or nothing in it is configured. Gravity is removed using the

@@ -9,10 +9,12 @@ import threading
 import time
 import unittest
 
+import rosbag
 import rospy
-import rostest
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
+
+from rbd_testkit.ros import run_rostest
 
 
 class BagRegressionTest(unittest.TestCase):
@@ -26,6 +28,7 @@ class BagRegressionTest(unittest.TestCase):
         tolerance = rospy.get_param("~tolerance")
         yaw_tolerance = math.radians(rospy.get_param("~yaw_tolerance_deg", 1.0))
         bag_duration = rospy.get_param("~bag_duration")
+        bag_path = rospy.get_param("~bag", "")
         lock = threading.Lock()
         last = {}
 
@@ -39,14 +42,18 @@ class BagRegressionTest(unittest.TestCase):
 
         rospy.Subscriber("/rbd_localization/pose", PoseStamped, on_pose)
         rospy.Subscriber("/odometry/filtered", Odometry, on_odom)
-        # Sim time from the bag (/clock): wait until it has played to its end.
+        # Sim time from the bag (/clock): wait until it has played to its end. The end is the
+        # bag's own last stamp (this node may start after the first /clock under load).
         wall_end = time.time() + 3 * bag_duration + 60.0
         while not rospy.is_shutdown() and time.time() < wall_end:
             if rospy.get_time() > 0.0:
                 break
             time.sleep(0.1)
-        start = rospy.get_time()
-        deadline = start + bag_duration - 0.5
+        if bag_path:
+            with rosbag.Bag(bag_path) as bag:
+                deadline = bag.get_end_time() - 0.3
+        else:
+            deadline = rospy.get_time() + bag_duration - 0.5
         while not rospy.is_shutdown() and rospy.get_time() < deadline and time.time() < wall_end:
             time.sleep(0.1)
         with lock:
@@ -62,4 +69,4 @@ class BagRegressionTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_localization", "bag_regression", BagRegressionTest)
+    run_rostest("rbd_localization", "bag_regression", BagRegressionTest)

@@ -12,12 +12,14 @@ import threading
 import unittest
 
 import rospy
-import rostest
 import tf2_ros
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped, TransformStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
+
+from rbd_testkit import wait_for
+from rbd_testkit.ros import run_rostest
 
 V = 0.3  # forward speed [m/s]
 W = 0.25  # yaw rate [rad/s]
@@ -130,11 +132,8 @@ class EkfSyntheticTest(unittest.TestCase):
         cls.feeder = Feeder()
         rospy.Subscriber("/odometry/filtered", Odometry, cls.on_odom, queue_size=50)
         rospy.Subscriber("/diagnostics", DiagnosticArray, cls.on_diag, queue_size=20)
-        deadline = rospy.Time.now() + rospy.Duration(20.0)
-        while cls.feeder.imu_pub.get_num_connections() == 0 or cls.feeder.pose_pub.get_num_connections() == 0:
-            if rospy.Time.now() > deadline:
-                raise AssertionError("ekf_localization_node did not subscribe")
-            rospy.sleep(0.1)
+        wait_for(lambda: cls.feeder.imu_pub.get_num_connections() and cls.feeder.pose_pub.get_num_connections(),
+                 20.0, what="ekf_localization_node subscribed")
         rospy.sleep(0.5)  # TF listener gets the static transforms
         cls.feeder.start = rospy.Time.now()
         cls.feeder.thread.start()
@@ -174,7 +173,7 @@ class EkfSyntheticTest(unittest.TestCase):
                 out.append((math.hypot(p.position.x - x, p.position.y - y), abs(dyaw), t))
         return out
 
-    def test_1_tracks_the_circle(self):
+    def test_tracks_the_circle(self):
         errs = self.errors(1.0, JUMP_AT - 0.1)
         self.assertGreater(len(errs), 100, "too few odometry/filtered messages")
         worst = max(errs)
@@ -184,7 +183,7 @@ class EkfSyntheticTest(unittest.TestCase):
             frame_ids = set((m.header.frame_id, m.child_frame_id) for _, m in self.odoms)
         self.assertEqual(frame_ids, {("odom", "base_link")})
 
-    def test_2_zed_jump_is_gated(self):
+    def test_zed_jump_is_gated(self):
         errs = self.errors(JUMP_AT, POSE_STOP_AT)
         self.assertGreater(len(errs), 100)
         worst = max(errs)
@@ -196,7 +195,7 @@ class EkfSyntheticTest(unittest.TestCase):
             rejected = [d for d in self.diag if d[1] == "pose0" and "rejected" in d[3] and d[0] >= JUMP_AT]
         self.assertTrue(rejected, "no 'rejected' diagnostic for pose0 after the jump")
 
-    def test_3_silent_zed_is_stale_in_diagnostics(self):
+    def test_silent_zed_is_stale_in_diagnostics(self):
         with self.lock:
             before = [d for d in self.diag if d[1] == "pose0" and 2.0 < d[0] < JUMP_AT]
             after = [d for d in self.diag if d[1] == "pose0" and POSE_STOP_AT + 2.6 < d[0] < IMU_STOP_AT]
@@ -206,7 +205,7 @@ class EkfSyntheticTest(unittest.TestCase):
         self.assertTrue(all(d[2] == DiagnosticStatus.ERROR and "stale" in d[3] for d in after), after)
         self.assertTrue(imu_ok and all(d[2] == DiagnosticStatus.OK for d in imu_ok), imu_ok)
 
-    def test_4_estimate_stops_when_all_sensors_are_silent(self):
+    def test_estimate_stops_when_all_sensors_are_silent(self):
         with self.lock:
             late = [t for t, _ in self.odoms if t > IMU_STOP_AT + 1.5]
             during = [t for t, _ in self.odoms if POSE_STOP_AT < t < IMU_STOP_AT]
@@ -215,4 +214,4 @@ class EkfSyntheticTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_localization", "ekf_synthetic", EkfSyntheticTest)
+    run_rostest("rbd_localization", "ekf_synthetic", EkfSyntheticTest)

@@ -12,12 +12,13 @@ import unittest
 
 import numpy as np
 import rospy
-import rostest
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, TransformStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
 from sensor_msgs.msg import LaserScan
 from tf2_msgs.msg import TFMessage
+
+from rbd_testkit.ros import run_rostest
 
 WALLS = np.array([
     (-3, -2.5, 5, -2.5), (5, -2.5, 5, 3.5), (5, 3.5, -3, 3.5), (-3, 3.5, -3, -2.5),
@@ -252,4 +253,4 @@ class MapCorrectionTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_localization", "map_correction_synthetic", MapCorrectionTest)
+    run_rostest("rbd_localization", "map_correction_synthetic", MapCorrectionTest)

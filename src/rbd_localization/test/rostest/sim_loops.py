@@ -12,6 +12,8 @@ Used by the rostest sim_loops.test (few loops, with assertions) and by hand for 
 """
 
 import argparse
+import bisect
+import collections
 import json
 import math
 import sys
@@ -34,26 +36,51 @@ def wrap(a):
     return (a + math.pi) % (2 * math.pi) - math.pi
 
 
-class Runner:
-    """Steers on ground truth and records the three trajectories."""
+def relative(pose, origin):
+    """Return (x, y, yaw) of pose in the frame of origin (both (x, y, yaw))."""
+    dx, dy = pose[0] - origin[0], pose[1] - origin[1]
+    c, s = math.cos(origin[2]), math.sin(origin[2])
+    return c * dx + s * dy, -s * dx + c * dy, wrap(pose[2] - origin[2])
 
-    def __init__(self):
+
+class Runner:
+    """Steers on ground truth and records the three trajectories (and any extra odometry)."""
+
+    def __init__(self, extra_odometry=None):
         self.lock = threading.Lock()
         self.truth = None
         self.est = None
         self.ekf = None
         self.tracks = {"truth": [], "corrected": [], "ekf": []}
+        self.truth_history = collections.deque(maxlen=2000)  # (stamp [s], (x, y, yaw)), for stamp matching
         self.max_err = 0.0  # corrected pose vs the latest ground truth since the last loop end
+        # Extra odometry topics (another filter's odom frame): compared with the truth after
+        # aligning both at the first sample once driving starts.
+        self.extra = {name: {"topic": topic, "first": None, "recording": False, "max_err": 0.0, "samples": 0,
+                             "track": []} for name, topic in (extra_odometry or {}).items()}
         self.cmd = rospy.Publisher("/cmd_vel", Twist, queue_size=1)
         rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_truth, queue_size=5)
         rospy.Subscriber("/rbd_localization/pose", PoseStamped, self.on_est, queue_size=5)
         rospy.Subscriber("/odometry/filtered", Odometry, self.on_ekf, queue_size=5)
+        for name, e in self.extra.items():
+            rospy.Subscriber(e["topic"], Odometry, self.on_extra, callback_args=name, queue_size=5)
 
     def on_truth(self, msg):
         p = msg.pose.pose
         with self.lock:
             self.truth = (p.position.x, p.position.y, yaw_of(p.orientation))
             self.tracks["truth"].append(self.truth[:2])
+            self.truth_history.append((msg.header.stamp.to_sec(), self.truth))
+
+    def truth_at(self, stamp):
+        """Return the ground truth sample nearest in time to stamp (lock held), or None."""
+        if not self.truth_history:
+            return None
+        stamps = [h[0] for h in self.truth_history]
+        i = bisect.bisect_left(stamps, stamp)
+        near = [j for j in (i - 1, i) if 0 <= j < len(stamps)]
+        best = min(near, key=lambda j: abs(stamps[j] - stamp))
+        return self.truth_history[best][1] if abs(stamps[best] - stamp) < 0.1 else None
 
     def on_est(self, msg):
         with self.lock:
@@ -67,6 +94,33 @@ class Runner:
         with self.lock:
             self.ekf = (p.position.x, p.position.y, yaw_of(p.orientation))
             self.tracks["ekf"].append(self.ekf[:2])
+
+    def on_extra(self, msg, name):
+        p = msg.pose.pose
+        est = (p.position.x, p.position.y, yaw_of(p.orientation))
+        with self.lock:
+            e = self.extra[name]
+            truth = self.truth_at(msg.header.stamp.to_sec())  # same instant, not the latest message
+            if not e["recording"] or truth is None:
+                return
+            if e["first"] is None:
+                e["first"] = (est, truth)
+            (ex, ey, eyaw), (tx, ty, tyaw) = e["first"]
+            rel_est = relative(est, (ex, ey, eyaw))
+            rel_truth = relative(truth, (tx, ty, tyaw))
+            err = math.hypot(rel_est[0] - rel_truth[0], rel_est[1] - rel_truth[1])
+            e["max_err"] = max(e["max_err"], err)
+            e["samples"] += 1
+            e["track"].append(rel_est[:2])
+            e.setdefault("errors", []).append((msg.header.stamp.to_sec(), err, rel_est, rel_truth))
+            e["final_err"] = err
+
+    def start_extra(self):
+        """Align the extra odometry with the truth at their next samples and record from then on."""
+        with self.lock:
+            for e in self.extra.values():
+                e["first"], e["recording"], e["max_err"], e["samples"], e["track"] = None, True, 0.0, 0, []
+                e["errors"] = []
 
     def send(self, vx, wz):
         t = Twist()
@@ -138,12 +192,18 @@ class Runner:
         return False
 
 
-def run(loops, settle=4.0):
-    """Drive `loops` loops; return the per-loop error report."""
-    r = Runner()
+def run(loops, settle=4.0, extra_odometry=None):
+    """Drive `loops` loops; return the per-loop error report.
+
+    extra_odometry: {name: topic} of further odometry (e.g. another filter configuration),
+    reported under report["extra"][name] with its largest and final error against the truth.
+    """
+    r = Runner(extra_odometry)
     if not r.wait_ready():
         raise RuntimeError("no ground truth / pose / odometry")
     rospy.sleep(settle)  # map built while standing
+    r.start_extra()
+    rospy.sleep(0.5)
     report = {"loops": []}
     for i in range(loops):
         r.go_to(1.0, 0.0)
@@ -159,6 +219,9 @@ def run(loops, settle=4.0):
         rospy.loginfo("loop %d: %s", i + 1, json.dumps(e))
     with r.lock:  # subscribers keep appending
         report["tracks"] = {k: list(v) for k, v in r.tracks.items()}
+        report["extra"] = {name: {"max_err": e["max_err"], "final_err": e.get("final_err"), "samples": e["samples"],
+                                  "track": list(e["track"]), "errors": list(e.get("errors", []))}
+                           for name, e in r.extra.items()}
     return report
 
 

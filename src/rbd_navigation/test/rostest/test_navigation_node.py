@@ -6,11 +6,12 @@ import time
 import unittest
 
 import rospy
-import rostest
 from geometry_msgs.msg import PoseStamped
 
 from rbd_msgs.srv import GeneratePath
 from rbd_pos_controller.geometry import quaternion_from_rpy, rpy_from_quaternion
+from rbd_testkit import wait_for
+from rbd_testkit.ros import run_rostest
 
 
 class TestNavigation(unittest.TestCase):
@@ -20,6 +21,8 @@ class TestNavigation(unittest.TestCase):
         rospy.wait_for_service("/rbd_navigation/generate_path", timeout=60.0)
         cls.srv = rospy.ServiceProxy("/rbd_navigation/generate_path", GeneratePath)
         cls.pub = rospy.Publisher("/test/pose", PoseStamped, queue_size=1)
+        # Before any test publishes a pose: the node's answer without one.
+        cls.no_pose = cls.srv(command="walk")
 
     def publish_pose(self, x, y, yaw):
         msg = PoseStamped()
@@ -27,20 +30,18 @@ class TestNavigation(unittest.TestCase):
         msg.pose.position.x, msg.pose.position.y = x, y
         o = msg.pose.orientation
         o.x, o.y, o.z, o.w = quaternion_from_rpy(0.0, 0.0, yaw)
-        deadline = time.monotonic() + 10.0
-        while self.pub.get_num_connections() == 0 and time.monotonic() < deadline:
-            time.sleep(0.05)
+        wait_for(lambda: self.pub.get_num_connections() > 0, 10.0, what="rbd_navigation subscribed to the pose")
         for _ in range(3):
             self.pub.publish(msg)
             time.sleep(0.1)
 
-    def test_0_no_pose_no_path(self):
-        res = self.srv(command="walk")
+    def test_no_pose_no_path(self):
+        res = self.no_pose
         self.assertFalse(res.success)
         self.assertIn("pose", res.message)
         self.assertEqual(res.count, 0)
 
-    def test_1_walk_relative_to_pose(self):
+    def test_walk_relative_to_pose(self):
         self.publish_pose(1.0, 2.0, math.pi / 2)
         res = self.srv(command="walk")
         self.assertTrue(res.success, res.message)
@@ -53,7 +54,7 @@ class TestNavigation(unittest.TestCase):
         o = first.orientation
         self.assertAlmostEqual(rpy_from_quaternion(o.x, o.y, o.z, o.w)[2], math.pi / 2, places=6)
 
-    def test_2_unknown_command(self):
+    def test_unknown_command(self):
         self.publish_pose(0.0, 0.0, 0.0)
         res = self.srv(command="fly")
         self.assertFalse(res.success)
@@ -61,7 +62,7 @@ class TestNavigation(unittest.TestCase):
         self.assertIn("walk", res.message)
         self.assertEqual((res.count, len(res.poses), len(res.names)), (0, 0, 0))
 
-    def test_3_body_pose_tricks(self):
+    def test_body_pose_tricks(self):
         self.publish_pose(0.0, 0.0, 0.0)
         res = self.srv(command="lie_down")
         self.assertTrue(res.success)
@@ -69,4 +70,4 @@ class TestNavigation(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_navigation", "navigation_wiring", TestNavigation)
+    run_rostest("rbd_navigation", "navigation_wiring", TestNavigation)

@@ -11,9 +11,11 @@ import tempfile
 import unittest
 
 import rospy
-import rostest
+
+from rbd_testkit.ros import run_rostest
 
 NODE = "/rbd_pos_controller/"
+ROTATION_CONTROL = ("rotation_x_control", "rotation_y_control")
 
 
 def run_experiment(name, out, label):
@@ -35,8 +37,13 @@ class TestExperiment(unittest.TestCase):
         rospy.init_node("test_experiment", anonymous=True)
         rospy.wait_for_service(NODE + "set_position", timeout=60.0)
         cls.out = os.environ.get("RBD_EXPERIMENT_OUT") or tempfile.mkdtemp(prefix="rbd-experiment.")
+        cls.defaults = {key: rospy.get_param(NODE + key) for key in ROTATION_CONTROL}
 
-    def test_1_thesis_path(self):
+    def setUp(self):
+        for key, value in self.defaults.items():  # whatever an earlier test set
+            rospy.set_param(NODE + key, value)
+
+    def test_thesis_path(self):
         m = run_experiment("thesis_path", os.path.join(self.out, "default"), "thesis path (default gains)")
         rospy.loginfo("thesis path: %s", m)
         self.assertTrue(m["reached"])
@@ -47,7 +54,7 @@ class TestExperiment(unittest.TestCase):
         for suffix in ("_path.png", "_velocities.png"):
             self.assertTrue(os.path.getsize(os.path.join(self.out, "default", "thesis_path" + suffix)) > 5000)
 
-    def test_2_rotation_with_and_without_position_control(self):
+    def test_rotation_with_and_without_position_control(self):
         rospy.set_param(NODE + "rotation_x_control", False)
         rospy.set_param(NODE + "rotation_y_control", False)
         without = run_experiment("rotation180", os.path.join(self.out, "rotation_off"), "180 deg, no position control")
@@ -64,4 +71,4 @@ class TestExperiment(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_pos_controller", "experiment_mock_a1", TestExperiment)
+    run_rostest("rbd_pos_controller", "experiment_mock_a1", TestExperiment)

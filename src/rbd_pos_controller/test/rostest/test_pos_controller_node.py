@@ -7,13 +7,14 @@ import time
 import unittest
 
 import rospy
-import rostest
 from geometry_msgs.msg import Pose, PoseStamped, Twist, Vector3
 from std_msgs.msg import Float32, String
 from std_srvs.srv import SetBool
 
 from rbd_msgs.srv import SetPosition
 from rbd_pos_controller.geometry import quaternion_from_rpy, rpy_from_quaternion
+from rbd_testkit import wait_for
+from rbd_testkit.ros import run_rostest
 
 PERIOD = 1.0 / 20.0  # the controller's rate
 
@@ -59,15 +60,6 @@ class Recorder:
         )
 
 
-def wait_for(predicate, timeout, step=0.02):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(step)
-    return predicate()
-
-
 class TestPosController(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -84,6 +76,13 @@ class TestPosController(unittest.TestCase):
         cls.pause = rospy.ServiceProxy("/kinematic_robot/pause_pose", SetBool)
         cls.scale_pub = rospy.Publisher("/rbd_lidar/speed_scale", Float32, queue_size=1, latch=True)
         assert wait_for(lambda: cls.rec.truth is not None and cls.rec.status, 30.0)
+
+    def setUp(self):
+        """Known state, whatever ran before: no emergency, pose flowing, full speed, controller idle."""
+        self.emergency(data=False)
+        self.pause(data=False)
+        self.scale_pub.publish(Float32(1.0))
+        self.assertTrue(wait_for(self.idle, 40.0), "not idle, status %s" % self.rec.status[-3:])
 
     def idle(self):
         return self.rec.status and self.rec.status[-1] == "idle"
@@ -105,7 +104,7 @@ class TestPosController(unittest.TestCase):
         self.assertLess(math.hypot(x1 - x0, y1 - y0), 0.005)
         self.assertLess(abs(yaw1 - yaw0), 0.005)
 
-    def test_1_reaches_goal_with_body_pose(self):
+    def test_reaches_goal_with_body_pose(self):
         self.go(make_pose(0.6, 0.3, 1.2, pitch=0.1, z=-0.05))
         x, y, yaw = self.rec.xy_yaw()
         self.assertLess(math.hypot(x - 0.6, y - 0.3), 0.03)
@@ -119,7 +118,7 @@ class TestPosController(unittest.TestCase):
         self.assertGreaterEqual(len(cmds), 3, "cmd_vel must keep coming at >= 10 Hz")
         self.assertTrue(all(c.linear.x == 0 and c.linear.y == 0 and c.angular.z == 0 for c in cmds))
 
-    def test_2_bad_goals_rejected_without_motion(self):
+    def test_bad_goals_rejected_without_motion(self):
         x0, y0, _ = self.rec.xy_yaw()
         for pose in (make_pose(float("nan"), 0.0, 0.0), make_pose(0.0, 0.0, 0.0)):
             if pose.position.x == 0.0:
@@ -130,7 +129,7 @@ class TestPosController(unittest.TestCase):
         self.assertTrue(self.idle())
         self.assert_robot_stopped()
 
-    def test_3_emergency_zeroes_within_one_period_and_releases_to_idle(self):
+    def test_emergency_zeroes_within_one_period_and_releases_to_idle(self):
         x, y, _ = self.rec.xy_yaw()
         res = self.set_position(pose=make_pose(x - 1.0, y, math.pi))
         self.assertTrue(res.accepted)
@@ -150,7 +149,7 @@ class TestPosController(unittest.TestCase):
         self.emergency(data=False)
         self.assertTrue(wait_for(self.idle, 2.0))
 
-    def test_4_stale_pose_stops_then_continues(self):
+    def test_stale_pose_stops_then_continues(self):
         x, y, yaw = self.rec.xy_yaw()
         goal = make_pose(x + 0.8 * math.cos(yaw), y + 0.8 * math.sin(yaw), yaw)
         self.assertTrue(self.set_position(pose=goal).accepted)
@@ -169,7 +168,7 @@ class TestPosController(unittest.TestCase):
         x1, y1, _ = self.rec.xy_yaw()
         self.assertLess(math.hypot(x1 - goal.position.x, y1 - goal.position.y), 0.03)
 
-    def test_5_speed_scale_zero_holds_robot(self):
+    def test_speed_scale_zero_holds_robot(self):
         self.scale_pub.publish(Float32(0.0))
         time.sleep(0.3)
         x, y, yaw = self.rec.xy_yaw()
@@ -183,4 +182,4 @@ class TestPosController(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_pos_controller", "pos_controller_wiring", TestPosController)
+    run_rostest("rbd_pos_controller", "pos_controller_wiring", TestPosController)

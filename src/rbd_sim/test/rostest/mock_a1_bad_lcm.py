@@ -2,20 +2,23 @@
 """rostest node: be the mock A1's LCM peer; malformed HighCmd packets must leave it standing still.
 
 Measured on /rbd_sim/ground_truth. A valid command afterwards must move it (so the test can fail),
-and when the commands stop, the A1's own watchdog must stop it.
+and when the commands stop, the A1's own watchdog must stop it. The malformed packets are proven
+to have arrived by the mock's own count of rejected commands (its log on /rosout).
 """
 
 import math
 import random
+import re
 import threading
 import time
 import unittest
 
 import lcm
 import rospy
-import rostest
 from nav_msgs.msg import Odometry
 
+from rbd_testkit import stays_unchanged, wait_for
+from rbd_testkit.ros import RosoutWatcher, run_rostest
 from rbd_wire_oracle import unitree as vendor
 
 PKG = "rbd_sim"
@@ -45,9 +48,26 @@ class MockA1BadLcm(unittest.TestCase):
         cls.rx = threading.Thread(target=cls._rx)
         cls.rx.daemon = True
         cls.rx.start()
-        deadline = time.monotonic() + 60.0
-        while (cls.pose is None or not cls.states) and time.monotonic() < deadline:
-            time.sleep(0.05)
+        cls.rosout = RosoutWatcher()
+        cls.rosout.wait_connected("/mock_a1", 60.0)
+        wait_for(lambda: cls.pose is not None and cls.states, 60.0)
+
+    def setUp(self):
+        """Known state, whatever ran before: the mock stands still."""
+        self.assertIsNotNone(self.get(), "no ground truth")
+
+        def still():
+            before = self.get()
+            time.sleep(0.2)
+            return all(v < 1e-4 for v in self.moved(self.get(), before))
+
+        wait_for(still, 5.0, 0.0, what="the mock standing still")
+
+    def rejected_so_far(self):
+        """The mock's count of rejected HighCmd packets, from its latest (throttled) log line."""
+        counts = [int(m.group(1)) for m in (re.search(r"rejected \((\d+) so far", line)
+                                            for line in self.rosout.find("HighCmd rejected", node="/mock_a1")) if m]
+        return max(counts) if counts else 0
 
     @classmethod
     def tearDownClass(cls):
@@ -86,13 +106,13 @@ class MockA1BadLcm(unittest.TestCase):
     def moved(self, a, b):
         return math.hypot(a[0] - b[0], a[1] - b[1]), abs(a[2] - b[2])
 
-    def test_1_high_state_has_the_layouts_size(self):
+    def test_high_state_has_the_layouts_size(self):
         layout = rospy.get_param("~sdk_layout", "3.3.4")
         self.assertTrue(self.states, "no LCM_High_State received")
         with self.lock:
             self.assertEqual(set(self.states), {vendor.HIGH_STATES[layout].size})
 
-    def test_2_malformed_packets_hold_still(self):
+    def test_malformed_packets_hold_still(self):
         rng = random.Random(11)
         nan, inf = float("nan"), float("inf")
         bad = [
@@ -110,13 +130,17 @@ class MockA1BadLcm(unittest.TestCase):
         bad += [bytes(rng.getrandbits(8) for _ in range(vendor.HIGH_CMD.size)) for _ in range(40)]
         bad += [bytes(rng.getrandbits(8) for _ in range(rng.randint(1, 300))) for _ in range(20)]
         start = self.get()
-        self.send(bad, 2.0)
-        time.sleep(0.3)
-        d, dyaw = self.moved(self.get(), start)
-        self.assertLess(d, 0.002, "moved %.4f m on malformed packets" % d)
-        self.assertLess(dyaw, 0.002)
+        n0 = self.rejected_so_far()
+        stays_unchanged(
+            lambda: [m >= 0.002 for m in self.moved(self.get(), start)],
+            lambda: self.rejected_so_far() >= n0 + len(bad),
+            0.3,
+            send=lambda: self.send(bad, 2.0),
+            what="moved (position, yaw) by 2 mm / 2 mrad",
+            proof="the mock rejecting the packets (its count on /rosout)",
+        )
 
-    def test_3_valid_packets_move_and_watchdog_stops(self):
+    def test_valid_packets_move_and_watchdog_stops(self):
         nan = float("nan")
         start = self.get()
         # Valid commands interleaved with garbage: the garbage is ignored, the robot walks.
@@ -135,4 +159,4 @@ class MockA1BadLcm(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun(PKG, "mock_a1_bad_lcm", MockA1BadLcm)
+    run_rostest(PKG, "mock_a1_bad_lcm", MockA1BadLcm)

@@ -12,13 +12,14 @@ import time
 import unittest
 
 import rospy
-import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Bool
 
 from rbd_msgs.srv import SetBodyPose
+from rbd_testkit import stays_unchanged, wait_for
+from rbd_testkit.ros import run_rostest
 
 PKG = "rbd_sim"
 RATE = 20.0  # cmd_vel rate of the test, like a controller [Hz]
@@ -76,12 +77,20 @@ class MockA1Behaviour(unittest.TestCase):
         cls.diag = []
         rospy.Subscriber("/diagnostics", DiagnosticArray, cls.diag.append, queue_size=5)
         rospy.wait_for_message("/rbd_a1_driver/odom", Odometry, timeout=60.0)
-        deadline = time.monotonic() + 30.0
-        while cls.gt.get() is None and time.monotonic() < deadline:
-            time.sleep(0.05)
-        deadline = time.monotonic() + 30.0
-        while cls.pub.get_num_connections() == 0 and time.monotonic() < deadline:
-            time.sleep(0.05)
+        wait_for(lambda: cls.gt.get() is not None, 30.0)
+        wait_for(lambda: cls.pub.get_num_connections() > 0, 30.0)
+
+    @classmethod
+    def driver_values(cls, key):
+        """Every value of ``key`` in rbd_a1_driver's diagnostics so far (1 Hz)."""
+        return [kv.value for arr in list(cls.diag) for st in arr.status for kv in st.values
+                if st.name.startswith("rbd_a1_driver") and kv.key == key]
+
+    @classmethod
+    def rejected(cls):
+        """rbd_a1_driver's count of rejected cmd_vel messages (diagnostics), 0 before the first."""
+        values = cls.driver_values("cmd_vel_rejected")
+        return int(values[-1]) if values else 0
 
     def setUp(self):
         self.assertIsNotNone(self.gt.get(), "no ground truth")
@@ -113,26 +122,31 @@ class MockA1Behaviour(unittest.TestCase):
         self.assertLess(dist(start, end), 0.005, "%s: moved %.3f m" % (what, dist(start, end)))
         self.assertLess(abs(end[5] - start[5]), 0.005, "%s: turned" % what)
 
-    def test_0_frames(self):
+    def test_frames(self):
         self.assertEqual(self.gt.frame, ("world", "base_link_gt"))
 
-    def test_1_forward_03_for_3s(self):
+    def test_forward_03_for_3s(self):
         start = self.settle()
         self.send(twist(0.3), 3.0)
         self.send(twist(), 0.5)
         end = self.settle()
-        moved = end[0] - start[0]
+        # Along and across the heading at the start (an earlier test may have turned the robot).
+        dx, dy, yaw = end[0] - start[0], end[1] - start[1], start[5]
+        moved = dx * math.cos(yaw) + dy * math.sin(yaw)
+        sideways = -dx * math.sin(yaw) + dy * math.cos(yaw)
         rospy.loginfo("MEASURED forward 0.3 m/s x 3 s: %.3f m", moved)
         self.assertAlmostEqual(moved, 0.9, delta=0.045, msg="moved %.3f m" % moved)
-        self.assertLess(abs(end[1] - start[1]), 0.01)
+        self.assertLess(abs(sideways), 0.01)
 
-    def test_2_no_cmd_vel_for_025s_stops(self):
+    def test_no_cmd_vel_for_025s_stops(self):
         self.settle()
         at_last = self.send(twist(0.3), 1.0)
         t_last = time.monotonic()
         time.sleep(1.0)
         stopped = self.gt.get()
-        coast = stopped[0] - at_last[0]
+        # Along the heading (an earlier test may have turned the robot: x alone goes negative then).
+        yaw = at_last[5]
+        coast = (stopped[0] - at_last[0]) * math.cos(yaw) + (stopped[1] - at_last[1]) * math.sin(yaw)
         rospy.loginfo("MEASURED coast after the last cmd_vel: %.3f m", coast)
         # 0.25 s gate + 0.05 s latency at 0.3 m/s + 0.03 m braking = 0.12 m; a 1 s gate would give 0.33 m.
         self.assertGreater(coast, 0.03, "was not moving?")
@@ -140,7 +154,7 @@ class MockA1Behaviour(unittest.TestCase):
         self.assertLess(time.monotonic() - t_last, 1.5, "test too slow to judge")
         self.assert_still(0.5, "after cmd_vel stopped")
 
-    def test_3_turn_180(self):
+    def test_turn_180(self):
         expect = float(rospy.get_param("~expect_drift", 0.4))
         start = self.settle()
         wz = 0.5
@@ -156,7 +170,7 @@ class MockA1Behaviour(unittest.TestCase):
         else:
             self.assertLess(drift, 0.02, "drift %.3f m with drift off" % drift)
 
-    def test_4_estop_gate(self):
+    def test_estop_gate(self):
         try:
             self.settle()
             self.estop.publish(Bool(True))
@@ -179,16 +193,23 @@ class MockA1Behaviour(unittest.TestCase):
             self.estop.publish(Bool(False))
             time.sleep(0.2)
 
-    def test_5_nan_cmd_vel_holds_still(self):
+    def test_nan_cmd_vel_holds_still(self):
         self.settle()
         start = self.gt.get()
         nan = float("nan")
-        for msg in (twist(nan, 0, 0), twist(0.3, 0, nan), twist(0.3, float("inf"), 0)):
-            self.send(msg, 0.5)
-        self.assertLess(dist(self.gt.get(), start), 0.005)
-        self.assertLess(abs(self.gt.get()[5] - start[5]), 0.005)
+        bad = (twist(nan, 0, 0), twist(0.3, 0, nan), twist(0.3, float("inf"), 0))
+        n0 = self.rejected()
+        stays_unchanged(
+            lambda: (dist(self.gt.get(), start) >= 0.005, abs(self.gt.get()[5] - start[5]) >= 0.005),
+            lambda: self.rejected() >= n0 + len(bad),  # the driver counted them (diagnostics, 1 Hz)
+            0.3,
+            send=lambda: [self.send(msg, 0.5) for msg in bad],
+            timeout=5.0,
+            what="moved 5 mm / turned 5 mrad",
+            proof="rbd_a1_driver rejecting the commands (cmd_vel_rejected)",
+        )
 
-    def test_6_body_pose_tilts_and_lowers(self):
+    def test_body_pose_tilts_and_lowers(self):
         self.settle()
         rospy.wait_for_service("/set_body_pose", timeout=10.0)
         call = rospy.ServiceProxy("/set_body_pose", SetBodyPose)
@@ -215,36 +236,41 @@ class MockA1Behaviour(unittest.TestCase):
 class TurnOnly(MockA1Behaviour):
     """Only the 180 deg turn (for the drift-off configuration, whose driver has estop_required)."""
 
-    def test_1_estop_required_holds_until_first_estop_message(self):
-        # Nothing has published /rbd_controller/estop yet: the driver must not walk.
-        self.settle()
-        start = self.gt.get()
-        self.send(twist(0.3), 1.5)
-        self.assertLess(dist(self.gt.get(), start), 0.005, "walked before any e-stop message")
-        reasons = []
-        deadline = time.monotonic() + 3.0  # diagnostics come at 1 Hz
-        while not any("estop_required" in r for r in reasons) and time.monotonic() < deadline:
-            time.sleep(0.1)
-            reasons = [kv.value for arr in list(self.diag) for st in arr.status for kv in st.values
-                       if st.name.startswith("rbd_a1_driver") and kv.key == "zero_velocity_reason"]
-        self.assertTrue(any("estop_required" in r for r in reasons), reasons[-5:])
+    @classmethod
+    def setUpClass(cls):
+        super().setUpClass()
+        # Before any e-stop message, so before any test: cmd_vel must not make the driver walk.
+        # Measured here once, then the e-stop source comes up for every test in any order.
+        probe = cls("test_estop_required_holds_until_first_estop_message")
+        probe.settle()
+        start = cls.gt.get()
+        probe.send(twist(0.3), 1.5)
+        cls.walked_before_estop = dist(cls.gt.get(), start)
+        # proof the commands arrived and were refused for this reason (diagnostics come at 1 Hz)
+        wait_for(lambda: any("estop_required" in r for r in cls.driver_values("zero_velocity_reason")), 3.0)
+        cls.reasons_before_estop = cls.driver_values("zero_velocity_reason")
         # One released e-stop message (latched; a single message does not arm the signal watchdog).
-        self.estop.publish(Bool(False))
+        cls.estop.publish(Bool(False))
         time.sleep(0.3)
+
+    def test_estop_required_holds_until_first_estop_message(self):
+        self.assertLess(self.walked_before_estop, 0.005, "walked before any e-stop message")
+        reasons = self.reasons_before_estop
+        self.assertTrue(any("estop_required" in r for r in reasons), reasons[-5:])
         start = self.gt.get()
         self.send(twist(0.3), 1.0)
         self.assertGreater(dist(self.gt.get(), start), 0.15, "no motion after the e-stop source came up")
         self.send(twist(), 0.5)
 
-    test_1_forward_03_for_3s = None
-    test_2_no_cmd_vel_for_025s_stops = None
-    test_4_estop_gate = None
-    test_5_nan_cmd_vel_holds_still = None
-    test_6_body_pose_tilts_and_lowers = None
+    test_forward_03_for_3s = None
+    test_no_cmd_vel_for_025s_stops = None
+    test_estop_gate = None
+    test_nan_cmd_vel_holds_still = None
+    test_body_pose_tilts_and_lowers = None
 
 
 if __name__ == "__main__":
     if "--turn-only" in sys.argv:
-        rostest.rosrun(PKG, "mock_a1_turn", TurnOnly)
+        run_rostest(PKG, "mock_a1_turn", TurnOnly)
     else:
-        rostest.rosrun(PKG, "mock_a1_behaviour", MockA1Behaviour)
+        run_rostest(PKG, "mock_a1_behaviour", MockA1Behaviour)

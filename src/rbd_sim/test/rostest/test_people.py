@@ -3,18 +3,17 @@
 
 import math
 import os
-import sys
 import unittest
 
 import cloud_check as cc
 import numpy as np
 import rospkg
 import rospy
-import rostest
 from sensor_msgs.msg import PointCloud2
 from visualization_msgs.msg import Marker, MarkerArray
 
 from rbd_sim.world import load_world
+from rbd_testkit.ros import run_rostest
 
 
 class TestPeople(unittest.TestCase):
@@ -72,4 +71,4 @@ class TestPeople(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_sim", "people", TestPeople, sys.argv)
+    run_rostest("rbd_sim", "people", TestPeople)

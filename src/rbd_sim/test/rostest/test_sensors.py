@@ -8,20 +8,19 @@ inside a closed 16 m hall with a 3 m ceiling. Ground truth: base_link at (0, 0, 
 import json
 import math
 import struct
-import sys
 import unittest
 
 import cloud_check as cc
 import numpy as np
 import rospy
-import rostest
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
-from sensor_msgs.msg import Imu, PointCloud2, PointField
+from sensor_msgs.msg import CompressedImage, Imu, PointCloud2, PointField
 from std_msgs.msg import String
 from visualization_msgs.msg import MarkerArray
 
 from rbd_msgs.srv import PlaceObstacle, PlaceObstacleRequest
+from rbd_testkit.ros import run_rostest
 
 BASE_Z = 0.28
 MOUNT_Z = 0.07
@@ -49,9 +48,15 @@ class TestSensors(unittest.TestCase):
         cls.zed = cc.Latest("/zed2/zed_node/pose", PoseStamped, keep=100)
         cls.zed_cov = cc.Latest("/zed2/zed_node/pose_with_covariance", PoseWithCovarianceStamped, keep=100)
         cls.markers = cc.Latest("/rbd_sim/obstacles", MarkerArray, keep=50)
+        cls.camera = cc.Latest("/zed2/zed_node/left/image_rect_color/compressed", CompressedImage, keep=60)
         rospy.wait_for_service("/rbd_sim/place_obstacle", timeout=60.0)
         cls.place = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
         cls.first = cls.clouds.wait_new(rospy.Time(0), timeout=60.0)
+
+    def setUp(self):
+        """Known state, whatever ran before: none of the obstacles these tests place."""
+        for name in ("p1", "close"):
+            self.place(PlaceObstacleRequest(name=name, remove=True))  # success=False when absent
 
     def fresh_cloud(self):
         """A cloud whose scan started after now (so it reflects the world as of now)."""
@@ -227,6 +232,22 @@ class TestSensors(unittest.TestCase):
         c = np.array(cov.pose.covariance).reshape(6, 6)
         self.assertTrue(np.all(np.diag(c) > 0))
 
+    def test_zed2_left_image_compressed_jpeg(self):
+        import cv2  # decodes the bytes on its own: the JPEG standard is the truth here
+
+        self.camera.wait_new(rospy.Time.now())
+        msgs = self.camera.window(2.0)
+        self.assertGreater(len(msgs), 15)  # 15 Hz nominal (the ZED wrapper's pub_frame_rate)
+        self.assertLess(len(msgs), 45)
+        stamps = [m.header.stamp.to_sec() for m in msgs]
+        self.assertTrue(all(b > a for a, b in zip(stamps, stamps[1:])), stamps)
+        for m in msgs[:3]:
+            self.assertEqual(m.header.frame_id, "zed2_left_camera_optical_frame")
+            self.assertIn("jpeg", m.format)
+            img = cv2.imdecode(np.frombuffer(bytes(m.data), np.uint8), cv2.IMREAD_COLOR)
+            self.assertIsNotNone(img)
+            self.assertEqual(img.shape, (376, 672, 3))  # the ZED2's VGA mode (placeholder scene)
+
     def test_metadata_latched(self):
         msg = rospy.wait_for_message("/ouster/metadata", String, timeout=10.0)
         meta = json.loads(msg.data)
@@ -251,4 +272,4 @@ class TestSensors(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_sim", "sensors", TestSensors, sys.argv)
+    run_rostest("rbd_sim", "sensors", TestSensors)

@@ -7,18 +7,17 @@ geometry of the mount (base_link -> os_sensor = (0, 0, 0.07)).
 """
 
 import math
-import sys
 import threading
 import unittest
 
 import cloud_check as cc
 import numpy as np
 import rospy
-import rostest
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import PointCloud2
 
 from rbd_sim.transforms import rpy_to_matrix, rpy_to_quat
+from rbd_testkit.ros import run_rostest
 
 MOUNT = np.array([0.0, 0.0, 0.07])
 
@@ -124,4 +123,4 @@ class TestTilt(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("rbd_sim", "sensors_tilt", TestTilt, sys.argv)
+    run_rostest("rbd_sim", "sensors_tilt", TestTilt)

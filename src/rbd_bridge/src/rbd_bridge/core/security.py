@@ -11,18 +11,7 @@ import hmac
 import math
 from typing import Any, Callable, Dict
 
-__all__ = [
-    "AuthError",
-    "Policy",
-    "parse_glob_list",
-    "check_mac",
-    "make_mac",
-    "policy_from_params",
-    "ROBODOG_PUBLISH",
-    "ROBODOG_SUBSCRIBE",
-    "ROBODOG_SERVICES",
-    "ROBODOG_PARAMS",
-]
+__all__ = ["AuthError", "Policy", "parse_glob_list", "check_mac", "make_mac", "policy_from_params"]
 
 ROBODOG_PUBLISH = ("/rbd_gestrec/gesture", "/rbd_local/heartbeat")
 ROBODOG_SUBSCRIBE = (
@@ -40,18 +29,11 @@ class AuthError(ValueError):
     """An ``auth`` op that does not authenticate the client."""
 
 
-def parse_glob_list(text: str) -> Any:
-    """Parse a rosbridge-style glob list parameter.
-
-    Accepts ``"[*]"``, ``"['/a', '/b/*']"``, ``"[/a, /b]"``, ``"/a /b"``, a Python list, or
-    an empty value.
-
-    Args:
-        text: The parameter value.
+def parse_glob_list(text: Any) -> Any:
+    """Parse a rosbridge-style glob list (``"[*]"``, ``"['/a', '/b/*']"``, ``"[/a, /b]"``, ``"/a /b"``, a list).
 
     Returns:
-        tuple: Glob strings (``()`` for an empty list), or ``None`` when text is ``None``
-        or ``""`` (meaning "not given").
+        tuple: The globs (``()`` for an empty list), or ``None`` for ``None`` / ``""`` (not given).
     """
     if text is None:
         return None
@@ -64,25 +46,41 @@ def parse_glob_list(text: str) -> Any:
         if text.startswith("[") and text.endswith("]"):
             text = text[1:-1]
         items = text.replace(",", " ").split()
-    out = []
-    for item in items:
-        item = item.strip().strip("'\"").strip()
-        if item:
-            out.append(item)
-    return tuple(out)
+    return tuple(i for i in (item.strip().strip("'\"").strip() for item in items) if i)
 
 
-def _matches(name: str, globs: Any) -> bool:
-    if globs is None:
-        return True
-    for pattern in globs:
-        if fnmatch.fnmatchcase(name, pattern):
-            return True
-    return False
+class _Globs:
+    """A glob list (None = everything) whose answers are cached (at most 4096 names)."""
+
+    def __init__(self, globs: Any) -> None:
+        self.globs = globs
+        self.cache = {}
+
+    def __call__(self, name: str) -> bool:
+        hit = self.cache.get(name)
+        if hit is None:
+            hit = self.globs is None or any(fnmatch.fnmatchcase(name, p) for p in self.globs)
+            if len(self.cache) >= 4096:
+                self.cache.clear()
+            self.cache[name] = hit
+        return hit
 
 
 class Policy:
-    """What a client may do. ``None`` for a glob list means "everything"."""
+    """What a client may do.
+
+    ``may_publish`` (into ROS), ``may_subscribe``, ``may_call`` (call or advertise a service;
+    rosapi's are ``/rosapi/*``) and ``may_read_param`` (rosapi) are ``(name) -> bool``. A glob
+    list of ``None`` allows everything.
+
+    Args:
+        publish_globs: Topics a client may advertise/publish.
+        subscribe_globs: Topics a client may subscribe to.
+        service_globs: Services a client may call or advertise.
+        param_globs: Parameters rosapi may read (and write when params_writable).
+        params_writable: Allow rosapi set_param / delete_param within param_globs.
+        secret: Shared secret; when set, clients must ``auth`` first.
+    """
 
     def __init__(
         self,
@@ -93,52 +91,26 @@ class Policy:
         params_writable: bool = False,
         secret: str = None,
     ) -> None:
-        """Build a policy.
-
-        Args:
-            publish_globs: Topics a client may advertise/publish (into ROS).
-            subscribe_globs: Topics a client may subscribe to (out of ROS).
-            service_globs: Services a client may call or advertise (rosapi's are
-                ``/rosapi/*``).
-            param_globs: Parameters rosapi may read (and write when params_writable).
-            params_writable: Allow rosapi set_param / delete_param.
-            secret: Shared secret; when set, clients must ``auth`` first.
-        """
-        self.publish_globs = publish_globs
-        self.subscribe_globs = subscribe_globs
-        self.service_globs = service_globs
-        self.param_globs = param_globs
+        """Build a policy."""
+        self.publish_globs, self.may_publish = publish_globs, _Globs(publish_globs)
+        self.subscribe_globs, self.may_subscribe = subscribe_globs, _Globs(subscribe_globs)
+        self.service_globs, self.may_call = service_globs, _Globs(service_globs)
+        self.param_globs, self.may_read_param = param_globs, _Globs(param_globs)
         self.params_writable = params_writable
         self.secret = secret
 
     @property
-    def authenticate(self) -> Any:
+    def authenticate(self) -> bool:
         """True when clients must authenticate."""
         return bool(self.secret)
 
-    def may_publish(self, topic: str) -> Any:
-        """Return True if a client may publish topic into ROS."""
-        return _matches(topic, self.publish_globs)
-
-    def may_subscribe(self, topic: str) -> Any:
-        """Return True if a client may receive topic."""
-        return _matches(topic, self.subscribe_globs)
-
-    def may_see_topic(self, topic: str) -> Any:
+    def may_see_topic(self, topic: str) -> bool:
         """Return True if rosapi may list topic (allowed in either direction)."""
         return self.may_publish(topic) or self.may_subscribe(topic)
 
-    def may_call(self, service: str) -> Any:
-        """Return True if a client may call or advertise service."""
-        return _matches(service, self.service_globs)
-
-    def may_read_param(self, name: str) -> Any:
-        """Return True if rosapi may reveal parameter name."""
-        return _matches(name, self.param_globs)
-
-    def may_write_param(self, name: str) -> Any:
+    def may_write_param(self, name: str) -> bool:
         """Return True if rosapi may set or delete parameter name."""
-        return self.params_writable and _matches(name, self.param_globs)
+        return bool(self.params_writable) and self.may_read_param(name)
 
 
 def _secs(value: Any, field: str) -> Any:
@@ -149,36 +121,17 @@ def _secs(value: Any, field: str) -> Any:
     return int(value)
 
 
-def make_mac(secret: str, client: str, dest: str, rand: str, t: Any, level: str, end: Any) -> Any:
-    """Compute the rosauth MAC: sha512 hex of secret+client+dest+rand+t.secs+level+end.secs.
-
-    Args:
-        secret: Shared secret.
-        client: Client address string.
-        dest: Server address string.
-        rand: Random string.
-        t: Request time in seconds (int).
-        level: User level string.
-        end: Session end time in seconds (int).
-
-    Returns:
-        str: 128 hex characters.
-    """
+def make_mac(secret: str, client: str, dest: str, rand: str, t: Any, level: str, end: Any) -> str:
+    """The rosauth MAC: sha512 hex of secret + client + dest + rand + t (s) + level + end (s)."""
     text = "%s%s%s%s%d%s%d" % (secret, client, dest, rand, int(t), level, int(end))
     return hashlib.sha512(text.encode("utf-8")).hexdigest()
 
 
 def check_mac(secret: str, frame: Dict[str, Any], now: Callable[..., Any], max_skew: float = 5.0) -> None:
-    """Validate an ``auth`` op the way rosauth's ros_mac_authentication does.
-
-    Args:
-        secret: Shared secret.
-        frame: The decoded ``auth`` frame.
-        now: Current time in seconds.
-        max_skew: Allowed |t - now| in seconds.
+    """Validate an ``auth`` op as rosauth's ros_mac_authentication does (now: wall clock [s]).
 
     Raises:
-        AuthError: If a field is missing, the time window is wrong or the MAC differs.
+        AuthError: A field is missing, t is more than max_skew from now, end has passed, or the MAC differs.
     """
     fields = {}
     for key in ("mac", "client", "dest", "rand", "level"):
@@ -202,14 +155,10 @@ def policy_from_params(get: Callable[..., Any], secret: str = None) -> Any:
 
     ``topics_glob`` (rosbridge) sets both directions; ``publish_topics_glob`` /
     ``subscribe_topics_glob`` override one direction. A list not given at all keeps the
-    RoboDog default; ``"[*]"`` opens it; ``"[]"`` closes it.
-
-    Args:
-        get: Callable(name, default) reading a private parameter.
-        secret: Shared secret when authentication is on.
-
-    Returns:
-        Policy: The policy.
+    RoboDog default; ``"[*]"`` opens it; ``"[]"`` closes it. As rosbridge does, a given
+    non-empty ``services_glob`` gets ``/rosapi/*`` added, and a given ``params_glob`` is
+    writable unless ``params_writable`` is false (the RoboDog default has no parameters).
+    ``get(name, default)`` reads a private parameter.
     """
     topics = parse_glob_list(get("topics_glob", None))
     publish = parse_glob_list(get("publish_topics_glob", None))
@@ -222,13 +171,20 @@ def policy_from_params(get: Callable[..., Any], secret: str = None) -> Any:
         subscribe = topics if topics is not None else ROBODOG_SUBSCRIBE
     if services is None:
         services = ROBODOG_SERVICES
+    elif services and "/rosapi/*" not in services:
+        services = services + ("/rosapi/*",)  # as rosbridge: rosapi stays reachable
+    writable = get("params_writable", None)
+    if writable is None or writable == "":
+        writable = params is not None  # as rosbridge: a given params_glob is readable and writable
+    elif isinstance(writable, str):
+        writable = writable.strip().lower() in ("true", "1", "yes")
     if params is None:
         params = ROBODOG_PARAMS
     return Policy(
         publish_globs=None if publish == ("*",) else publish,
         subscribe_globs=None if subscribe == ("*",) else subscribe,
-        service_globs=None if services == ("*",) else services,
+        service_globs=None if "*" in services else services,
         param_globs=None if params == ("*",) else params,
-        params_writable=bool(get("params_writable", False)),
+        params_writable=bool(writable),
         secret=secret,
     )

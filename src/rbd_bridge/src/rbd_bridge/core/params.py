@@ -19,17 +19,7 @@ class ParamError(ValueError):
 def number(
     name: str, value: Any, default: Any, kind: Callable[[Any], Any] = int, minimum: Optional[float] = None
 ) -> Any:
-    """Return ``value`` as ``kind``; None, ``"None"`` or an empty text mean ``default``.
-
-    Args:
-        name: Parameter name (for the error text).
-        value: The value read from the parameter server.
-        default: Value used when the parameter is unset.
-        kind: ``int`` or ``float``.
-        minimum: Smallest accepted value, if any.
-
-    Returns:
-        The parsed value or ``default``.
+    """Parameter name's value as ``kind`` (int or float); None, ``"None"`` or an empty text mean ``default``.
 
     Raises:
         ParamError: The value is a boolean, not a number, or below ``minimum``.

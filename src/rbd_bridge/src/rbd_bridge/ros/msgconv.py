@@ -18,19 +18,15 @@ import base64
 import binascii
 import math
 import threading
+import time
 from typing import Any, Callable, Optional
 
 import genpy
 import roslib.message
 
-__all__ = [
-    "ConversionError",
-    "get_message_class",
-    "get_service_class",
-    "msg_to_dict",
-    "dict_to_msg",
-    "normalize_type",
-]
+from rbd_bridge.core.types import ConversionError, TypedArray, normalize_type
+
+__all__ = ["get_message_class", "get_service_class", "msg_to_dict", "dict_to_msg", "message_typedefs"]
 
 _INT_RANGES = {
     "int8": (-(2**7), 2**7 - 1),
@@ -48,91 +44,37 @@ _FLOATS = ("float32", "float64")
 _BINARY = ("uint8", "char")
 
 
-class ConversionError(ValueError):
-    """A JSON value does not fit the ROS message type; the text names the field."""
-
-
-def normalize_type(type_name: str) -> Any:
-    """Return the ROS 1 spelling ``pkg/Name`` of a type (accepts ``pkg/msg/Name``, ``pkg/srv/Name``).
-
-    Args:
-        type_name: Type as a client wrote it.
-
-    Returns:
-        str: ``pkg/Name``.
-
-    Raises:
-        ConversionError: If the text is not a type name.
-    """
-    if not isinstance(type_name, str) or not type_name:
-        raise ConversionError("type must be a non-empty string, got %r" % (type_name,))
-    parts = type_name.strip("/").split("/")
-    if len(parts) == 3 and parts[1] in ("msg", "srv", "action"):
-        parts = [parts[0], parts[2]]
-    if len(parts) != 2 or not all(p.replace("_", "a").isalnum() for p in parts):
-        raise ConversionError("invalid type name %r" % (type_name,))
-    return "/".join(parts)
-
-
 _class_lock = threading.Lock()
-_msg_classes = {}
-_srv_classes = {}
+_classes = {}
+
+
+def _load(kind: str, type_name: str) -> Any:
+    name = normalize_type(type_name)
+    cls = _classes.get((kind, name))
+    if cls is None:
+        load = roslib.message.get_message_class if kind == "message" else roslib.message.get_service_class
+        with _class_lock:
+            try:
+                cls = load(name)
+            except Exception as exc:  # roslib raises many kinds on bad packages
+                raise ConversionError("cannot load %s type %s: %s" % (kind, name, exc)) from None
+            if cls is None:
+                raise ConversionError("unknown %s type %s" % (kind, name))
+            _classes[(kind, name)] = cls
+    return cls
 
 
 def get_message_class(type_name: str) -> Any:
-    """Load a message class by name.
-
-    Args:
-        type_name: e.g. ``std_msgs/String``.
-
-    Returns:
-        The genpy message class.
-
-    Raises:
-        ConversionError: If the type cannot be loaded.
-    """
-    name = normalize_type(type_name)
-    cls = _msg_classes.get(name)
-    if cls is None:
-        with _class_lock:
-            try:
-                cls = roslib.message.get_message_class(name)
-            except Exception as exc:  # roslib raises many kinds on bad packages
-                raise ConversionError("cannot load message type %s: %s" % (name, exc)) from None
-            if cls is None:
-                raise ConversionError("unknown message type %s" % name)
-            _msg_classes[name] = cls
-    return cls
+    """Load a message class by name (e.g. ``std_msgs/String``); raises ConversionError."""
+    return _load("message", type_name)
 
 
 def get_service_class(type_name: str) -> Any:
-    """Load a service class by name.
-
-    Args:
-        type_name: e.g. ``std_srvs/SetBool``.
-
-    Returns:
-        The genpy service class (with ``_request_class`` and ``_response_class``).
-
-    Raises:
-        ConversionError: If the type cannot be loaded.
-    """
-    name = normalize_type(type_name)
-    cls = _srv_classes.get(name)
-    if cls is None:
-        with _class_lock:
-            try:
-                cls = roslib.message.get_service_class(name)
-            except Exception as exc:
-                raise ConversionError("cannot load service type %s: %s" % (name, exc)) from None
-            if cls is None:
-                raise ConversionError("unknown service type %s" % name)
-            _srv_classes[name] = cls
-    return cls
+    """Load a service class (with ``_request_class`` / ``_response_class``); raises ConversionError."""
+    return _load("service", type_name)
 
 
-def _split_array(slot_type: str) -> Any:
-    """Return (base type, is_array, fixed length or None)."""
+def _split_array(slot_type: str) -> Any:  # (base type, is_array, fixed length or None)
     if slot_type.endswith("]"):
         base, _, rest = slot_type.partition("[")
         length = rest[:-1]
@@ -168,17 +110,6 @@ def _raw_bytes(value: Any) -> Any:
     if isinstance(value, str):
         value = value.encode("latin-1")
     return bytes(value)
-
-
-class TypedArray:
-    """A homogeneous numeric array for the CBOR encoder (typed-array tags)."""
-
-    __slots__ = ("kind", "values")
-
-    def __init__(self, kind: str, values: Any) -> None:
-        """Wrap values of ROS element type kind (e.g. ``float32``)."""
-        self.kind = kind
-        self.values = values
 
 
 _out_cache = {}
@@ -221,7 +152,7 @@ def _typed(kind: str) -> Any:
 
 
 def _float_list(values: Any) -> Any:
-    return [v if v - v == 0 else None for v in values]
+    return [v if v - v == 0 else None for v in values]  # (as _finite)
 
 
 def _nested_out(nested_cls: Any, binary: bool, is_array: bool) -> Any:
@@ -242,15 +173,10 @@ def _convert_out(msg: Any, plan: Any) -> Any:
 
 
 def msg_to_dict(msg: Any, binary: bool = False) -> Any:
-    """Convert a genpy message into a JSON-ready dict (rosbridge mapping).
+    """A genpy message as a JSON-ready dict (rosbridge mapping).
 
-    Args:
-        msg: A genpy message instance.
-        binary: True for the CBOR encoding: byte arrays stay ``bytes``, numeric arrays become
-            :class:`TypedArray`, floats keep NaN/Inf.
-
-    Returns:
-        dict: Field name to JSON-ready value.
+    With binary (for CBOR) byte arrays stay ``bytes``, numeric arrays become
+    :class:`TypedArray` s and floats keep NaN/Inf.
     """
     return _convert_out(msg, _compile_out(type(msg), binary))
 
@@ -436,31 +362,16 @@ def _fill(cls: Any, data: Any, path: str, ctx: Any) -> Any:
 
 
 def dict_to_msg(cls: Any, data: Any, now: Callable[..., Any] = None) -> Any:
-    """Build a message of class cls from a JSON object (rosbridge mapping, strict).
+    """Build (message, paths of the fields filled with defaults) of class cls from a JSON object.
 
-    Args:
-        cls: genpy message class (also a service request/response class).
-        data: The decoded JSON object (``None`` means an empty object).
-        now: Callable returning the current ``genpy.Time`` for header stamps
-            (defaults to wall clock).
-
-    Returns:
-        tuple: (message, list of missing field paths filled with defaults).
+    Strict rosbridge mapping (``None`` is an empty object); ``now()`` gives the
+    ``genpy.Time`` for missing header stamps (default: wall clock).
 
     Raises:
         ConversionError: On wrong types, unknown fields, out-of-range values.
     """
-    if data is None:
-        data = {}
-    ctx = _Context(now or _wall_now)
-    msg = _fill(cls, data, "", ctx)
-    return msg, ctx.missing
-
-
-def _wall_now() -> Any:
-    import time
-
-    return genpy.Time.from_sec(time.time())
+    ctx = _Context(now or (lambda: genpy.Time.from_sec(time.time())))
+    return _fill(cls, {} if data is None else data, "", ctx), ctx.missing
 
 
 def _describe(value: Any) -> str:
@@ -468,6 +379,9 @@ def _describe(value: Any) -> str:
     if len(text) > 40:
         text = text[:37] + "..."
     return "%s %s" % (type(value).__name__, text)
+
+
+_EXAMPLES = {"bool": "False", "string": "", "time": "{}", "duration": "{}"}
 
 
 def message_typedefs(cls: Any) -> Any:
@@ -479,8 +393,7 @@ def message_typedefs(cls: Any) -> Any:
     Returns:
         list: One dict per type, cls first.
     """
-    out = []
-    seen = set()
+    out, seen = [], set()
 
     def visit(c: Any) -> None:
         if c._type in seen:
@@ -489,38 +402,16 @@ def message_typedefs(cls: Any) -> Any:
         names, types, lens, examples, nested = [], [], [], [], []
         for name, slot_type in zip(c.__slots__, c._slot_types):
             base, is_array, fixed = _split_array(slot_type)
-            if base == "Header":
-                base = "std_msgs/Header"
+            base = "std_msgs/Header" if base == "Header" else base
+            primitive = base in _INT_RANGES or base in _FLOATS or base in _EXAMPLES
             names.append(name)
             types.append(base)
-            lens.append(-1 if not is_array else (fixed if fixed is not None else 0))
+            lens.append((fixed or 0) if is_array else -1)
             if is_array:
                 examples.append("[]")
-            elif base in _INT_RANGES:
-                examples.append("0")
-            elif base in _FLOATS:
-                examples.append("0.0")
-            elif base == "bool":
-                examples.append("False")
-            elif base == "string":
-                examples.append("")
-            elif base in ("time", "duration"):
-                examples.append("{}")
             else:
-                examples.append("{}")
-                nested.append(_nested_class(base))
-            if (
-                is_array
-                and base not in _INT_RANGES
-                and base not in _FLOATS
-                and base
-                not in (
-                    "bool",
-                    "string",
-                    "time",
-                    "duration",
-                )
-            ):
+                examples.append("0" if base in _INT_RANGES else "0.0" if base in _FLOATS else _EXAMPLES.get(base, "{}"))
+            if not primitive:
                 nested.append(_nested_class(base))
         constnames, constvalues = [], []
         for line in (getattr(c, "_full_text", "") or "").split("\n"):
@@ -531,17 +422,9 @@ def message_typedefs(cls: Any) -> Any:
                 left, value = line.split("=", 1)
                 constnames.append(left.split()[-1])
                 constvalues.append(value.strip())
-        out.append(
-            {
-                "type": c._type,
-                "fieldnames": names,
-                "fieldtypes": types,
-                "fieldarraylen": lens,
-                "examples": examples,
-                "constnames": constnames,
-                "constvalues": constvalues,
-            }
-        )
+        fields = (names, types, lens, examples, constnames, constvalues)
+        keys = ("fieldnames", "fieldtypes", "fieldarraylen", "examples", "constnames", "constvalues")
+        out.append(dict(zip(keys, fields), type=c._type))
         for n in nested:
             visit(n)
 

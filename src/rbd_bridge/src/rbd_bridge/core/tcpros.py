@@ -22,10 +22,7 @@ _READS_PER_WAKEUP = 16  # a burst is read in one wake-up, up to this many recvs
 
 
 class FramingError(ValueError):
-    """The stream is not a TCPROS message stream (absurd length).
-
-    ``payloads`` holds the complete messages that came before the bad length.
-    """
+    """The stream is not a TCPROS message stream (absurd length); ``payloads``: the messages before it."""
 
     def __init__(self, text: str, payloads: List[bytes]) -> None:
         """Record the message and the good payloads."""
@@ -34,11 +31,7 @@ class FramingError(ValueError):
 
 
 class TcprosFramer:
-    """Incremental splitter of a TCPROS message stream into payloads.
-
-    Args:
-        max_message: Largest accepted payload in bytes.
-    """
+    """Incremental splitter of a TCPROS message stream into payloads (at most max_message bytes each)."""
 
     def __init__(self, max_message: int = _MAX_MESSAGE) -> None:
         """Start with an empty buffer."""
@@ -54,8 +47,7 @@ class TcprosFramer:
         """Add data (bytes-like); return the payloads completed by it, in order.
 
         Raises:
-            FramingError: A length prefix is larger than ``max_message`` (the stream is
-                unusable from there on; the payloads before it are in the exception).
+            FramingError: A length above ``max_message`` (the stream is unusable from there on).
         """
         buf = self._buf
         if buf:
@@ -83,26 +75,15 @@ class TcprosFramer:
 
 
 class LoopReader:
-    """Read one connected TCPROS topic socket in the event loop's thread.
+    """Read one connected TCPROS topic socket in the event loop's thread (all methods run there).
 
-    The socket stays in blocking mode for its other users; reads use ``MSG_DONTWAIT``
-    and run only when the loop reports the socket readable.
-
-    Args:
-        loop: The asyncio loop (all methods are called in its thread).
-        sock: Connected socket; owned (closed) by the reader from :meth:`start` on.
-        on_messages: Callable(list of payload bytes), called per batch of complete messages.
-        on_close: Callable(error or None), called once when the stream ends (EOF, socket
-            error, framing error or :meth:`stop`).
+    The socket (owned, closed by the reader from :meth:`start` on) stays blocking for its
+    other users; reads use ``MSG_DONTWAIT`` when the loop reports it readable.
+    ``on_messages(payloads)`` gets each batch of complete messages, ``on_close(error or
+    None)`` is called once when the stream ends (EOF, socket or framing error, :meth:`stop`).
     """
 
-    def __init__(
-        self,
-        loop: Any,
-        sock: socket.socket,
-        on_messages: Callable[[List[bytes]], Any],
-        on_close: Callable[[Optional[BaseException]], Any],
-    ) -> None:
+    def __init__(self, loop: Any, sock: socket.socket, on_messages: Callable, on_close: Callable) -> None:
         """Prepare; nothing is read before :meth:`start`."""
         self.loop = loop
         self.sock = sock

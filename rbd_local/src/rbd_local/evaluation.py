@@ -1,0 +1,125 @@
+"""Robustness evaluation on clips made from real hand photos (used by tests and ``rbd-evaluate``).
+
+A clip (:mod:`rbd_local.gestures.realclips`) is rendered, run through MediaPipe Hands once
+(the slow part), and its key points are kept; the recogniser (the same
+:class:`~rbd_local.gestures.recognizer.GestureRecognizer` the app runs after the detector)
+is then replayed over the key points for every model to score, so a model taught from some
+clips is scored on others without running MediaPipe again.
+"""
+
+import numpy as np
+
+from rbd_local.gestures import realclips
+from rbd_local.gestures.model import NONE, GestureModel
+from rbd_local.gestures.recognizer import GestureRecognizer
+from rbd_local.gestures.teach import extract_show
+
+
+class Clip:
+    """One tracked clip: what it shows, its frame times and key points (NaN: no hand)."""
+
+    __slots__ = ("kind", "times", "keypoints", "condition")
+
+    def __init__(self, kind: str, times: np.ndarray, keypoints: np.ndarray, condition: str) -> None:
+        """Bundle a clip's data."""
+        self.kind = kind
+        self.times = times
+        self.keypoints = keypoints
+        self.condition = condition
+
+    @property
+    def detected(self) -> int:
+        """Frames in which a hand was found."""
+        return int(np.isfinite(self.keypoints[:, 0, 0]).sum())
+
+
+def load_sprites(photo_paths: list[str]) -> list:
+    """Hand sprites of the real photos (see :class:`~rbd_local.gestures.photo_clip.HandSprite`)."""
+    import cv2
+
+    from rbd_local.gestures.photo_clip import HandSprite
+
+    return [HandSprite(cv2.imread(p)) for p in photo_paths]
+
+
+def make_clips(sprites: list, plan: dict, cond: realclips.Condition, seed: int, detector: object) -> list[Clip]:
+    """Render and track clips.
+
+    Args:
+        sprites: hand sprites.
+        plan: motion kind -> number of clips.
+        cond: viewing condition.
+        seed: random seed (same seed, same clips).
+        detector: a video-mode :class:`~rbd_local.gestures.detector.HandDetector`.
+
+    Returns:
+        The tracked clips, in plan order.
+    """
+    rng = np.random.default_rng(seed)
+    out = []
+    for kind, count in plan.items():
+        for _ in range(int(count)):
+            times, frames = realclips.make_clip(sprites, kind, cond, rng)
+            out.append(Clip(kind, times, realclips.track_clip(detector, frames), cond.name))
+    return out
+
+
+def replay(model: GestureModel, clip: Clip, min_consecutive: int = 2, cooldown_s: float = 1.5,
+           threshold: float = None) -> tuple[list[str], list[str]]:
+    """Run the recogniser over a clip's key points.
+
+    Returns:
+        (labels that fired, in order; the decided label of every full window).
+    """
+    rec = GestureRecognizer(model, threshold, min_consecutive, cooldown_s)
+    fired, windows = [], []
+    for t, kp in zip(clip.times, clip.keypoints, strict=True):
+        d = rec.update(float(t), None if not np.isfinite(kp[0, 0]) else kp)
+        if d.label:
+            windows.append(d.label)
+        if d.fired:
+            fired.append(d.label)
+    return fired, windows
+
+
+def show_windows(model: GestureModel, clips: list[Clip]) -> np.ndarray:
+    """One show window per clip (clips without a usable show are skipped)."""
+    out = [extract_show(c.times, c.keypoints, model.window_s, model.samples) for c in clips]
+    out = [w for w in out if w is not None]
+    return np.stack(out) if out else np.empty((0, model.samples, 21, 3))
+
+
+def score(model: GestureModel, clips: list[Clip], expected: dict) -> dict:
+    """Score a model on clips.
+
+    Args:
+        model: the model (built-in and taught gestures).
+        clips: tracked clips.
+        expected: motion kind -> the label that must fire first (kinds not listed: nothing
+            may fire; random motions are always such kinds).
+
+    Returns:
+        {"frames", "detected", "gesture_clips", "correct", "by_kind": {kind: [correct, n]},
+        "random_windows", "random_false_windows", "random_clips", "random_clips_fired",
+        "fired": {kind: [first fired labels]}}.
+    """
+    res = {"frames": 0, "detected": 0, "gesture_clips": 0, "correct": 0, "by_kind": {},
+           "random_windows": 0, "random_false_windows": 0, "random_clips": 0, "random_clips_fired": 0, "fired": {}}
+    for clip in clips:
+        res["frames"] += len(clip.times)
+        res["detected"] += clip.detected
+        fired, windows = replay(model, clip)
+        res["fired"].setdefault(clip.kind, []).append(fired[0] if fired else NONE)
+        if clip.kind in expected:
+            ok = bool(fired) and fired[0] == expected[clip.kind]
+            res["gesture_clips"] += 1
+            res["correct"] += ok
+            entry = res["by_kind"].setdefault(clip.kind, [0, 0])
+            entry[0] += ok
+            entry[1] += 1
+        else:
+            res["random_clips"] += 1
+            res["random_clips_fired"] += bool(fired)
+            res["random_windows"] += len(windows)
+            res["random_false_windows"] += sum(w != NONE for w in windows)
+    return res

@@ -1,0 +1,104 @@
+"""Bounded per-client queue of outgoing frames (a slow client costs bounded memory, never delays others)."""
+
+import collections
+from typing import Any, Callable
+
+__all__ = ["OutQueue"]
+
+
+class OutQueue:
+    """Bounded FIFO of frames for one client.
+
+    Over ``max_frames`` or ``max_bytes`` the oldest frames are dropped (a stalled client
+    costs bounded memory and never delays others). A topic frame may also carry a
+    per-topic limit (the subscription's ``queue_length``): then only the newest frames of
+    that topic are kept.
+    """
+
+    def __init__(
+        self, max_frames: int = 1000, max_bytes: int = 16 * 1024 * 1024, notify: Callable[..., Any] = None
+    ) -> None:
+        """Create an empty queue; notify() is called when a frame arrives in an empty queue."""
+        self.max_frames = max_frames
+        self.max_bytes = max_bytes
+        self.notify = notify
+        self._queue = collections.deque()
+        self._per_topic = {}
+        self.bytes = 0
+        self.frames = 0
+        self.dropped = 0
+        self.held = 0
+
+    def __len__(self) -> int:
+        """Number of live frames."""
+        return self.frames
+
+    def push(self, frame: Any, topic: str = None, topic_limit: int = 0) -> None:
+        """Append frame; drop old frames to respect the bounds."""
+        entry = [frame, topic, True]
+        was_empty = self.frames == 0
+        self._queue.append(entry)
+        self.frames += 1
+        self.bytes += len(frame)
+        if topic is not None:
+            per = self._per_topic.get(topic)
+            if per is None:
+                per = self._per_topic[topic] = collections.deque()
+            per.append(entry)
+            if topic_limit > 0:
+                while len(per) > topic_limit:
+                    self._kill(per.popleft())
+        while self.frames > self.max_frames or (self.bytes > self.max_bytes and self.frames > 1):
+            self._drop_oldest()
+        if was_empty and self.notify is not None and not self.held:
+            self.notify()
+
+    def hold(self) -> None:
+        """Collect pushes without notifying (a batch), until the matching :meth:`release`."""
+        self.held += 1
+
+    def release(self) -> None:
+        """End a :meth:`hold`; notify once if frames are waiting."""
+        self.held -= 1
+        if not self.held and self.frames and self.notify is not None:
+            self.notify()
+
+    def _kill(self, entry: Any) -> None:
+        if entry[2]:
+            entry[2] = False
+            self.frames -= 1
+            self.bytes -= len(entry[0])
+            self.dropped += 1
+            entry[0] = None
+
+    def _drop_oldest(self) -> None:
+        while self._queue:
+            entry = self._queue.popleft()
+            if entry[2]:
+                self._forget(entry)
+                self._kill(entry)
+                return
+
+    def _forget(self, entry: Any) -> None:
+        topic = entry[1]
+        if topic is not None:
+            per = self._per_topic.get(topic)
+            if per:
+                while per and not per[0][2]:
+                    per.popleft()
+                if per and per[0] is entry:
+                    per.popleft()
+                if not per:
+                    del self._per_topic[topic]
+
+    def pop(self) -> Any:
+        """Return the oldest live frame, or None when empty."""
+        while self._queue:
+            entry = self._queue.popleft()
+            if entry[2]:
+                self._forget(entry)
+                entry[2] = False
+                self.frames -= 1
+                self.bytes -= len(entry[0])
+                return entry[0]
+        return None

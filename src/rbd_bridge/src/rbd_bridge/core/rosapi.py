@@ -1,0 +1,286 @@
+"""rosapi services served in-process by the bridge (rosapi is not in Debian).
+
+Clients call ``/rosapi/<name>`` with ``call_service`` exactly as with rosbridge_suite's
+rosapi node; request and response field names are rosapi's (ROS 1). The services are not
+registered with the ROS master: only WebSocket clients can reach them. Results are
+filtered through the bridge's allow-lists. Parameter values travel as JSON strings.
+
+ROS-free: ``RosApi`` needs a *graph* object with rosgraph.Master's XML-RPC methods
+(``getTopicTypes``, ``getSystemState``, ``lookupService``), a *params* object with
+``get(name)``, ``set(name, value)``, ``has(name)``, ``delete(name)``, ``search(name)``,
+``names()``, and a *types* object with ``typedefs(type_name, part)`` (rosapi ``TypeDef``
+dicts of a message, or of a service's ``"request"``/``"response"``) and
+``full_text(type_name)``, both raising ``ConversionError``; the node passes ROS-backed
+ones (:mod:`rbd_bridge.ros.graph`), tests may pass fakes.
+"""
+
+import json
+from typing import Any, Callable, Dict
+
+from rbd_bridge.core.types import ConversionError
+
+__all__ = ["RosApi", "ROSAPI_TYPES", "RosApiError"]
+
+# name: (rosapi type, request fields in order: list args are mapped by position)
+_SERVICES = {
+    "topics": ("Topics", ()),
+    "topic_type": ("TopicType", ("topic",)),
+    "topics_for_type": ("TopicsForType", ("type",)),
+    "topics_and_raw_types": ("TopicsAndRawTypes", ()),
+    "services": ("Services", ()),
+    "service_type": ("ServiceType", ("service",)),
+    "services_for_type": ("ServicesForType", ("type",)),
+    "service_providers": ("ServiceProviders", ("service",)),
+    "service_node": ("ServiceNode", ("service",)),
+    "service_host": ("ServiceHost", ("service",)),
+    "nodes": ("Nodes", ()),
+    "node_details": ("NodeDetails", ("node",)),
+    "publishers": ("Publishers", ("topic",)),
+    "subscribers": ("Subscribers", ("topic",)),
+    "message_details": ("MessageDetails", ("type",)),
+    "service_request_details": ("ServiceRequestDetails", ("type",)),
+    "service_response_details": ("ServiceResponseDetails", ("type",)),
+    "get_param": ("GetParam", ("name", "default")),
+    "set_param": ("SetParam", ("name", "value")),
+    "has_param": ("HasParam", ("name",)),
+    "delete_param": ("DeleteParam", ("name",)),
+    "search_param": ("SearchParam", ("name",)),
+    "get_param_names": ("GetParamNames", ()),
+    "get_time": ("GetTime", ()),
+    "action_servers": ("GetActionServers", ()),
+}
+ROSAPI_TYPES = {name: "rosapi/" + spec[0] for name, spec in _SERVICES.items()}
+_ACTION_SUFFIXES = ("/goal", "/cancel", "/status", "/feedback", "/result")
+
+
+class RosApiError(Exception):
+    """A rosapi request that fails (sent back as ``result: false``)."""
+
+
+def _str_arg(args: Dict[str, Any], key: str) -> str:
+    value = args.get(key)
+    if value is None:
+        return ""
+    if not isinstance(value, str):
+        raise RosApiError("rosapi: %r must be a string" % key)
+    return value
+
+
+def _nodes_of(state_part: Any, name: str) -> Any:
+    return next((sorted(nodes) for n, nodes in state_part if n == name), [])
+
+
+class RosApi:
+    """Dispatch ``/rosapi/*`` calls.
+
+    Args:
+        policy: The bridge's :class:`rbd_bridge.core.security.Policy`.
+        graph: rosgraph.Master-like object.
+        params: Parameter store adapter (module doc).
+        now: Callable returning (secs, nsecs) of ROS time.
+        service_type: Callable(service) -> type name of a ROS service (may raise).
+        types: Message definitions adapter (module doc).
+    """
+
+    def __init__(
+        self, policy: Any, graph: Any, params: Any, now: Callable[..., Any], service_type: Any, types: Any = None
+    ) -> None:
+        """Keep the adapters."""
+        self.policy = policy
+        self.graph = graph
+        self.params = params
+        self.types = types
+        self.now = now
+        self.lookup_service_type = service_type
+
+    @staticmethod
+    def handles(service: str) -> bool:
+        """Return True if service is one of ours."""
+        return service.startswith("/rosapi/") and service[8:] in _SERVICES
+
+    def call(self, service: str, args: Any) -> Dict[str, Any]:
+        """Serve one call of ``/rosapi/<name>`` with a request dict (a list is mapped by position).
+
+        Raises:
+            RosApiError: On a bad request or a denied name.
+        """
+        name = service[8:]
+        if isinstance(args, list):
+            order = _SERVICES[name][1]
+            if len(args) > len(order):
+                raise RosApiError("rosapi/%s: too many arguments" % name)
+            args = dict(zip(order, args))
+        return getattr(self, "_" + name)(args or {})
+
+    # ------------------------------------------------------------ graph
+
+    def _topic_types(self) -> Any:
+        # as rosapi: the master's topic types keep topics whose publishers are all gone, so
+        # only topics with a publisher or subscriber now count (unknown type: "")
+        pubs, subs, _ = self.graph.getSystemState()
+        live = set(t for t, nodes in pubs + subs if nodes and self.policy.may_see_topic(t))
+        types = dict((t, ty) for t, ty in self.graph.getTopicTypes() if t in live)
+        return sorted((t, types.get(t, "")) for t in live)
+
+    def _service_names(self) -> Any:
+        names = set(s for s, _ in self.graph.getSystemState()[2]) | set("/rosapi/" + n for n in _SERVICES)
+        return sorted(s for s in names if self.policy.may_call(s))
+
+    def _service_type_of(self, service: str) -> str:
+        if self.handles(service):
+            return ROSAPI_TYPES[service[8:]]
+        try:
+            return (self.policy.may_call(service) and self.lookup_service_type(service)) or ""
+        except Exception:
+            return ""
+
+    def _topics(self, args: Any) -> Any:
+        pairs = self._topic_types()
+        return {"topics": [t for t, _ in pairs], "types": [ty for _, ty in pairs]}
+
+    def _topic_type(self, args: Any) -> Any:
+        return {"type": dict(self._topic_types()).get(_str_arg(args, "topic"), "")}
+
+    def _topics_for_type(self, args: Any) -> Any:
+        wanted = _str_arg(args, "type")
+        return {"topics": [t for t, ty in self._topic_types() if ty == wanted]}
+
+    def _topics_and_raw_types(self, args: Any) -> Any:
+        reply = self._topics(args)
+        texts = []
+        for type_name in reply["types"]:
+            try:
+                texts.append(self.types.full_text(type_name))
+            except ConversionError:
+                texts.append("")
+        reply["typedefs_full_text"] = texts
+        return reply
+
+    def _nodes_on(self, args: Any, part: int) -> Any:
+        topic = _str_arg(args, "topic")
+        return _nodes_of(self.graph.getSystemState()[part], topic) if self.policy.may_see_topic(topic) else []
+
+    def _publishers(self, args: Any) -> Any:
+        return {"publishers": self._nodes_on(args, 0)}
+
+    def _subscribers(self, args: Any) -> Any:
+        return {"subscribers": self._nodes_on(args, 1)}
+
+    def _services(self, args: Any) -> Any:
+        return {"services": self._service_names()}
+
+    def _service_type(self, args: Any) -> Any:
+        return {"type": self._service_type_of(_str_arg(args, "service"))}
+
+    def _services_for_type(self, args: Any) -> Any:
+        wanted = _str_arg(args, "type")
+        return {"services": [s for s in self._service_names() if self._service_type_of(s) == wanted]}
+
+    def _providers(self, args: Any) -> Any:
+        service = _str_arg(args, "service")
+        return _nodes_of(self.graph.getSystemState()[2], service) if self.policy.may_call(service) else []
+
+    def _service_providers(self, args: Any) -> Any:
+        return {"providers": self._providers(args)}
+
+    def _service_node(self, args: Any) -> Any:
+        return {"node": (self._providers(args) or [""])[0]}
+
+    def _service_host(self, args: Any) -> Any:
+        service = _str_arg(args, "service")
+        try:
+            uri = self.graph.lookupService(service) if self.policy.may_call(service) else ""
+        except Exception:
+            uri = ""
+        return {"host": uri.split("//", 1)[-1].split(":", 1)[0] if isinstance(uri, str) and uri else ""}
+
+    def _nodes(self, args: Any) -> Any:
+        return {"nodes": sorted(set(n for part in self.graph.getSystemState() for _, nodes in part for n in nodes))}
+
+    def _node_details(self, args: Any) -> Any:
+        node = _str_arg(args, "node")
+        pubs, subs, srvs = self.graph.getSystemState()
+        see, call = self.policy.may_see_topic, self.policy.may_call
+        return {
+            "subscribing": sorted(t for t, n in subs if node in n and see(t)),
+            "publishing": sorted(t for t, n in pubs if node in n and see(t)),
+            "services": sorted(s for s, n in srvs if node in n and call(s)),
+        }
+
+    def _action_servers(self, args: Any) -> Any:
+        # as rosapi (ROS 1): a namespace (not the root) with all five actionlib topics
+        topics = set(t for t, _ in self._topic_types())
+        bases = set(t[:-5] for t in topics if t.endswith("/goal") and len(t) > 5)
+        return {"action_servers": sorted(b for b in bases if all(b + s in topics for s in _ACTION_SUFFIXES))}
+
+    # ------------------------------------------------------------ types
+
+    def _details(self, args: Any, part: str = "") -> Any:
+        try:
+            return {"typedefs": self.types.typedefs(_str_arg(args, "type"), part)}
+        except ConversionError as exc:
+            raise RosApiError(str(exc)) from None
+
+    def _message_details(self, args: Any) -> Any:
+        return self._details(args)
+
+    def _service_request_details(self, args: Any) -> Any:
+        return self._details(args, "request")
+
+    def _service_response_details(self, args: Any) -> Any:
+        return self._details(args, "response")
+
+    # ------------------------------------------------------------ params
+
+    def _param_name(self, args: Any, write: bool = False) -> str:
+        name = _str_arg(args, "name")
+        if not name:
+            raise RosApiError("rosapi: parameter name missing")
+        name = name if name.startswith("/") else "/" + name
+        if not self.policy.may_read_param(name):
+            raise RosApiError("parameter %s is not allowed by this bridge's allow-list" % name)
+        if write and not self.policy.may_write_param(name):
+            raise RosApiError("parameter %s is read-only through this bridge" % name)
+        return name
+
+    def _get_param(self, args: Any) -> Any:
+        name = self._param_name(args)
+        default = args.get("default", args.get("default_value", ""))
+        if self.params.has(name):
+            return {"value": json.dumps(self.params.get(name))}
+        if isinstance(default, str) and default:
+            try:
+                return {"value": json.dumps(json.loads(default))}
+            except ValueError:
+                return {"value": json.dumps(default)}
+        return {"value": "null"}
+
+    def _set_param(self, args: Any) -> Any:
+        name = self._param_name(args, write=True)
+        text = _str_arg(args, "value")
+        try:
+            value = json.loads(text)
+        except ValueError:
+            value = text
+        self.params.set(name, value)
+        return {}
+
+    def _has_param(self, args: Any) -> Any:
+        return {"exists": bool(self.params.has(self._param_name(args)))}
+
+    def _delete_param(self, args: Any) -> Any:
+        name = self._param_name(args, write=True)
+        if self.params.has(name):
+            self.params.delete(name)
+        return {}
+
+    def _search_param(self, args: Any) -> Any:
+        found = self.params.search(_str_arg(args, "name")) or ""
+        return {"global_name": found if found and self.policy.may_read_param(found) else ""}
+
+    def _get_param_names(self, args: Any) -> Any:
+        return {"names": sorted(n for n in self.params.names() if self.policy.may_read_param(n))}
+
+    def _get_time(self, args: Any) -> Any:
+        secs, nsecs = self.now()
+        return {"time": {"secs": secs, "nsecs": nsecs}}

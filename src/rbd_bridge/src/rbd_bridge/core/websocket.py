@@ -1,0 +1,480 @@
+"""WebSocket transport on asyncio and wsproto, one :class:`rbd_bridge.core.session.Session` per client.
+
+wsproto (Sans-I/O) does the RFC 6455 work: the opening handshake (its ``WSConnection``),
+then framing, unmasking, message assembly, UTF-8 checking of text (invalid UTF-8 closes
+with 1007), ping/pong and close frames (its frame layer, ``FrameProtocol``; the event
+layer above it cost ~7 us more per message, measured). Around it stays the design that
+keeps the bridge fast: each network read is parsed once and its messages are handled in
+the same ``data_received`` call (no coroutine per frame), and frames to clients are
+written straight to the socket.
+
+wsproto's frame layer costs ~25 us per small frame (pure Python, a generator and objects
+per frame; the bridge's own parser took ~3.5 us), which failed the performance gate of
+issue 18. So the common frames a client sends - complete, final, masked text, binary,
+ping and pong frames without extension bits - are read by :meth:`_Connection._fast`; the
+first frame that is anything else (fragmented, close, unmasked, reserved bits or opcodes)
+hands the connection's stream to wsproto from that frame on, for good. Server frames are
+headers plus payload (:func:`wire`). A topic frame is framed once (:func:`wire`) and the same
+bytes go to every client; while a client's socket and asyncio's write buffer are full
+(``pause_writing``) its frames wait in its bounded
+:class:`rbd_bridge.core.outqueue.OutQueue`. No extension (permessage-deflate) is
+negotiated; clients fall back to plain frames, as RFC 6455 requires.
+"""
+
+import asyncio
+import itertools
+import logging
+import socket
+import struct
+import threading
+from typing import Any, Callable, List, Optional
+
+from wsproto import ConnectionType, WSConnection
+from wsproto.events import AcceptConnection, RejectConnection, RejectData, Request
+from wsproto.frame_protocol import FrameProtocol, Opcode, ParseFailed
+from wsproto.utilities import RemoteProtocolError
+
+from rbd_bridge.core.outqueue import OutQueue
+from rbd_bridge.core.session import Session
+
+__all__ = ["BridgeServer", "wire"]
+
+_log = logging.getLogger("rbd_bridge")
+_RECV_SIZE = 65536  # asyncio reads this much per call (its 256 KiB default costs an mmap per read)
+_JOIN_BYTES = 65536  # queued small frames leave joined in writes of up to this size
+_MAX_HANDSHAKE = 16384
+_TEXT, _BINARY = Opcode.TEXT, Opcode.BINARY
+_FAST_OPCODES = (1, 2, 9, 10)  # text, binary, ping, pong
+try:  # websockets' C helper when installed (the venv); else Python's big-int XOR
+    from websockets.speedups import apply_mask as _apply_mask
+except ImportError:
+    _apply_mask = None
+
+
+def _utf8(text: Any) -> Any:
+    return text.encode("utf-8") if isinstance(text, str) else text
+
+
+def _unmask(payload: bytes, mask: bytes) -> bytes:
+    if _apply_mask is not None:
+        return _apply_mask(payload, mask)
+    n = len(payload)
+    key = (mask * (n // 4 + 1))[:n]
+    return (int.from_bytes(payload, "little") ^ int.from_bytes(key, "little")).to_bytes(n, "little")
+
+
+def wire(payload: Any) -> bytes:
+    """One unmasked, final server frame: text for str, binary for bytes (RFC 6455 5.2)."""
+    if isinstance(payload, str):
+        payload, first = payload.encode("utf-8"), 0x81
+    else:
+        first = 0x82
+    n = len(payload)
+    if n < 126:
+        return bytes((first, n)) + payload
+    if n < 65536:
+        return struct.pack("!BBH", first, 126, n) + payload
+    return struct.pack("!BBQ", first, 127, n) + payload
+
+
+class _Connection(asyncio.Protocol):
+    """One client connection: handshake, messages in, writes with flow control."""
+
+    def __init__(self, server: "BridgeServer") -> None:
+        self.server = server
+        self.ws = WSConnection(ConnectionType.SERVER)  # the handshake
+        self.proto = None  # then wsproto's frame protocol
+        self.transport = None
+        self.sock = None
+        self.session = None
+        self.out = None
+        self.closing = False
+        self.paused = False
+        self.parts = []
+        self.parts_size = 0
+        self.buf = bytearray()  # an incomplete frame of the fast path
+        self.fast = True  # False once wsproto has the stream
+        self.alive = True
+        self.timer = None
+        self.peer = "?"
+        self.head_buf = bytearray()
+        # Writes may also come from a ROS thread (try_direct); the lock orders them with
+        # the loop's writes, and head is the unsent rest of a direct write (goes first).
+        self.lock = threading.RLock()
+        self.head = None
+
+    def connection_made(self, transport: Any) -> None:
+        self.transport = transport
+        sock = transport.get_extra_info("socket")
+        if sock is not None:
+            try:
+                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            except OSError:
+                pass
+        peer = transport.get_extra_info("peername")
+        self.peer = "%s:%s" % tuple(peer[:2]) if peer else "?"
+        transport.set_write_buffer_limits(high=1 << 18)
+        if hasattr(transport, "max_size"):
+            transport.max_size = _RECV_SIZE
+        self.sock = getattr(transport, "_sock", None)  # the transport's own non-blocking socket
+        self.timer = self.server.loop.call_later(10.0, self._handshake_timeout)
+
+    def data_received(self, data: bytes) -> None:
+        if self.proto is None:
+            self._handshake(data)
+            return
+        backend = self.server.backend
+        backend.begin_batch()  # the publishes of this read leave together, per ROS peer
+        try:
+            if self.fast:
+                data = self._fast(data)
+                if not data or self.closing:
+                    return
+                self.fast = False
+            self.proto.receive_bytes(data)
+            for frame in self.proto.received_frames():
+                self.alive = True
+                opcode = frame.opcode
+                if opcode is _TEXT or opcode is _BINARY:
+                    self._message(frame.payload, frame.message_finished)
+                elif opcode is Opcode.PING:
+                    self._write(self.proto.pong(frame.payload))
+                elif opcode is Opcode.CLOSE:
+                    self.close(frame.payload[0])  # answered with the client's code
+                if self.closing:
+                    return
+        except ParseFailed as exc:  # RFC 6455 violations, invalid UTF-8 (1007) among them
+            self.close(exc.code, str(exc))
+        except Exception:  # never leave a half-dead connection behind a bug
+            _log.exception("client %s: frame handling error", self.peer)
+            self.close(1011, "internal error")
+        finally:
+            backend.end_batch()
+
+    def _fast(self, data: bytes) -> bytes:
+        """Handle the complete common frames of buf + data; return the bytes wsproto must take."""
+        buf = self.buf
+        buf += data
+        limit = self.server.max_message_size
+        pos, end = 0, len(buf)
+        while not self.closing and end - pos >= 2:
+            b0, b1 = buf[pos], buf[pos + 1]
+            length, head = b1 & 0x7F, pos + 2
+            if length == 126:
+                if end - pos < 4:
+                    break
+                length, head = struct.unpack_from("!H", buf, head)[0], pos + 4
+            elif length == 127:
+                if end - pos < 10:
+                    break
+                length, head = struct.unpack_from("!Q", buf, head)[0], pos + 10
+            opcode = b0 & 0x0F
+            if b0 & 0xF0 != 0x80 or not b1 & 0x80 or opcode not in _FAST_OPCODES or (opcode > 8 and length > 125):
+                rest = bytes(buf[pos:])  # anything else: wsproto from this frame on
+                del buf[:]
+                return rest
+            if limit and length > limit:
+                self.close(1009, "message larger than max_message_size")
+                return b""
+            if end < head + 4 + length:
+                break
+            payload = _unmask(bytes(buf[head + 4 : head + 4 + length]), bytes(buf[head : head + 4]))
+            pos = head + 4 + length
+            self.alive = True
+            if opcode == 9:
+                self._write(self.proto.pong(payload))
+            elif opcode == 1:
+                try:
+                    text = payload.decode("utf-8")
+                except UnicodeDecodeError:
+                    self.close(1007, "invalid UTF-8 in a text message")
+                    return b""
+                self.session.receive(text)
+            elif opcode == 2:
+                self.session.receive(payload)
+        del buf[:pos]
+        return b""
+
+    def _message(self, data: Any, finished: bool) -> None:
+        limit = self.server.max_message_size
+        if finished and not self.parts:
+            size = len(data)
+        else:
+            self.parts.append(data)
+            self.parts_size += len(data)
+            size = self.parts_size
+            if finished:
+                data = ("" if isinstance(data, str) else b"").join(self.parts)
+                self.parts, self.parts_size = [], 0
+        # characters for text: a complete big text is measured in bytes below
+        if limit and (size > limit or (finished and 4 * size > limit and len(_utf8(data)) > limit)):
+            self.close(1009, "message larger than max_message_size")
+        elif finished:
+            self.session.receive(data)
+
+    def pause_writing(self) -> None:
+        self.paused = True
+
+    def resume_writing(self) -> None:
+        self.paused = False
+        self.flush()
+
+    def connection_lost(self, exc: Optional[Exception]) -> None:
+        with self.lock:  # no direct write is in progress once this returns
+            self.closing = True
+        if self.timer is not None:
+            self.timer.cancel()
+            self.timer = None
+        if self.session is not None:
+            self.server.closed(self)
+
+    # ------------------------------------------------------------ handshake
+
+    def _handshake_timeout(self) -> None:
+        self.timer = None
+        if self.proto is None:
+            self.transport.abort()
+
+    def _handshake(self, data: bytes) -> None:
+        # wsproto gets the request alone: frames a client sends without waiting for the
+        # answer go to the connection once it is open (a wsproto server drops them)
+        self.head_buf += data
+        end = self.head_buf.find(b"\r\n\r\n")
+        if end < 0:
+            if len(self.head_buf) > _MAX_HANDSHAKE:
+                self._reject(RejectConnection(status_code=431), "request too large")
+            return
+        head, rest = bytes(self.head_buf[: end + 4]), bytes(self.head_buf[end + 4 :])
+        try:
+            self.ws.receive_data(head)
+            request = next((e for e in self.ws.events() if isinstance(e, Request)), None)
+        except RemoteProtocolError as exc:
+            self._reject(exc.event_hint, str(exc))
+            return
+        if request is None:
+            self._reject(RejectConnection(status_code=400), "not a WebSocket upgrade request")
+            return
+        if self.timer is not None:
+            self.timer.cancel()
+        self.transport.write(self.ws.send(AcceptConnection()))
+        self.proto = FrameProtocol(client=False, extensions=[])
+        self.server.opened(self)
+        self._schedule_ping()
+        if rest:
+            self.data_received(rest)
+
+    def _reject(self, event: Any, text: str) -> None:
+        status = getattr(event, "status_code", 400)
+        status = 426 if status == 400 and "Upgrade" in text else status  # plain HTTP to a WebSocket server
+        body = (text + "\n").encode()
+        headers = [(b"content-type", b"text/plain"), (b"content-length", b"%d" % len(body))]
+        try:
+            reject = RejectConnection(status_code=status, headers=headers, has_body=True)
+            self.transport.write(self.ws.send(reject) + self.ws.send(RejectData(data=body)))
+        except Exception:  # the handshake state machine refuses: just drop the connection
+            pass
+        self.transport.close()
+
+    # ------------------------------------------------------------ frames out
+
+    def _write(self, data: bytes) -> None:
+        """Loop thread: write data after any unsent rest of a direct write."""
+        with self.lock:
+            if self.head is not None:
+                head, self.head = self.head, None
+                self.transport.write(head)
+            self.transport.write(data)
+
+    def flush(self) -> None:
+        """Write queued frames (small ones joined, big ones alone) until the transport asks to pause."""
+        out, write = self.out, self.transport.write
+        with self.lock:
+            if self.closing:
+                return
+            if self.head is not None:
+                head, self.head = self.head, None
+                write(head)
+            parts, size = [], 0
+            while not self.paused and not self.closing:
+                frame = out.pop()
+                if frame is None:
+                    break
+                if parts and (len(frame) >= 16384 or size >= _JOIN_BYTES):
+                    write(b"".join(parts))
+                    parts, size = [], 0
+                parts.append(frame)
+                size += len(frame)
+            if parts and not self.closing:
+                write(b"".join(parts))  # (one frame: written as it is, no copy)
+
+    def try_direct(self, message: Any, compression: str) -> bool:
+        """Any thread: send a topic frame at once if nothing is queued and the socket takes it; True if taken.
+
+        Otherwise (False, never waiting) the caller queues it as usual: order, the bounded
+        queue and the stalled-client guarantee are unchanged.
+        """
+        sock = self.sock
+        if sock is None or self.paused or self.closing or self.proto is None:
+            return False
+        frame = message.wire(compression, wire)
+        with self.lock:
+            if self.closing or self.paused or self.head is not None or len(self.out):
+                return False
+            if self.transport.get_write_buffer_size():
+                return False
+            try:
+                sent = sock.send(frame)
+            except OSError:  # full (BlockingIOError) or broken: the loop sees it next time
+                return False
+            if sent == len(frame):
+                return True
+            self.head = frame[sent:]
+        try:
+            self.server.loop.call_soon_threadsafe(self.flush)
+        except RuntimeError:  # loop closed
+            pass
+        return True
+
+    def close(self, code: int = 1000, reason: str = "") -> None:
+        """Send a close frame (or answer the client's) and drop the connection shortly after."""
+        if self.closing or self.transport is None:
+            return
+        if self.proto is not None:
+            try:
+                self._write(self.proto.close(code, reason[:120] or None))
+            except Exception:
+                pass
+        with self.lock:
+            self.closing = True
+        self.server.loop.call_later(2.0, self.transport.abort)
+        self.transport.close()
+
+    def _schedule_ping(self) -> None:
+        if self.server.ping_interval:
+            self.timer = self.server.loop.call_later(self.server.ping_interval, self._ping)
+
+    def _ping(self) -> None:
+        self.timer = None
+        if self.closing:
+            return
+        self.alive = False
+        self._write(self.proto.ping())
+        self.timer = self.server.loop.call_later(self.server.ping_timeout or self.server.ping_interval, self._check)
+
+    def _check(self) -> None:
+        self.timer = None
+        if self.closing:
+            return
+        if not self.alive:
+            _log.warning("client %s: no answer to ping, closing", self.peer)
+            self.close(1011, "keepalive ping timeout")
+            self.transport.abort()
+            return
+        self._schedule_ping()
+
+
+class BridgeServer:
+    """Serve rosbridge v2 over WebSocket.
+
+    Args:
+        loop: The asyncio event loop.
+        backend: The ROS side (see :mod:`rbd_bridge.core.session`).
+        policy: :class:`rbd_bridge.core.security.Policy`.
+        host: Bind address.
+        port: TCP port (0 = any free port; :attr:`port` after :meth:`start`).
+        max_message_size: Largest incoming message [bytes] (bigger closes with 1009).
+        max_queue_frames: Outgoing frames kept per client (the oldest are dropped beyond).
+        max_queue_bytes: Outgoing bytes kept per client (the oldest are dropped beyond).
+        ping_interval: Ping period [s] (None = off); silent ping_timeout s after a ping: dropped.
+        ping_timeout: See ping_interval.
+        on_clients: Callable(count) called when the number of clients changes.
+        direct_writes: Other threads may send topic frames at once to idle clients (try_direct).
+    """
+
+    def __init__(
+        self,
+        loop: Any,
+        backend: Any,
+        policy: Any,
+        host: str = "127.0.0.1",
+        port: int = 9090,
+        max_message_size: int = 10000000,
+        max_queue_frames: int = 1000,
+        max_queue_bytes: int = 16 * 1024 * 1024,
+        ping_interval: Optional[float] = 20.0,
+        ping_timeout: Optional[float] = 20.0,
+        on_clients: Optional[Callable[[int], None]] = None,
+        direct_writes: bool = True,
+    ) -> None:
+        """Configure; nothing listens until start()."""
+        self.loop, self.backend, self.policy, self.host, self.port = loop, backend, policy, host, port
+        self.max_message_size = max_message_size
+        self.max_queue_frames, self.max_queue_bytes = max_queue_frames, max_queue_bytes
+        self.ping_interval, self.ping_timeout = ping_interval, ping_timeout
+        self.on_clients = on_clients
+        self.direct_writes = direct_writes
+        self.sessions = {}
+        self._connections = {}
+        self._ids = itertools.count(1)
+        self._server = None
+
+    async def start(self) -> int:
+        """Bind and listen; return the port."""
+        self._server = await self.loop.create_server(lambda: _Connection(self), self.host, self.port, backlog=128)
+        sockets = self._server.sockets or []
+        if sockets:
+            self.port = sockets[0].getsockname()[1]
+        return self.port
+
+    async def stop(self) -> None:
+        """Close every connection and the listening socket."""
+        if self._server is not None:
+            self._server.close()
+            for conn in list(self._connections.values()):
+                conn.close(1001, "bridge shutting down")
+            await self._server.wait_closed()
+            self._server = None
+
+    def opened(self, conn: _Connection) -> None:
+        """A handshake completed: give the connection its session."""
+        client_id = next(self._ids)
+        conn.out = OutQueue(self.max_queue_frames, self.max_queue_bytes, notify=conn.flush)
+        conn.session = Session(
+            client_id,
+            self.backend,
+            self.policy,
+            conn.out,
+            self.loop.call_later,
+            close=conn.close,
+            peer=conn.peer,
+            wire=wire,
+        )
+        conn.session.max_message_size = self.max_message_size
+        if conn.sock is not None and self.direct_writes:
+            conn.session.direct = conn.try_direct
+        self.sessions[client_id] = conn.session
+        self._connections[client_id] = conn
+        self._clients_changed()
+        _log.info("client %d connected from %s (%d connected)", client_id, conn.peer, len(self.sessions))
+
+    def closed(self, conn: _Connection) -> None:
+        """A connection ended: release its session's ROS resources."""
+        session = conn.session
+        session.close()
+        self.sessions.pop(session.client_id, None)
+        self._connections.pop(session.client_id, None)
+        self._clients_changed()
+        if conn.out.dropped:
+            _log.warning("client %d: %d outgoing frames dropped (slow client)", session.client_id, conn.out.dropped)
+        _log.info("client %d disconnected (%d connected)", session.client_id, len(self.sessions))
+
+    def client_peers(self) -> List[str]:
+        """``host:port`` of every connected client (for the node's ``~stats``, read by preflight)."""
+        return sorted(conn.peer for conn in list(self._connections.values()))
+
+    def _clients_changed(self) -> None:
+        if self.on_clients is not None:
+            try:
+                self.on_clients(len(self.sessions))
+            except Exception:
+                _log.exception("client count callback failed")

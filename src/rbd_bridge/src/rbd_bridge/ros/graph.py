@@ -1,0 +1,69 @@
+"""The ROS-backed adapters of :class:`rbd_bridge.core.rosapi.RosApi`: master, parameters, types."""
+
+import threading
+from typing import Any
+
+import rosgraph
+import rospy
+
+from rbd_bridge.ros.msgconv import get_message_class, get_service_class, message_typedefs
+
+__all__ = ["ThreadLocalMaster", "RosParams", "RosTypes"]
+
+
+class ThreadLocalMaster:
+    """rosgraph.Master per thread (an XML-RPC ServerProxy must not be shared by threads)."""
+
+    def __init__(self, caller_id: str) -> None:
+        """Create the masters lazily, one per calling thread."""
+        self._caller_id = caller_id
+        self._local = threading.local()
+
+    def __getattr__(self, name: str) -> Any:
+        """The calling thread's master's attribute (``getTopicTypes``, ``getSystemState``, ...)."""
+        master = getattr(self._local, "master", None)
+        if master is None:
+            master = self._local.master = rosgraph.Master(self._caller_id)
+        return getattr(master, name)
+
+
+class RosParams:
+    """The parameter server, as rosapi's parameter calls use it."""
+
+    def get(self, name: str) -> Any:
+        """Value of name."""
+        return rospy.get_param(name)
+
+    def set(self, name: str, value: Any) -> None:
+        """Set name to value."""
+        rospy.set_param(name, value)
+
+    def has(self, name: str) -> bool:
+        """True if name is set."""
+        return rospy.has_param(name)
+
+    def delete(self, name: str) -> None:
+        """Delete name."""
+        rospy.delete_param(name)
+
+    def search(self, name: str) -> Any:
+        """The parameter server's upward search from this node's namespace."""
+        return rospy.search_param(name)
+
+    def names(self) -> Any:
+        """Every parameter name."""
+        return rospy.get_param_names()
+
+
+class RosTypes:
+    """Message definitions for rosapi (raise ``ConversionError`` for unknown types)."""
+
+    def typedefs(self, type_name: str, part: str = "") -> Any:
+        """TypeDef dicts of a message type, or of a service's ``request`` / ``response``."""
+        if part:
+            return message_typedefs(getattr(get_service_class(type_name), "_%s_class" % part))
+        return message_typedefs(get_message_class(type_name))
+
+    def full_text(self, type_name: str) -> str:
+        """The full definition text of a message type."""
+        return get_message_class(type_name)._full_text

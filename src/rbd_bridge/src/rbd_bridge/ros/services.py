@@ -1,0 +1,290 @@
+"""Services: ``call_service`` into ROS (and rosapi) in a thread pool; services hosted by clients.
+
+Calls run in a worker pool (a ROS call blocks); their answers come back to the event loop.
+A client's ``advertise_service`` becomes a real ``rospy.Service`` whose handler forwards the
+request to the client and waits for its ``service_response``.
+"""
+
+import concurrent.futures
+import itertools
+import logging
+import socket
+import threading
+from typing import Any, Callable, Optional
+
+import rospy
+import rosservice
+
+from rbd_bridge.core.rosapi import RosApi, RosApiError
+from rbd_bridge.core.types import BridgeError, ConversionError, normalize_type
+from rbd_bridge.ros.msgconv import dict_to_msg, get_service_class, msg_to_dict
+
+__all__ = ["Services"]
+
+_log = logging.getLogger("rbd_bridge")
+
+
+def _is_transport_error(exc: Exception) -> bool:
+    if isinstance(exc, (rospy.exceptions.TransportException, socket.error, EOFError)):
+        return True
+    text = str(exc).lower()
+    return "transport error" in text or "unable to connect" in text or "connection" in text
+
+
+class _Hosted:
+    """A service that a WebSocket client provides to ROS."""
+
+    def __init__(self, services: Any, name: str, type_name: str, cls: Any, session: Any) -> None:
+        self.services = services
+        self.name = name
+        self.type = type_name
+        self.cls = cls
+        self.session = session
+        self.pending = {}
+        self.lock = threading.Lock()
+        self.closed = False
+        self.server = None
+        self.false_results = 0
+
+    def handle(self, request: Any) -> Any:
+        """Rospy thread: forward the request to the client and wait for its answer."""
+        call_id = "service_request:%s:%d" % (self.name, next(self.services.ids))
+        waiter = [threading.Event(), None, None]
+        with self.lock:
+            if self.closed:
+                raise rospy.ServiceException("service %s: its WebSocket provider is gone" % self.name)
+            self.pending[call_id] = waiter
+        self.services.loop.call_soon_threadsafe(
+            self.session.send_service_request, self.name, call_id, msg_to_dict(request)
+        )
+        timeout = self.services.service_timeout
+        if not waiter[0].wait(timeout):
+            with self.lock:
+                self.pending.pop(call_id, None)
+            text = "service %s: WebSocket provider did not answer in %.1f s" % (self.name, timeout)
+            raise rospy.ServiceException(text)
+        ok, values = waiter[1], waiter[2]
+        if not ok and not isinstance(values, dict):
+            raise rospy.ServiceException("service %s failed: %s" % (self.name, values))
+        if not ok:
+            # rosbridge ignores the flag and returns the values (roslibpy handlers that
+            # return False rely on it); say so once per service
+            self.false_results += 1
+            if self.false_results == 1:
+                _log.warning(
+                    "service %s: its WebSocket provider answered result=false; the values go to the caller"
+                    " as with rosbridge (logged once)",
+                    self.name,
+                )
+        try:
+            response, _ = dict_to_msg(self.cls._response_class, values if isinstance(values, dict) else {})
+        except ConversionError as exc:
+            text = "service %s: bad response from its WebSocket provider: %s" % (self.name, exc)
+            raise rospy.ServiceException(text) from None
+        return response
+
+    def answer(self, call_id: Any, ok: bool, values: Any) -> bool:
+        with self.lock:
+            waiter = self.pending.pop(call_id, None)
+        if waiter is None:
+            return False
+        waiter[1], waiter[2] = ok, values
+        waiter[0].set()
+        return True
+
+    def close(self, reason: str) -> None:
+        with self.lock:
+            self.closed = True
+            pending, self.pending = self.pending, {}
+        for waiter in pending.values():
+            waiter[1], waiter[2] = False, reason
+            waiter[0].set()
+        if self.server is not None:
+            self.server.shutdown(reason)
+
+
+class Services:
+    """``call_service`` and client-hosted services for the backend (answers come back on the loop).
+
+    ``rosapi`` (:class:`rbd_bridge.core.rosapi.RosApi`) answers ``/rosapi/*``; a ROS caller
+    waits ``service_timeout`` s for a client-hosted service; ``call_service`` without
+    ``timeout`` gives up after ``call_timeout`` s (0 = never).
+    """
+
+    def __init__(
+        self,
+        loop: Any,
+        master: Any,
+        rosapi: Any,
+        service_timeout: float = 10.0,
+        call_timeout: float = 30.0,
+        workers: int = 8,
+    ) -> None:
+        """Create the pool; nothing is registered yet."""
+        self.loop = loop
+        self.master = master
+        self.rosapi = rosapi
+        self.service_timeout = service_timeout
+        self.call_timeout = call_timeout
+        self.pool = concurrent.futures.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rbd_bridge_call")
+        self.hosted = {}
+        self.ids = itertools.count(1)
+        self._proxies = {}
+        self._proxy_lock = threading.Lock()
+        self._types = {}
+
+    def call_service(
+        self, session: Any, service: str, args: Any, timeout: Optional[float], done: Callable[..., Any]
+    ) -> None:
+        """Run the call in the pool; ``done(ok, values)`` is called on the loop (at most once)."""
+        state = {"done": False}
+
+        def finish(ok: bool, values: Any) -> None:
+            if not state["done"]:
+                state["done"] = True
+                done(ok, values)
+
+        timeout = timeout or self.call_timeout
+        handle = None
+        if timeout:
+            text = "service %s: no response within %.1f s" % (service, timeout)
+            handle = self.loop.call_later(timeout, finish, False, text)
+
+        def complete(result: Any) -> None:
+            if handle is not None:
+                handle.cancel()
+            finish(*result)
+
+        def work() -> None:
+            try:
+                if RosApi.handles(service):
+                    result = (True, self.rosapi.call(service, args))
+                else:
+                    result = (True, self._call_ros(service, args))
+            except (RosApiError, BridgeError, ConversionError) as exc:
+                result = (False, str(exc))
+            except Exception as exc:  # rospy raises a zoo of types
+                result = (False, "service %s failed: %s" % (service, exc))
+            self.loop.call_soon_threadsafe(complete, result)
+
+        self.pool.submit(work)
+
+    def service_type(self, service: str) -> str:
+        """The type of a ROS service (hosted ones included); raises BridgeError if it does not exist."""
+        type_name = self._types.get(service)
+        if type_name is None:
+            hosted = self.hosted.get(service)
+            type_name = hosted.type if hosted is not None else rosservice.get_service_type(service)
+            if not type_name:
+                raise BridgeError("service %s does not exist" % service)
+            self._types[service] = type_name
+        return type_name
+
+    def _request(self, service: str, cls: Any, args: Any) -> Any:
+        req_cls = cls._request_class
+        if isinstance(args, list):
+            if len(args) > len(req_cls.__slots__):
+                raise BridgeError(
+                    "service %s: %d arguments given, request has %d fields"
+                    % (service, len(args), len(req_cls.__slots__))
+                )
+            args = dict(zip(req_cls.__slots__, args))
+        try:
+            return dict_to_msg(req_cls, args, rospy.Time.now)[0]
+        except ConversionError as exc:
+            raise BridgeError("service %s: %s" % (service, exc)) from None
+
+    def _call_ros(self, service: str, args: Any) -> Any:
+        try:
+            type_name = self.service_type(service)
+        except rosservice.ROSServiceIOException as exc:
+            raise BridgeError("service %s: %s" % (service, exc)) from None
+        cls = get_service_class(type_name)
+        request = self._request(service, cls, args)
+        with self._proxy_lock:
+            entry = self._proxies.get(service)
+            fresh = entry is None or entry[0] != type_name
+            if fresh:
+                entry = (type_name, rospy.ServiceProxy(service, cls, persistent=True), threading.Lock())
+                self._proxies[service] = entry
+        _, proxy, lock = entry
+        if not lock.acquire(False):
+            # a call on the persistent connection is in flight: use a one-shot connection
+            return msg_to_dict(rospy.ServiceProxy(service, cls).call(request))
+        try:
+            try:
+                response = proxy.call(request)
+            except Exception as exc:
+                self._drop_proxy(service, entry)
+                if fresh or not _is_transport_error(exc):
+                    raise
+                # the provider restarted since the connection was made: retry once on a new one
+                response = rospy.ServiceProxy(service, cls).call(request)
+        finally:
+            lock.release()
+        return msg_to_dict(response)
+
+    def _drop_proxy(self, service: str, entry: Any) -> None:
+        with self._proxy_lock:
+            if self._proxies.get(service) is entry:
+                del self._proxies[service]
+        self._types.pop(service, None)
+        try:
+            entry[1].close()
+        except Exception:
+            pass
+
+    def advertise_service(self, session: Any, service: str, type_name: str) -> None:
+        """Serve service in ROS on behalf of session."""
+        try:
+            type_name = normalize_type(type_name)
+            cls = get_service_class(type_name)
+        except ConversionError as exc:
+            raise BridgeError(str(exc)) from None
+        hosted = self.hosted.get(service)
+        if hosted is not None:
+            if hosted.session is not session:
+                raise BridgeError("advertise_service: %s is already provided by another client" % service)
+            self._unhost(hosted, "re-advertised")
+        else:
+            try:
+                uri = self.master.lookupService(service)
+            except Exception:
+                uri = None
+            if uri:
+                raise BridgeError("advertise_service: %s is already provided in ROS (%s)" % (service, uri))
+        hosted = _Hosted(self, service, type_name, cls, session)
+        hosted.server = rospy.Service(service, cls, hosted.handle)
+        self.hosted[service] = hosted
+        self._types.pop(service, None)
+
+    def _unhost(self, hosted: Any, reason: str) -> None:
+        if self.hosted.get(hosted.name) is hosted:
+            del self.hosted[hosted.name]
+        self._types.pop(hosted.name, None)
+        hosted.close(reason)
+
+    def unadvertise_service(self, session: Any, service: str) -> None:
+        """Stop serving service for session."""
+        hosted = self.hosted.get(service)
+        if hosted is not None and hosted.session is session:
+            self._unhost(hosted, "unadvertised by its WebSocket provider")
+
+    def service_response(self, session: Any, service: str, call_id: Any, values: Any, ok: bool) -> None:
+        """Pass a client's answer to the waiting ROS caller."""
+        hosted = self.hosted.get(service)
+        if hosted is None or hosted.session is not session:
+            raise BridgeError("service_response: %s is not advertised by this client" % service)
+        if not hosted.answer(call_id, ok, values):
+            raise BridgeError("service_response: no pending call %r" % (call_id,), "warning")
+
+    def release(self, session: Any) -> None:
+        """Unhost every service of a gone client (or of every client when session is None)."""
+        for hosted in list(self.hosted.values()):
+            if session is None or hosted.session is session:
+                self._unhost(hosted, "its WebSocket provider disconnected" if session else "bridge shutting down")
+
+    def shutdown(self) -> None:
+        """Unhost everything and stop the pool (node exit)."""
+        self.release(None)
+        self.pool.shutdown(wait=False)

@@ -1,0 +1,257 @@
+"""Topics: one rospy.Publisher and one rospy.Subscriber per topic, shared by all clients.
+
+Publishing keeps the first second after an advertise for subscribers still connecting
+(:class:`rbd_bridge.core.fanout.ReplayWindow`, via rospy's public ``SubscribeListener``).
+Messages from ROS reach the clients through rospy's receive threads here: an isolated
+message goes straight to idle clients from that thread (:func:`rbd_bridge.core.fanout.send_direct`),
+bursts and everyone else through the event loop, one wake-up per burst. The opt-in
+:mod:`rbd_bridge.ros.fastpath` replaces both ROS sides with faster ones that patch rospy.
+"""
+
+import collections
+import io
+import logging
+import threading
+import time
+from typing import Any, Optional
+
+import rospy
+
+from rbd_bridge.core.fanout import ReplayWindow, TopicMessage, prepare, send_direct
+from rbd_bridge.core.types import BridgeError, ConversionError, normalize_type
+from rbd_bridge.ros.msgconv import dict_to_msg, get_message_class, msg_to_dict
+
+__all__ = ["Topics", "message_class"]
+
+_log = logging.getLogger("rbd_bridge")
+# Messages of one topic closer together than this [s] are a burst: they go through the
+# event loop, which writes a whole burst per wake-up; isolated ones are sent directly.
+_BURST_GAP = 0.0002
+_RECV_SIZE = 65536  # rospy's recv() size per read of a subscribed topic [bytes]
+
+
+def message_class(type_name: str) -> Any:
+    """(``pkg/Name``, genpy class) of a type; BridgeError if it cannot be loaded."""
+    try:
+        return normalize_type(type_name), get_message_class(type_name)
+    except ConversionError as exc:
+        raise BridgeError(str(exc)) from None
+
+
+class _Pub:
+    def __init__(self, type_name: str, cls: Any, publisher: Any, window: Any) -> None:
+        self.type = type_name
+        self.cls = cls
+        self.publisher = publisher
+        self.window = window
+        self.clients = set()
+
+
+class _Sub:
+    def __init__(self, topic: str, type_name: str, cls: Any) -> None:
+        self.topic = topic
+        self.type = type_name
+        self.cls = cls
+        self.subscriber = None
+        self.sessions = set()
+        self.latched = {}  # latched messages by publisher (callerid)
+        self.last_rx = -1.0
+
+
+class _Replay(rospy.SubscribeListener):
+    """rospy's hook for a new subscriber connection: replay the advertise window to it."""
+
+    def __init__(self, window: ReplayWindow) -> None:
+        super().__init__()
+        self.window = window
+
+    def peer_subscribe(self, topic_name: str, topic_publish: Any, peer_publish: Any) -> None:
+        with self.window.lock:
+            for message in self.window.replay():
+                peer_publish(message)
+
+
+class Topics:
+    """The topic half of the backend.
+
+    Args:
+        loop: The event loop the sessions live on.
+        master: rosgraph.Master-like (topic types).
+        window: Seconds after advertise whose publishes new subscribers still get (0 = off).
+        fast: :class:`rbd_bridge.ros.fastpath.FastPath`, or None for plain rospy.
+    """
+
+    def __init__(self, loop: Any, master: Any, window: float = 1.0, fast: Any = None) -> None:
+        """No topic yet."""
+        self.loop = loop
+        self.master = master
+        self.window = window
+        self.fast = fast
+        self.pubs = {}
+        self.subs = {}
+        self.rospy_read_messages = 0  # not locked: approximate under concurrent publishers
+        self._inbox = collections.deque()
+        self._inbox_lock = threading.Lock()
+        self._draining = False
+
+    def master_type(self, topic: str) -> Optional[str]:
+        """The type the master knows for topic (None if none)."""
+        try:
+            types = dict(self.master.getTopicTypes())
+        except Exception as exc:
+            raise BridgeError("cannot reach the ROS master: %s" % exc) from None
+        return types.get(topic)
+
+    # ------------------------------------------------------------ into ROS
+
+    def advertise(self, session: Any, topic: str, type_name: str, latch: bool, queue_size: int) -> None:
+        """Register session as publisher of topic (one rospy.Publisher per topic)."""
+        type_name, cls = message_class(type_name)
+        pub = self.pubs.get(topic)
+        if pub is None:
+            existing = self.master_type(topic)
+            if existing and existing not in (type_name, "*"):
+                raise BridgeError("advertise: %s already exists with type %s" % (topic, existing))
+            window = ReplayWindow(self.window, queue_size, latch)
+            hook = _Replay(window)
+            if self.fast is not None:
+                publisher = self.fast.publisher(topic, cls, queue_size, latch, hook, window)
+            else:
+                publisher = rospy.Publisher(topic, cls, queue_size=queue_size, latch=latch, subscriber_listener=hook)
+            pub = self.pubs[topic] = _Pub(type_name, cls, publisher, window)
+        elif pub.type != type_name:
+            raise BridgeError("advertise: %s is already advertised with type %s" % (topic, pub.type))
+        pub.clients.add(session.client_id)
+
+    def unadvertise(self, session: Any, topic: str) -> None:
+        """Drop session from topic's publishers; unregister when nobody is left."""
+        pub = self.pubs.get(topic)
+        if pub is not None:
+            pub.clients.discard(session.client_id)
+            if not pub.clients:
+                del self.pubs[topic]
+                pub.publisher.unregister()
+
+    def publish(self, session: Any, topic: str, msg: Any) -> Any:
+        """Publish msg (advertising implicitly with the type the master knows); return defaulted fields."""
+        pub = self.pubs.get(topic)
+        if pub is None or session.client_id not in pub.clients:
+            type_name = pub.type if pub is not None else self.master_type(topic)
+            if not type_name or type_name == "*":
+                raise BridgeError("publish: cannot infer the type of %s (advertise it first)" % topic)
+            self.advertise(session, topic, type_name, False, 100)
+            pub = self.pubs[topic]
+        try:
+            message, missing = dict_to_msg(pub.cls, msg, rospy.Time.now)
+        except ConversionError as exc:
+            raise BridgeError("publish %s: %s" % (topic, exc)) from None
+        try:
+            with pub.window.lock:
+                pub.window.record(message)
+                pub.publisher.publish(message)
+        except rospy.ROSSerializationException as exc:
+            raise BridgeError("publish %s: %s" % (topic, exc)) from None
+        return missing
+
+    # ------------------------------------------------------------ out of ROS
+
+    def subscribe(self, session: Any, topic: str, type_name: Optional[str]) -> str:
+        """Share one rospy.Subscriber per topic among all sessions; return the type."""
+        sub = self.subs.get(topic)
+        if sub is not None:
+            if type_name and normalize_type(type_name) != sub.type:
+                raise BridgeError("subscribe: %s has type %s, not %s" % (topic, sub.type, type_name))
+            sub.sessions.add(session)
+            for message in list(sub.latched.values()):
+                self.loop.call_soon(session.deliver, topic, message)
+            return sub.type
+        existing = self.master_type(topic)
+        if type_name:
+            type_name, cls = message_class(type_name)
+            if existing and existing not in (type_name, "*"):
+                raise BridgeError("subscribe: %s has type %s, not %s" % (topic, existing, type_name))
+        elif not existing or existing == "*":
+            raise BridgeError("subscribe: cannot infer the type of %s (it does not exist yet; give 'type')" % topic)
+        else:
+            type_name, cls = message_class(existing)
+        sub = self.subs[topic] = _Sub(topic, type_name, cls)
+        sub.sessions.add(session)
+        # queue_size=None: everything one read holds is handed over (a slow WebSocket client
+        # is bounded in its own OutQueue); buff_size is rospy's recv() size: each recv
+        # allocates that much (1 MiB cost ~0.1 ms per message here), big messages take several
+        sub.subscriber = rospy.Subscriber(
+            topic, cls, self._on_message, callback_args=sub, queue_size=None, buff_size=_RECV_SIZE, tcp_nodelay=True
+        )
+        if self.fast is not None:
+            self.fast.read_directly(sub)
+        return type_name
+
+    def unsubscribe(self, session: Any, topic: str) -> None:
+        """Remove session; unregister the rospy.Subscriber when nobody is left."""
+        sub = self.subs.get(topic)
+        if sub is not None:
+            sub.sessions.discard(session)
+            if not sub.sessions:
+                del self.subs[topic]
+                sub.subscriber.unregister()
+
+    def release(self, session: Any) -> None:
+        """Drop every publisher and subscription of a gone client."""
+        for topic in list(session.advertised):
+            self.unadvertise(session, topic)
+        for topic, sub in list(self.subs.items()):
+            if session in sub.sessions:
+                self.unsubscribe(session, topic)
+
+    def _on_message(self, msg: Any, sub: Any) -> None:
+        """Rospy thread: wrap the message, encode what subscribers want, send or hop to the loop."""
+        self.rospy_read_messages += 1
+        header = getattr(msg, "_connection_header", None) or {}
+        latched = header.get("latching") == "1"
+        stamp = rospy.get_rostime()
+
+        def raw() -> Any:
+            buff = io.BytesIO()
+            msg.serialize(buff)
+            return buff.getvalue(), stamp.secs, stamp.nsecs
+
+        message = TopicMessage(sub.topic, lambda binary: msg_to_dict(msg, binary), raw, latched)
+        sessions = list(sub.sessions)
+        if not prepare(message, sessions):
+            return
+        if latched:
+            sub.latched[header.get("callerid", "")] = message
+        now = time.monotonic()
+        burst = now - sub.last_rx < _BURST_GAP
+        sub.last_rx = now
+        rest = None
+        with self._inbox_lock:
+            if not burst and not self._inbox and not self._draining and not latched:
+                # nothing older is on its way: idle clients get it from this thread
+                rest = send_direct(message, sessions)
+                if not rest:
+                    return
+            wake = not self._inbox
+            self._inbox.append((sub, message, rest))
+        if wake:  # one loop wake-up per burst, not per message
+            try:
+                self.loop.call_soon_threadsafe(self._drain_inbox)
+            except RuntimeError:  # loop closed: shutting down
+                pass
+
+    def _drain_inbox(self) -> None:
+        while True:
+            with self._inbox_lock:
+                if not self._inbox:
+                    self._draining = False
+                    return
+                items = list(self._inbox)
+                self._inbox.clear()
+                self._draining = True  # no direct send may overtake these
+            for sub, message, only in items:
+                for session in list(sub.sessions) if only is None else only:
+                    if session in sub.sessions:
+                        try:
+                            session.deliver(sub.topic, message)
+                        except Exception:
+                            _log.exception("delivery to client %s failed", session.client_id)
