@@ -26,6 +26,8 @@ import time
 
 import analysis  # tests/experiments is on the path (experiments.py runs these)
 
+from rbd_testkit import wait_for
+
 HERE_NOTE = "issue 17"
 BOX = 0.4  # edge of the box [m]
 #: The box lands this far ahead of the robot's footprint [m]: outside the stop zone (0.37 m ahead of it).
@@ -35,16 +37,6 @@ DROP_GAP = 0.5
 def log(msg):
     """One progress line."""
     print("[avoidance] %s" % msg, flush=True)
-
-
-def wait_for(predicate, timeout, period=0.05):
-    """Poll predicate until true or timeout [s]."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(period)
-    return bool(predicate())
 
 
 class Watch:
@@ -265,9 +257,9 @@ def run_trick_with_box(ctx, watch, op, trick, avoidance, blocked_wait):
     if not op.gesture(trick):
         raise RuntimeError("%s not taken" % trick)
     if trick == "walk":  # the way back: heading turned to the start's back, past the first pose
-        ok = wait_for(lambda: _walking_back(watch, start), 40.0, 0.02)
+        ok = wait_for(lambda: _walking(watch, start, back=True), 40.0, 0.02)
     else:  # the way out, 0.3 m past the start
-        ok = wait_for(lambda: _walking_out(watch, start), 40.0, 0.02)
+        ok = wait_for(lambda: _walking(watch, start, back=False), 40.0, 0.02)
     if not ok:
         raise RuntimeError("the robot never walked where the box goes")
     x, y, yaw = watch.pose()
@@ -325,25 +317,18 @@ def stroll_poses(start):
             ("stroll back to the start", x, y), ("face forward again", x, y)]
 
 
-def _walking_out(watch, start):
+def _walking(watch, start, back):
+    """Walking (> 0.15 m/s, EXECUTING) away from start (back=False: heading as at the start, 0.3 m
+    past it) or back towards it (heading turned round, not yet 0.45 m past the start)."""
     with watch.lock:
         if len(watch.truth) < 2 or watch.state != "EXECUTING":
             return False
         _, x, y, yaw, speed = watch.truth[-1][:5]
     sx, sy, syaw = start
     along = (x - sx) * math.cos(syaw) + (y - sy) * math.sin(syaw)
+    if back:
+        return math.cos(yaw - syaw) < -0.95 and speed > 0.15 and along < 0.45
     return math.cos(yaw - syaw) > 0.95 and speed > 0.15 and along > 0.3
-
-
-def _walking_back(watch, start):
-    with watch.lock:
-        if len(watch.truth) < 2 or watch.state != "EXECUTING":
-            return False
-        _, x, y, yaw, speed = watch.truth[-1][:5]
-    sx, sy, syaw = start
-    along = (x - sx) * math.cos(syaw) + (y - sy) * math.sin(syaw)
-    back = math.cos(yaw - syaw) < -0.95
-    return back and speed > 0.15 and along < 0.45
 
 
 def baseline(watch, op, trick):

@@ -288,6 +288,15 @@ class PositionController:
         """Feed one /rbd_lidar/state reading (critical points per side) received at now [s]."""
         self.guard.update(now, points, stale, error)
 
+    def _refuse_unless_ready(self, now: float) -> None:
+        """Raise GoalRejectedError in a stop state or without a fresh pose (any new goal)."""
+        if self.state == State.EMERGENCY_STOP:
+            raise GoalRejectedError("emergency stop engaged")
+        if self.state == State.COLLISION_DETECTED:
+            raise GoalRejectedError("collision detected")
+        if not self.pose_fresh(now):
+            raise GoalRejectedError("no robot pose received within %.2f s" % self.params.pose_timeout)
+
     def set_guarded_goal(self, goal: Goal, max_speed: float, now: float) -> None:
         """Accept an avoidance goal: translate to (goal.x, goal.y) at <= max_speed, heading kept.
 
@@ -301,12 +310,7 @@ class PositionController:
             raise GoalRejectedError(
                 "max_speed must be in (0, %.2f] m/s, got %r" % (self.params.gains.max_vx, max_speed)
             )
-        if self.state == State.EMERGENCY_STOP:
-            raise GoalRejectedError("emergency stop engaged")
-        if self.state == State.COLLISION_DETECTED:
-            raise GoalRejectedError("collision detected")
-        if not self.pose_fresh(now):
-            raise GoalRejectedError("no robot pose received within %.2f s" % self.params.pose_timeout)
+        self._refuse_unless_ready(now)
         if not self.guard.fresh(now):
             raise GoalRejectedError("no valid LiDAR zone state within %.2f s" % self.guard.timeout)
         self.goal = Goal(goal.x, goal.y, self._pose[2])
@@ -322,12 +326,7 @@ class PositionController:
         values = (goal.x, goal.y, goal.yaw, goal.roll, goal.pitch, goal.body_height)
         if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
             raise GoalRejectedError("goal has non-finite values: %r" % (goal,))
-        if self.state == State.EMERGENCY_STOP:
-            raise GoalRejectedError("emergency stop engaged")
-        if self.state == State.COLLISION_DETECTED:
-            raise GoalRejectedError("collision detected")
-        if not self.pose_fresh(now):
-            raise GoalRejectedError("no robot pose received within %.2f s" % self.params.pose_timeout)
+        self._refuse_unless_ready(now)
         x, y, _ = self._pose
         self.goal = goal
         far = math.hypot(goal.x - x, goal.y - y) >= self.params.skip_rotation_distance
