@@ -8,17 +8,15 @@ the suite's time budget). Run them with
 (the visitor experiment is in test_experiments.py's short run, which make test runs).
 """
 
-import json
 import os
-import shutil
-import signal
-import subprocess
 import sys
-import tempfile
 
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+
+from short_run import result, run_all  # noqa: E402
 
 pytestmark = pytest.mark.skipif(not os.environ.get("RBD_AVOIDANCE_EXPERIMENTS"),
                                 reason="set RBD_AVOIDANCE_EXPERIMENTS=1 (3-7 min, over make test's budget)")
@@ -26,28 +24,7 @@ pytestmark = pytest.mark.skipif(not os.environ.get("RBD_AVOIDANCE_EXPERIMENTS"),
 
 @pytest.fixture(scope="module")
 def run():
-    out = tempfile.mkdtemp(prefix="rbd-avoid-exp.")
-    proc = subprocess.Popen([sys.executable, os.path.join(HERE, "run_all"), "--short", "--only", "box,wall", "--out",
-                             out], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True,
-                            start_new_session=True)
-    try:
-        stdout, _ = proc.communicate(timeout=900)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGINT)
-        stdout, _ = proc.communicate(timeout=60)
-    try:
-        with open(os.path.join(out, "results.json")) as fh:
-            data = json.load(fh)
-        data["stdout"] = stdout
-        yield data
-    finally:
-        shutil.rmtree(out, ignore_errors=True)
-
-
-def result(run, name):
-    r = run["results"][name]
-    assert "error" not in r, "%s: %s\n%s" % (name, r.get("error"), run["stdout"][-3000:])
-    return r
+    yield from run_all(["--short", "--only", "box,wall"], 900)
 
 
 def test_box_on_the_path_is_got_around_and_without_avoidance_blocks_for_ever(run):

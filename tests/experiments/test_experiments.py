@@ -8,11 +8,7 @@ previous result. RBD_EXPERIMENTS_OUT keeps the output directory.
 import json
 import math
 import os
-import shutil
-import signal
-import subprocess
 import sys
-import tempfile
 
 import pytest
 
@@ -21,6 +17,7 @@ sys.path.insert(0, HERE)
 
 import analysis  # noqa: E402
 import thesis  # noqa: E402
+from short_run import result, run_all  # noqa: E402
 
 # ---------------------------------------------------------------------------------------------
 # ROS-free: the measurement maths
@@ -162,33 +159,7 @@ def test_root_readme_table_is_the_generated_one():
 
 @pytest.fixture(scope="module")
 def short_run():
-    keep = os.environ.get("RBD_EXPERIMENTS_OUT")
-    out = keep or tempfile.mkdtemp(prefix="rbd-experiments.")
-    # Own process group: on a timeout SIGINT reaches run_all and both experiment processes,
-    # which stop their simulator stacks (by PID) on the way out.
-    proc = subprocess.Popen([sys.executable, os.path.join(HERE, "run_all"), "--short", "--parallel", "--out", out],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True,
-                            start_new_session=True)
-    try:
-        stdout, _ = proc.communicate(timeout=400)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGINT)
-        stdout, _ = proc.communicate(timeout=60)
-    try:
-        with open(os.path.join(out, "results.json")) as fh:
-            data = json.load(fh)
-        data["stdout"] = stdout
-        data["out"] = out
-        yield data
-    finally:
-        if not keep:
-            shutil.rmtree(out, ignore_errors=True)
-
-
-def result(run, name):
-    r = run["results"][name]
-    assert "error" not in r, "%s: %s\n%s" % (name, r.get("error"), run["stdout"][-3000:])
-    return r
+    yield from run_all(["--short", "--parallel"], 400, keep=os.environ.get("RBD_EXPERIMENTS_OUT"))
 
 
 def test_fig18_steps_integrate_with_small_latency(short_run):
