@@ -370,7 +370,12 @@ def main():
 
 
 def drop_bag(monitor):
-    """A bag is put down 0.5 m ahead of the robot's footprint on its way out; it stays until the trick is done."""
+    """A bag is put down 0.5 m ahead of the robot's footprint on its way out; it stays until the trick is done.
+
+    Dropped right after the start (0.05 m along), so that the bag (0.5 m deep along the path when
+    turned 0.3 rad) ends 1.3 m along, out of the stop zone of the stroll's far pose (2 m along, the
+    zone reaching 0.63 m behind it): the robot gets around it and reaches that pose.
+    """
     import rospy
 
     from rbd_bringup.metrics import box_ahead
@@ -384,7 +389,7 @@ def drop_bag(monitor):
         along = (x - start[0]) * math.cos(start[2]) + (y - start[1]) * math.sin(start[2])
         with monitor.lock:
             moving = monitor.commands and monitor.commands[-1][1] > 0.1
-        return moving and monitor.state == "EXECUTING" and along > 0.3
+        return moving and monitor.state == "EXECUTING" and along > 0.05
 
     wait_for(walking_out, 20.0)
     x, y, yaw = monitor.pose
