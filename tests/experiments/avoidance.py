@@ -638,10 +638,11 @@ def visitor_run(watch, op, v, dodge_max, second=False):
     """One approach at v [m/s]: a visitor walks in from 2.2 m to 0.55 m, stands 3 s and leaves.
 
     With ``second``, a second visitor walks at the robot from behind at 0.8 m/s as soon as it steps
-    back from the first (DODGING, moving), up to 1.1 m behind home: the robot must not back into
-    them (``never towards a moving person``, on ground truth).
+    back from the first (DODGING, moving), up to 1.3 m behind home, then at 0.25 m/s up to 0.2 m
+    behind the robot's footprint: the robot must not back into them (``never towards a moving
+    person``, on ground truth).
     """
-    from rbd_bringup.metrics import TowardsMonitor, footprint_clearance, outside_polygon
+    from rbd_bringup.metrics import A1_FOOTPRINT_LENGTH, TowardsMonitor, footprint_clearance, outside_polygon
 
     watch.wait_state(("WAITING_FOR_GESTURE",), 30.0)
     time.sleep(1.0)
@@ -654,7 +655,14 @@ def visitor_run(watch, op, v, dodge_max, second=False):
     if second:
         moving_back = wait_for(lambda: watch.state == "DODGING" and _speed(watch) > 0.05, 5.0, 0.02)
         second_started = watch.state if moving_back else None
-        crowd.move([("visitor2", -2.0, -1.1)], 0.8)
+        crowd.move([("visitor2", -2.0, -1.3)], 0.8)
+        # Then slowly on to 0.2 m behind the robot's footprint (as it is now): still walking when it
+        # is within TowardsMonitor's band (0.5 m) well past its reaction grace, so the rule "never
+        # towards a moving person" is exercised, not only passed by a visitor who stopped short of
+        # the band (at -1.1 m the band was never held long enough at low load: 0 samples).
+        rx, ry, _ = watch.pose()
+        rear = (rx - x) * math.cos(yaw) + (ry - y) * math.sin(yaw) - A1_FOOTPRINT_LENGTH / 2.0
+        crowd.move([("visitor2", -1.3, max(-1.3, rear - Visitors.RADIUS - 0.2))], 0.25)
     crowd.stand(3.0)
     crowd.move([(n, d, math.copysign(3.0, d)) for n, d in crowd.at.items()], v)
     crowd.leave()
