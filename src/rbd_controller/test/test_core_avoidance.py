@@ -34,8 +34,9 @@ STROLL = [(2.0, 0.0, 0.0), (0.0, 0.0, math.pi), (0.0, 0.0, 0.0)]
 
 
 class World:
-    def __init__(self, dodge=False, enabled=True, path=WALK, relative=False, **avoid):
+    def __init__(self, dodge=False, enabled=True, path=WALK, relative=False, scan=False, **avoid):
         self.x, self.y, self.yaw = 0.0, 0.0, 0.0
+        self.scan = scan  # also feed the scan's obstacle points (every point within 3 m), as the node does
         self.obstacles = {}
         self.t = 0.0
         self.goals = []  # (state at send, kind, x, y)
@@ -147,6 +148,10 @@ class World:
             collision = sum(r.points) >= 5
             self.ctl.perception.on_pose(self.t, self.x, self.y, self.yaw)
             self.ctl.perception.on_blocking_points(self.t, self.blocking_points())
+            if self.scan:
+                near = [(px, py) for arr in self.obstacles.values() for px, py in arr
+                        if math.hypot(px - self.x, py - self.y) < 3.0]
+                self.ctl.perception.on_scan_points(self.t, near)
             self.ctl.on_lidar_state(self.t, collision, r)
             if collision != self.ctl.fsm.collision:
                 self.ctl.set_collision(collision)
@@ -237,6 +242,24 @@ def test_a_trick_left_away_from_home_by_the_avoidance_ends_with_a_walk_home():
         assert got == pytest.approx(want, abs=1e-6)  # the trick, from where it stood
     assert sent[3] == (0.0, 0.0)  # then home, once
     assert (w.x, w.y) == pytest.approx((0.0, 0.0), abs=1e-9) and w.yaw == pytest.approx(0.0)
+
+
+def test_no_walk_home_into_the_wall_it_escaped_from():
+    # A wall 0.45 m ahead of the idle robot (inside home's stop zone): it escapes, and home, whose
+    # zone holds the wall (seen in the scan), is skipped with a reason instead of walked back to
+    # into stop-and-go until the wall is classified again.
+    w = World(scan=True)
+    w.ctl.set_emergency(False)
+    w.step(3)
+    w.obstacles["wall"] = np.array([(0.5, y) for y in np.arange(-1.0, 1.0 + 1e-9, 0.02)])
+    assert w.run_until(lambda: w.ctl.state == State.ESCAPING, 5.0), states(w)
+    assert w.run_until(lambda: w.ctl.state == State.WAITING_FOR_GESTURE, 30.0), (states(w), w.logs[-5:])
+    w.step(10)
+    assert [g for g in w.goals if g[1] == "normal"] == [], w.goals  # never sent home
+    assert w.x < -0.1 and w.min_clearance > 0.25  # it stays where the escape took it
+    skipped = [e["detail"] for e in w.events if e["event"] == "gave_up"]
+    assert skipped == ["goal blocked: the stop zone at home would hold the obstacle"], skipped
+    assert not any(msg.endswith(": walking back") for _, msg in w.logs)
 
 
 def test_a_trick_ending_at_home_adds_nothing():

@@ -159,6 +159,7 @@ class MainController:
         self._progress_active = 0.0
         self._last_tick = None  # type: Optional[float]
         self._episode_start = None  # type: Optional[float]
+        self._trick_episodes_since = None  # type: Optional[float]  # first avoidance episode of this trick
         self._attempts = 0
         self._retry_at = 0.0
         self._reason = ""
@@ -361,6 +362,8 @@ class MainController:
         if self.fsm.state != State.DODGING and self._episode_start is None:
             self._episode_start = self._now
             self._progress_active = self._active
+            if self._trick_episodes_since is None:
+                self._trick_episodes_since = self._now
         if self.fsm.state == State.DODGING:
             self.stats["dodges"] += 1
 
@@ -372,6 +375,7 @@ class MainController:
             self.home, self.home_yaw = (pose[0], pose[1]), pose[2]
         self._returning = False
         self._episode_start = None
+        self._trick_episodes_since = None
         self.command = ""
         self.queue = []
         self.current = None
@@ -382,6 +386,7 @@ class MainController:
     def _enter_generating(self, _previous: State) -> None:
         self._body_pose_wanted = (0.0, 0.0, 0.0)
         self.trick_home = self.perception.pose
+        self._trick_episodes_since = None
 
     def _enter_executing(self, previous: State) -> None:
         self._enter_motion(previous)
@@ -530,19 +535,28 @@ class MainController:
         A trick whose poses were skipped (or whose way was changed by a detour) can end away from
         where it started; tricks are relative to the robot, so every later trick would start there
         and the show would wander off. With avoidance on, a robot ending more than
-        ``~home_tolerance`` from home gets one more pose, home (once per trick; if that pose is
-        blocked too it is skipped with its reason like any other).
+        ``~home_tolerance`` from home gets one more pose, home (once per trick). When home's stop
+        zone holds the known obstacle (a wall the robot escaped from stands within the zone of
+        home), that pose is skipped at once with its reason, as a trick pose would be, instead of
+        walking into stop-and-go in front of the obstacle until it is classified again.
         """
         pose = self.perception.pose
         if (self.avoid.enabled and not self._returning and self.home is not None and pose is not None
                 and math.hypot(pose[0] - self.home[0], pose[1] - self.home[1]) > self.avoid.home_tolerance):
             self._returning = True
             away = math.hypot(pose[0] - self.home[0], pose[1] - self.home[1])
-            self.queue.append((self.ports.make_pose(self.home[0], self.home[1], self.home_yaw),
-                               "back home (%.2f m away after avoiding)" % away))
-            self.ports.log("info", "trick done %.2f m from home: walking back" % away)
-            self.ports.publish(self)
-            return
+            home = self.ports.make_pose(self.home[0], self.home[1], self.home_yaw)
+            since = self._trick_episodes_since if self._trick_episodes_since is not None else self._now
+            if self._goal_blocked(home, self.perception.obstacles(since - 5.0)):
+                self.stats["gave_up"] += 1
+                reason = "goal blocked: the stop zone at home would hold the obstacle"
+                self.ports.log("warn", "trick done %.2f m from home, not walking back: %s" % (away, reason))
+                self.ports.publish_avoidance({"event": "gave_up", "detail": reason})
+            else:
+                self.queue.append((home, "back home (%.2f m away after avoiding)" % away))
+                self.ports.log("info", "trick done %.2f m from home: walking back" % away)
+                self.ports.publish(self)
+                return
         self._fire_if(epoch, Event.QUEUE_EMPTY)
 
     # ------------------------------------------------------------------ avoidance (issue 17)
@@ -598,10 +612,14 @@ class MainController:
         """Known obstacle points inside the stop zone of a robot at the trick pose."""
         return zone_occupied_at(self.ports.pose_xy(pose), self.avoid.zone, points)
 
+    def _known_obstacles(self) -> Any:
+        """Caller holds the lock. The remembered obstacle points of this avoidance episode (from 5 s before it)."""
+        since = self._episode_start if self._episode_start is not None else self._now
+        return self.perception.obstacles(since - 5.0)
+
     def _drop_unreachable(self) -> None:
         """Caller holds the lock. Drop the queued poses whose zone the known obstacle occupies."""
-        since = self._episode_start if self._episode_start is not None else self._now
-        points = self.perception.obstacles(since - 5.0)
+        points = self._known_obstacles()
         while self.queue and self._goal_blocked(self.queue[0][0], points):
             _, name = self.queue.pop(0)
             self.stats["gave_up"] += 1
