@@ -8,7 +8,8 @@ the rosbridge-compatible server to the robot. After the four built-in tricks a v
 new gesture (a checkmark, five shows) for the trick `bow` in teach mode and performs it; the
 app sends the trick's name, which rbd_gestrec accepts because `bow` is a trick of
 rbd_navigation. During the walk a person steps into the robot's way and leaves again. Then the
-operator sends `stroll` (2 m out and back) and a bag is put down on the robot's way: it stops,
+operator turns the robot towards the lab's free half, sends `stroll` (2 m out and back) and a bag
+is put down on the robot's way (turned back afterwards): it stops,
 classifies the bag as static, steps back and walks around it, out and back (issue 17).
 Everything safety-related is measured on the simulator's ground truth and on the command
 stream the A1 receives over LCM.
@@ -318,6 +319,10 @@ def main():
         for i, trick in enumerate(tricks):
             if trick == TAUGHT[1]:
                 audience.teach(seed=500)
+            if trick == args.bag:
+                # The lab's free half is behind the robot (a visitor walks a loop 2.8 m ahead of
+                # home, inside the stop zone of the stroll's far pose): the operator turns it first.
+                turn(monitor, start_pose[2] + math.pi)
             taken = False
             for attempt in range(5):
                 monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0)
@@ -342,6 +347,8 @@ def main():
                 say("trick %s completed (%d/%d)" % (trick, len(completed), len(tricks)))
             else:
                 say("trick %s did not complete" % trick)
+            if trick == args.bag:
+                turn(monitor, start_pose[2])
         duration = time.monotonic() - t_start
         time.sleep(1.0)
     finally:
@@ -356,9 +363,9 @@ def main():
     with monitor.lock:
         report = build_report(tricks, completed, monitor.contacts.contacts, monitor.contacts.min_clearance,
                               monitor.state_log, start_pose, monitor.pose,
-                              reaction_times(monitor.onsets, monitor.commands), 0.1, duration, GESTURE_INPUT,
-                              avoidance_events=list(monitor.avoidance), obstacle_contacts=monitor.box_contacts,
-                              min_obstacle_clearance=monitor.min_box_clearance)
+                              reaction_times(monitor.onsets, monitor.commands), 0.1, duration,
+                              gesture_input=GESTURE_INPUT, avoidance_events=list(monitor.avoidance),
+                              obstacle_contacts=monitor.box_contacts, min_obstacle_clearance=monitor.min_box_clearance)
         plot_run(monitor.path, monitor.people_log, monitor.stop_points, os.path.join(args.out, "run.png"),
                  boxes=list(monitor.boxes_seen.values()), detours=list(monitor.detours))
     write_report(report, args.out)
@@ -404,6 +411,24 @@ def drop_bag(monitor):
         say("the bag is taken away")
 
     threading.Thread(target=take_away, daemon=True).start()
+
+
+def turn(monitor, yaw):
+    """The operator turns the waiting robot in place to face ``yaw`` (world) with the position controller."""
+    import rospy
+    from geometry_msgs.msg import Pose
+
+    from rbd_msgs.srv import SetPosition
+
+    monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0)
+    x, y, _ = monitor.pose
+    goal = Pose()
+    goal.position.x, goal.position.y = x, y
+    goal.orientation.z, goal.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
+    rospy.wait_for_service("/rbd_pos_controller/set_position", 10.0)
+    rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)(pose=goal)
+    turned = wait_for(lambda: abs(math.sin((monitor.pose[2] - yaw) / 2.0)) < 0.03, 30.0)
+    say("the operator turns the robot to face %.0f deg: %s" % (math.degrees(yaw), "done" if turned else "not done"))
 
 
 def wait_done(monitor, timeout):
