@@ -15,12 +15,11 @@ link is down it says so (the last report stays, marked as such) and Run is disab
 """
 
 import queue
-import threading
 import time
 
 import customtkinter as ctk
 
-from rbd_local.gui import drain
+from rbd_local.gui import drain, in_background
 
 STATUS_COLOURS = {"PASS": "#2e7d32", "FAIL": "#c62828", "SKIP": "#757575"}
 READY_COLOUR = "#2e7d32"
@@ -103,16 +102,8 @@ class PreflightPanel:
         self._update_button()
         self._message("running the robot's checks (a few seconds)…", True)
 
-        def work() -> None:
-            try:
-                result = self.run_preflight(self.timeout)
-            except (ConnectionError, ValueError) as exc:
-                result = "preflight failed: %s" % exc
-            except Exception as exc:  # the panel must always give an answer
-                result = "preflight failed: %r" % (exc,)
-            self._events.put(("run", result))
-
-        threading.Thread(target=work, name="rbd-gui-preflight", daemon=True).start()
+        run = self.run_preflight
+        in_background(self._events, "run", lambda: run(self.timeout), "preflight failed", "rbd-gui-preflight")
 
     def apply_pending(self) -> None:
         """Apply queued inputs (the window's poll calls this)."""

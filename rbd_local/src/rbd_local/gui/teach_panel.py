@@ -14,11 +14,10 @@ button that forgets them; "Undo" restores the model file before its last change.
 """
 
 import queue
-import threading
 
 import customtkinter as ctk
 
-from rbd_local.gui import drain
+from rbd_local.gui import drain, in_background
 
 MOVES_PREVIEW = 5
 PHASE_COLOURS = {
@@ -138,16 +137,8 @@ class TeachPanel:
         self.trick_menu.configure(state="disabled")
         self.preview_label.configure(text="loading the robot's tricks…")
 
-        def work() -> None:
-            try:
-                result = self.load_tricks(3.0)
-            except (ConnectionError, ValueError) as exc:
-                result = "tricks not loaded: %s" % exc
-            except Exception as exc:  # the panel must always give an answer
-                result = "tricks not loaded: %r" % (exc,)
-            self._events.put(("tricks", result))
-
-        threading.Thread(target=work, name="rbd-gui-tricks", daemon=True).start()
+        load = self.load_tricks
+        in_background(self._events, "tricks", lambda: load(3.0), "tricks not loaded", "rbd-gui-tricks")
 
     def apply_pending(self) -> None:
         """Apply queued inputs and the desk's state (the window's poll calls this)."""
