@@ -8,8 +8,8 @@ the rosbridge-compatible server to the robot. After the four built-in tricks a v
 new gesture (a checkmark, five shows) for the trick `bow` in teach mode and performs it; the
 app sends the trick's name, which rbd_gestrec accepts because `bow` is a trick of
 rbd_navigation. During the walk a person steps into the robot's way and leaves again. Then the
-operator turns the robot towards the lab's free half, sends `stroll` (2 m out and back) and a bag
-is put down on the robot's way (turned back afterwards): it stops,
+operator walks the robot 0.5 m ahead and turns it towards the lab's free half, sends `stroll`
+(2 m out and back) and a bag is put down on the robot's way: it stops,
 classifies the bag as static, steps back and walks around it, out and back (issue 17).
 Everything safety-related is measured on the simulator's ground truth and on the command
 stream the A1 receives over LCM.
@@ -321,8 +321,11 @@ def main():
                 audience.teach(seed=500)
             if trick == args.bag:
                 # The lab's free half is behind the robot (a visitor walks a loop 2.8 m ahead of
-                # home, inside the stop zone of the stroll's far pose): the operator turns it first.
-                turn(monitor, start_pose[2] + math.pi)
+                # home, inside the stop zone of the stroll's far pose): the operator walks it 0.5 m
+                # ahead and turns it round (the far pose then keeps 1.1 m from the bin behind home);
+                # the controller walks it home after the stroll (home = where the e-stop was released).
+                c, s_ = math.cos(start_pose[2]), math.sin(start_pose[2])
+                turn(monitor, start_pose[2] + math.pi, (start_pose[0] + 0.5 * c, start_pose[1] + 0.5 * s_))
             taken = False
             for attempt in range(5):
                 monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0)
@@ -348,7 +351,7 @@ def main():
             else:
                 say("trick %s did not complete" % trick)
             if trick == args.bag:
-                turn(monitor, start_pose[2])
+                turn(monitor, start_pose[2], start_pose[:2])  # a no-op when the controller walked it home
         duration = time.monotonic() - t_start
         time.sleep(1.0)
     finally:
@@ -413,22 +416,27 @@ def drop_bag(monitor):
     threading.Thread(target=take_away, daemon=True).start()
 
 
-def turn(monitor, yaw):
-    """The operator turns the waiting robot in place to face ``yaw`` (world) with the position controller."""
+def turn(monitor, yaw, xy=None):
+    """The operator walks the waiting robot to ``xy`` (default: where it stands) to face ``yaw`` (world).
+
+    With the position controller, as an operator does with a joystick (not through the bridge).
+    """
     import rospy
     from geometry_msgs.msg import Pose
 
     from rbd_msgs.srv import SetPosition
 
     monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0)
-    x, y, _ = monitor.pose
+    x, y = xy if xy is not None else monitor.pose[:2]
     goal = Pose()
     goal.position.x, goal.position.y = x, y
     goal.orientation.z, goal.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
     rospy.wait_for_service("/rbd_pos_controller/set_position", 10.0)
     rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)(pose=goal)
-    turned = wait_for(lambda: abs(math.sin((monitor.pose[2] - yaw) / 2.0)) < 0.03, 30.0)
-    say("the operator turns the robot to face %.0f deg: %s" % (math.degrees(yaw), "done" if turned else "not done"))
+    turned = wait_for(lambda: abs(math.sin((monitor.pose[2] - yaw) / 2.0)) < 0.03
+                      and math.hypot(monitor.pose[0] - x, monitor.pose[1] - y) < 0.05, 30.0)
+    say("the operator walks the robot to (%.2f, %.2f) facing %.0f deg: %s"
+        % (x, y, math.degrees(yaw), "done" if turned else "not done"))
 
 
 def wait_done(monitor, timeout):
