@@ -59,9 +59,9 @@ def start_bridge(env, launch="bridge.launch", **args):
     return port, proc
 
 
-def start_probe(env, name, subs=(), pubs=()):
+def start_probe(env, name, subs=(), pubs=(), defer=None):
     """Start test/ros_probe.py as node ``name`` (plain rospy subscribers/publishers: the ROS-side truth)."""
-    cmd = [sys.executable, PROBE, "__name:=%s" % name]
+    cmd = [sys.executable, PROBE, "__name:=%s" % name] + (["--defer", str(defer)] if defer is not None else [])
     for spec in subs:
         cmd += ["--sub", spec]
     for spec in pubs:
