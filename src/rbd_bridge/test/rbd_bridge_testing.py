@@ -158,7 +158,15 @@ def png_text(data):
     return b"".join(rows[i + 1 : i + stride] for i in range(0, len(rows), stride)).decode("utf-8")
 
 
-OPEN = {"topics_glob": "[*]", "services_glob": "[*]", "params_glob": "[*]", "params_writable": "true"}
+# Everything allowed; a short publisher linger, so that tests of "unadvertise ends the topic" wait little.
+LINGER = 0.5
+OPEN = {
+    "topics_glob": "[*]",
+    "services_glob": "[*]",
+    "params_glob": "[*]",
+    "params_writable": "true",
+    "publisher_linger": LINGER,
+}
 
 
 class WsClient:
