@@ -27,15 +27,15 @@ def test_the_last_client_leaving_keeps_the_publisher_for_the_linger_then_it_goes
     pub = Pub()
     pubs.add("/t", pub, "a")
     assert pubs.join("/t", "std_msgs/String", True, "b") == (pub, None)  # in use: shared, latch as is
-    assert pubs.leave("/t", "a") == (None, 0.0)  # b still uses it
-    assert pubs.leave("/t", "b") == (None, 5.0)  # nobody: lingers, sweep due in 5 s
-    assert pubs.get("/t") is pub and not pub.clients
+    assert pubs.leave("/t", "a") == ([], 0.0)  # b still uses it
+    assert pubs.leave("/t", "b") == ([], 5.0)  # nobody: lingers, sweep due in 5 s
+    assert pubs.held.get("/t") is pub and not pub.clients
     now[0] = 104.9
     assert pubs.sweep() == ([], pytest.approx(0.1))
-    assert pubs.leave("/t", "a") == (None, 0.0)  # not a user: changes nothing
+    assert pubs.leave("/t", "a") == ([], 0.0)  # not a user: changes nothing
     now[0] = 105.0
     assert pubs.sweep() == ([pub], 0.0)
-    assert pubs.get("/t") is None
+    assert pubs.held.get("/t") is None
     assert pubs.sweep() == ([], 0.0)
 
 
@@ -49,7 +49,7 @@ def test_an_advertise_within_the_linger_reuses_the_publisher():
     assert pub.clients == {"b"} and pub.revived == 1
     now[0] = 200.0  # long after the first deadline: b holds it
     assert pubs.sweep() == ([], 0.0)
-    assert pubs.get("/t") is pub
+    assert pubs.held.get("/t") is pub
     assert pubs.join("/t", "std_msgs/String", False, "c") == (pub, None)
     assert pub.revived == 1  # joined while in use: not a revival
 
@@ -61,7 +61,7 @@ def test_a_lingering_publisher_of_another_type_or_latching_is_replaced(type_name
     pubs.add("/t", pub, "a")
     pubs.leave("/t", "a")
     assert pubs.join("/t", type_name, latch, "b") == (None, pub)  # unregister it, make a new one
-    assert pubs.get("/t") is None and pub.revived == 0
+    assert pubs.held.get("/t") is None and pub.revived == 0
 
 
 def test_another_type_while_in_use_is_an_error():
@@ -77,8 +77,8 @@ def test_linger_zero_releases_at_once():
     pubs, _ = make(0.0)
     pub = Pub()
     pubs.add("/t", pub, "a")
-    assert pubs.leave("/t", "a") == (pub, 0.0)
-    assert pubs.get("/t") is None
+    assert pubs.leave("/t", "a") == ([pub], 0.0)
+    assert pubs.held.get("/t") is None
 
 
 def test_sweep_is_due_at_the_earliest_deadline():

@@ -131,31 +131,28 @@ class Topics:
 
     def unadvertise(self, session: Any, topic: str) -> None:
         """Drop session from topic's publishers; unregister after the linger when nobody is left."""
-        gone, due = self.pubs.leave(topic, session.client_id)
-        if gone is not None:
-            gone.publisher.unregister()
-        self._sweep_in(due)
+        self._unregister(*self.pubs.leave(topic, session.client_id))
 
-    def _sweep_in(self, seconds: float) -> None:
-        if seconds and self._sweeping is None:
-            self._sweeping = self.loop.call_later(seconds, self._sweep)
+    def _unregister(self, gone: Any, due: float) -> None:
+        """Unregister gone's publishers; sweep the lingering ones in due seconds (0 = none left)."""
+        for pub in gone:
+            pub.publisher.unregister()
+        if due and self._sweeping is None:
+            self._sweeping = self.loop.call_later(due, self._sweep)
 
     def _sweep(self) -> None:
         self._sweeping = None
-        gone, due = self.pubs.sweep()
-        for pub in gone:
-            pub.publisher.unregister()
-        self._sweep_in(due)
+        self._unregister(*self.pubs.sweep())
 
     def publish(self, session: Any, topic: str, msg: Any) -> Any:
         """Publish msg (advertising implicitly with the type the master knows); return defaulted fields."""
-        pub = self.pubs.get(topic)
+        pub = self.pubs.held.get(topic)
         if pub is None or session.client_id not in pub.clients:
             type_name = pub.type if pub is not None else self.master_type(topic)
             if not type_name or type_name == "*":
                 raise BridgeError("publish: cannot infer the type of %s (advertise it first)" % topic)
             self.advertise(session, topic, type_name, pub is not None and pub.latch, 100)
-            pub = self.pubs.get(topic)
+            pub = self.pubs.held[topic]
         try:
             message, missing = dict_to_msg(pub.cls, msg, rospy.Time.now)
         except ConversionError as exc:
