@@ -34,9 +34,10 @@ class TestGestrec(unittest.TestCase):
     def check_unknown_filtered(self, topic=GESTURE_TOPIC, proof_timeout=10.0):
         """An unknown gesture that reached the node is never returned.
 
-        Proof that it arrived: the node's own warning about it (throttled to one per 2 s: this is
-        the only unknown gesture this test sends). Published to a wrong topic, the proof never
-        comes and this check fails (test_unknown_check_fails_on_a_wrong_topic).
+        Proof that it arrived: the node's own warning about it (a new name is warned about at
+        once, the same name once per 2 s: 'self_destruct' is sent by this check only). Published
+        to a wrong topic, the proof never comes and this check fails
+        (test_unknown_check_fails_on_a_wrong_topic).
         """
         mark = self.rosout.mark()
         stays_unchanged(
