@@ -59,9 +59,9 @@ def start_bridge(env, launch="bridge.launch", **args):
     return port, proc
 
 
-def start_probe(env, name, subs=(), pubs=()):
+def start_probe(env, name, subs=(), pubs=(), defer=None):
     """Start test/ros_probe.py as node ``name`` (plain rospy subscribers/publishers: the ROS-side truth)."""
-    cmd = [sys.executable, PROBE, "__name:=%s" % name]
+    cmd = [sys.executable, PROBE, "__name:=%s" % name] + (["--defer", str(defer)] if defer is not None else [])
     for spec in subs:
         cmd += ["--sub", spec]
     for spec in pubs:
@@ -158,7 +158,15 @@ def png_text(data):
     return b"".join(rows[i + 1 : i + stride] for i in range(0, len(rows), stride)).decode("utf-8")
 
 
-OPEN = {"topics_glob": "[*]", "services_glob": "[*]", "params_glob": "[*]", "params_writable": "true"}
+# Everything allowed; a short publisher linger, so that tests of "unadvertise ends the topic" wait little.
+LINGER = 0.5
+OPEN = {
+    "topics_glob": "[*]",
+    "services_glob": "[*]",
+    "params_glob": "[*]",
+    "params_writable": "true",
+    "publisher_linger": LINGER,
+}
 
 
 class WsClient:

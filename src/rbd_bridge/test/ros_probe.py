@@ -1,10 +1,12 @@
 #!/usr/bin/env python3
 """A plain rospy node that stands on the ROS side of bridge tests (ground truth, no bridge code).
 
-Usage: ``ros_probe.py [--sub TOPIC:TYPE:QUEUE]... [--pub TOPIC:TYPE:JSON]... [__name:=NAME]``
+Usage: ``ros_probe.py [--sub TOPIC:TYPE:QUEUE]... [--pub TOPIC:TYPE:JSON]... [--defer SECONDS] [__name:=NAME]``
 
 - every ``--sub`` is an ordinary ``rospy.Subscriber`` (queue_size QUEUE, 0 = rospy's None)
-  whose callback only appends the message (as cheap as a subscriber can be);
+  whose callback only appends the message (as cheap as a subscriber can be); with
+  ``--defer`` they are made only when ``~subscribe`` (std_srvs/Trigger) is called, one every
+  SECONDS, in the order given (a subscriber that connects at a chosen moment);
 - ``~report`` (std_srvs/Trigger) answers with JSON ``{topic: {"count": n, "messages": [...]}}``,
   each message as ROS itself renders it (``genpy.message.strify_message`` read back as YAML);
   for more than 100 messages only their ``data`` fields are listed; ``"connections"`` maps
@@ -16,6 +18,7 @@ Usage: ``ros_probe.py [--sub TOPIC:TYPE:QUEUE]... [--pub TOPIC:TYPE:JSON]... [__
 import json
 import sys
 import threading
+import time
 
 import genpy
 import roslib.message
@@ -34,23 +37,40 @@ def _split(spec: str, parts: int) -> list:
 def main() -> None:
     """Parse the arguments, subscribe/advertise, serve the two services."""
     args = rospy.myargv(sys.argv)[1:]
-    subs, pubs = [], []
+    subs, pubs, defer = [], [], None
     while args:
         flag, value = args[0], args[1]
         args = args[2:]
-        (subs if flag == "--sub" else pubs).append(value)
+        if flag == "--defer":
+            defer = float(value)
+        else:
+            (subs if flag == "--sub" else pubs).append(value)
     rospy.init_node("ros_probe")
     lock = threading.Lock()
     received = {}
-    for spec in subs:
-        topic, type_name, queue = _split(spec, 3)
-        received[topic] = []
-        rospy.Subscriber(
-            topic,
-            roslib.message.get_message_class(type_name),
-            lambda msg, t=topic: received[t].append(msg),
-            queue_size=int(queue) or None,
-        )
+
+    def subscribe() -> None:
+        for spec in subs:
+            topic, type_name, queue = _split(spec, 3)
+            with lock:
+                received[topic] = []
+            rospy.Subscriber(
+                topic,
+                roslib.message.get_message_class(type_name),
+                lambda msg, t=topic: received[t].append(msg),
+                queue_size=int(queue) or None,
+            )
+            if defer:
+                time.sleep(defer)
+
+    def start(_request: object) -> TriggerResponse:
+        threading.Thread(target=subscribe, daemon=True).start()
+        return TriggerResponse(success=True, message="subscribing")
+
+    if defer is None:
+        subscribe()
+    else:
+        rospy.Service("~subscribe", Trigger, start)
     publishers = []
     for spec in pubs:
         topic, type_name, fields = _split(spec, 3)

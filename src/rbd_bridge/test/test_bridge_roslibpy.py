@@ -8,7 +8,7 @@ import time
 import pytest
 import rosgraph
 import roslibpy
-from rbd_bridge_testing import master_of, png_text, start_echo, wait_until
+from rbd_bridge_testing import LINGER, master_of, png_text, start_echo, wait_until
 
 from rbd_bridge.core.rosapi import ROSAPI_TYPES
 from rbd_testkit import free_port
@@ -299,8 +299,10 @@ def test_unadvertise_unregisters_the_bridge_publisher_once_no_client_holds_it(ro
     # the bridge sends after handling the unadvertise, on the same connection)
     assert BRIDGE in rosapi(first, "publishers", topic=topic)["publishers"]
     assert BRIDGE in graph_nodes(open_bridge, 0, topic)
+    start = time.monotonic()
     pub2.unadvertise()
     assert wait_until(lambda: BRIDGE not in rosapi(second, "publishers", topic=topic)["publishers"], 10)
+    assert time.monotonic() - start >= LINGER  # not at once: it lingered for the next advertiser
     assert BRIDGE not in graph_nodes(open_bridge, 0, topic)  # the master agrees
 
 

@@ -120,10 +120,16 @@ class ReplayWindow:
     def __init__(self, seconds: float, limit: int, latch: bool, clock: Callable[[], float] = time.monotonic) -> None:
         """Open the window now."""
         self.clock = clock
-        self.deadline = clock() + seconds if seconds > 0 else 0.0
+        self.seconds = seconds
         self.messages = collections.deque(maxlen=max(1, limit))
         self.latch = latch
         self.lock = threading.RLock()
+        self.reopen()
+
+    def reopen(self) -> None:
+        """Open the window now, empty (also for a lingering publisher advertised again)."""
+        self.deadline = self.clock() + self.seconds if self.seconds > 0 else 0.0
+        self.messages.clear()
 
     def is_open(self) -> bool:
         """True while messages are kept."""

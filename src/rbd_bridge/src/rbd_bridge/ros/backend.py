@@ -41,6 +41,7 @@ class RosBackend:
         fail_direct_reads: Test hook: every take-over fails (rospy's threads read).
         advertise_window: Seconds after advertise whose publishes reach subscribers still
             connecting (0 = off).
+        publisher_linger: Seconds a publisher stays registered after its last client left.
     """
 
     def __init__(
@@ -53,11 +54,12 @@ class RosBackend:
         direct_reads: bool = True,
         fail_direct_reads: bool = False,
         advertise_window: float = 1.0,
+        publisher_linger: float = 5.0,
     ) -> None:
         """Create the backend (rospy.init_node must have been called)."""
         master = ThreadLocalMaster(rospy.get_name())
         self.fast = FastPath(loop, self._subscription, direct_reads, fail_direct_reads) if fast_path else None
-        self.topics = Topics(loop, master, advertise_window, self.fast)
+        self.topics = Topics(loop, master, advertise_window, self.fast, publisher_linger)
         self.services = Services(loop, master, None, service_timeout, call_timeout)
         self.services.rosapi = RosApi(policy, master, RosParams(), _now, self.services.service_type, RosTypes())
         for name in ("advertise", "unadvertise", "publish", "subscribe", "unsubscribe"):

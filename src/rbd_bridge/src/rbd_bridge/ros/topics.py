@@ -1,7 +1,8 @@
 """Topics: one rospy.Publisher and one rospy.Subscriber per topic, shared by all clients.
 
 Publishing keeps the first second after an advertise for subscribers still connecting
-(:class:`rbd_bridge.core.fanout.ReplayWindow`, via rospy's public ``SubscribeListener``).
+(:class:`rbd_bridge.core.fanout.ReplayWindow`, via rospy's public ``SubscribeListener``);
+a publisher nobody uses lingers before it is unregistered (:mod:`rbd_bridge.core.publishers`).
 Messages from ROS reach the clients through rospy's receive threads here: an isolated
 message goes straight to idle clients from that thread (:func:`rbd_bridge.core.fanout.send_direct`),
 bursts and everyone else through the event loop, one wake-up per burst. The opt-in
@@ -18,6 +19,7 @@ from typing import Any, Optional
 import rospy
 
 from rbd_bridge.core.fanout import ReplayWindow, TopicMessage, prepare, send_direct
+from rbd_bridge.core.publishers import Publication, Publications
 from rbd_bridge.core.types import BridgeError, ConversionError, normalize_type
 from rbd_bridge.ros.msgconv import dict_to_msg, get_message_class, msg_to_dict
 
@@ -38,13 +40,16 @@ def message_class(type_name: str) -> Any:
         raise BridgeError(str(exc)) from None
 
 
-class _Pub:
-    def __init__(self, type_name: str, cls: Any, publisher: Any, window: Any) -> None:
-        self.type = type_name
+class _Pub(Publication):
+    def __init__(self, type_name: str, latch: bool, cls: Any, publisher: Any, window: Any) -> None:
+        super().__init__(type_name, latch)
         self.cls = cls
         self.publisher = publisher
         self.window = window
-        self.clients = set()
+
+    def revive(self) -> None:
+        with self.window.lock:
+            self.window.reopen()
 
 
 class _Sub:
@@ -79,15 +84,17 @@ class Topics:
         master: rosgraph.Master-like (topic types).
         window: Seconds after advertise whose publishes new subscribers still get (0 = off).
         fast: :class:`rbd_bridge.ros.fastpath.FastPath`, or None for plain rospy.
+        linger: Seconds a publisher nobody uses stays registered (0 = unregistered at once).
     """
 
-    def __init__(self, loop: Any, master: Any, window: float = 1.0, fast: Any = None) -> None:
+    def __init__(self, loop: Any, master: Any, window: float = 1.0, fast: Any = None, linger: float = 5.0) -> None:
         """No topic yet."""
         self.loop = loop
         self.master = master
         self.window = window
         self.fast = fast
-        self.pubs = {}
+        self.pubs = Publications(linger)
+        self._sweeping = None
         self.subs = {}
         self.rospy_read_messages = 0  # not locked: approximate under concurrent publishers
         self._inbox = collections.deque()
@@ -107,7 +114,9 @@ class Topics:
     def advertise(self, session: Any, topic: str, type_name: str, latch: bool, queue_size: int) -> None:
         """Register session as publisher of topic (one rospy.Publisher per topic)."""
         type_name, cls = message_class(type_name)
-        pub = self.pubs.get(topic)
+        pub, stale = self.pubs.join(topic, type_name, latch, session.client_id)
+        if stale is not None:
+            stale.publisher.unregister()
         if pub is None:
             existing = self.master_type(topic)
             if existing and existing not in (type_name, "*"):
@@ -118,29 +127,32 @@ class Topics:
                 publisher = self.fast.publisher(topic, cls, queue_size, latch, hook, window)
             else:
                 publisher = rospy.Publisher(topic, cls, queue_size=queue_size, latch=latch, subscriber_listener=hook)
-            pub = self.pubs[topic] = _Pub(type_name, cls, publisher, window)
-        elif pub.type != type_name:
-            raise BridgeError("advertise: %s is already advertised with type %s" % (topic, pub.type))
-        pub.clients.add(session.client_id)
+            self.pubs.add(topic, _Pub(type_name, latch, cls, publisher, window), session.client_id)
 
     def unadvertise(self, session: Any, topic: str) -> None:
-        """Drop session from topic's publishers; unregister when nobody is left."""
-        pub = self.pubs.get(topic)
-        if pub is not None:
-            pub.clients.discard(session.client_id)
-            if not pub.clients:
-                del self.pubs[topic]
-                pub.publisher.unregister()
+        """Drop session from topic's publishers; unregister after the linger when nobody is left."""
+        self._unregister(*self.pubs.leave(topic, session.client_id))
+
+    def _unregister(self, gone: Any, due: float) -> None:
+        """Unregister gone's publishers; sweep the lingering ones in due seconds (0 = none left)."""
+        for pub in gone:
+            pub.publisher.unregister()
+        if due and self._sweeping is None:
+            self._sweeping = self.loop.call_later(due, self._sweep)
+
+    def _sweep(self) -> None:
+        self._sweeping = None
+        self._unregister(*self.pubs.sweep())
 
     def publish(self, session: Any, topic: str, msg: Any) -> Any:
         """Publish msg (advertising implicitly with the type the master knows); return defaulted fields."""
-        pub = self.pubs.get(topic)
+        pub = self.pubs.held.get(topic)
         if pub is None or session.client_id not in pub.clients:
             type_name = pub.type if pub is not None else self.master_type(topic)
             if not type_name or type_name == "*":
                 raise BridgeError("publish: cannot infer the type of %s (advertise it first)" % topic)
-            self.advertise(session, topic, type_name, False, 100)
-            pub = self.pubs[topic]
+            self.advertise(session, topic, type_name, pub is not None and pub.latch, 100)
+            pub = self.pubs.held[topic]
         try:
             message, missing = dict_to_msg(pub.cls, msg, rospy.Time.now)
         except ConversionError as exc:
