@@ -59,6 +59,7 @@ class Monitor:
         from visualization_msgs.msg import MarkerArray
 
         from rbd_bringup.a1_monitor import HighCmdMonitor
+        from rbd_bringup.demo_report import StopOnsets
         from rbd_bringup.metrics import ContactMonitor, footprint_box_clearance
         from rbd_msgs.msg import CollisionState
 
@@ -71,9 +72,11 @@ class Monitor:
         self.people_log = {}
         self.state = ""
         self.state_log = []
-        self.onsets = []
+        self._stops = StopOnsets()
+        self.onsets = self._stops.onsets  # scan stamps from which the zone demanded a stop
         self.stop_points = []
         self.commands = []
+        self.velocities = []  # (wall time, (vx, vy, wz)) of every HighCmd: the direction of the motion
         self.boxes = {}  # placed boxes: name -> (x, y, yaw, size_x, size_y)
         self.boxes_seen = {}
         self.box_contacts = []
@@ -81,7 +84,6 @@ class Monitor:
         self._box_touching = set()
         self.avoidance = []  # the controller's avoidance events
         self.detours = []
-        self._collision = False
         rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_truth, queue_size=50)
         rospy.Subscriber("/rbd_sim/obstacles", MarkerArray, self.on_people, queue_size=5)
         rospy.Subscriber("/rbd_controller/state", String, self.on_state, queue_size=20)
@@ -91,12 +93,17 @@ class Monitor:
 
         rospy.Subscriber("/rbd_controller/detour", Path, self.on_detour, queue_size=5)
         # every HighCmd the A1 receives (wall time, commanded speed)
-        self.a1 = HighCmdMonitor(lcm_url, record=self.on_command, clock=time.time)
+        self.a1 = HighCmdMonitor(lcm_url, record=self.on_command, clock=time.time, record_velocity=self.on_velocity)
 
     def on_command(self, t, speed):
         """One HighCmd seen on LCM."""
         with self.lock:
             self.commands.append((t, speed))
+
+    def on_velocity(self, t, velocity):
+        """Direction of one HighCmd seen on LCM."""
+        with self.lock:
+            self.velocities.append((t, velocity))
 
     def on_truth(self, msg):
         """Ground-truth pose: path, contacts with people."""
@@ -162,11 +169,17 @@ class Monitor:
         say("state -> %s" % msg.data)
 
     def on_zone(self, msg):
-        """Scan stamps at which an intruder first entered the zone."""
-        if msg.collision and not self._collision and not msg.stale and not msg.error:
-            with self.lock:
-                self.onsets.append(msg.header.stamp.to_sec())
-        self._collision = msg.collision
+        """Scan stamps from which the zone demanded a stop.
+
+        A trick motion: any intruder; a guarded avoidance motion: an intruder on a side it heads
+        towards (demo_report.stop_demanded).
+        """
+        stamp = msg.header.stamp.to_sec()
+        with self.lock:
+            velocity = next((v for t, v in reversed(self.velocities) if t <= stamp), (0.0, 0.0, 0.0))
+            self._stops.update(stamp, msg.collision, msg.points, not msg.stale and not msg.error, velocity,
+                               self.state)
+            del self.velocities[:-200]
 
     def wait_state(self, states, timeout):
         """Block until the controller is in one of states; False on timeout."""

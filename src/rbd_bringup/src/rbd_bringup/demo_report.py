@@ -12,7 +12,8 @@ def reaction_times(collision_onsets: Sequence[float], commands: Sequence[Tuple[f
     """Software reaction time per collision onset: scan time → first zero-velocity command at the A1.
 
     Args:
-        collision_onsets: stamps of the scans that first contained an intruder [s].
+        collision_onsets: stamps of the scans from which the zone demanded a stop [s] (the rising
+            edges of :func:`stop_demanded`; a guarded motion away from an intruder is no stop).
         commands: (time [s], commanded speed magnitude) of every HighCmd seen on LCM, in order.
 
     Returns:
@@ -28,6 +29,95 @@ def reaction_times(collision_onsets: Sequence[float], commands: Sequence[Tuple[f
         if after:
             out.append(after[0] - onset)
     return out
+
+
+#: Side order of rbd_msgs/CollisionState's ``points`` (FRONT, LEFT, BACK, RIGHT).
+FRONT, LEFT, BACK, RIGHT = 0, 1, 2, 3
+#: Controller states whose motions are gated per zone side (DESIGN: an avoidance motion starts with
+#: something in the zone and may only move away from it), not stopped by the collision flag.
+GUARDED_STATES = ("ESCAPING", "DODGING")
+
+
+def heading_sides(vx: float, vy: float, wz: float, eps: float = 1e-3) -> List[int]:
+    """Zone sides a body velocity moves towards (a turn sweeps all four).
+
+    Args:
+        vx: forward velocity [m/s].
+        vy: leftward velocity [m/s].
+        wz: yaw rate [rad/s].
+        eps: smaller magnitudes count as zero.
+
+    Returns:
+        Side indices (FRONT, LEFT, BACK, RIGHT) in that order.
+    """
+    if abs(wz) > eps:
+        return [FRONT, LEFT, BACK, RIGHT]
+    sides = []
+    if vx > eps:
+        sides.append(FRONT)
+    elif vx < -eps:
+        sides.append(BACK)
+    if vy > eps:
+        sides.append(LEFT)
+    elif vy < -eps:
+        sides.append(RIGHT)
+    return sorted(sides)
+
+
+def stop_demanded(
+    collision: bool, points: Sequence[int], velocity: Tuple[float, float, float], state: str, point_threshold: int = 5
+) -> bool:
+    """Whether a zone reading demands that the current motion stops.
+
+    A trick motion (every state but the guarded ones) must stop on the collision flag. A guarded
+    avoidance motion (ESCAPING, DODGING) is allowed to move away from what is in the zone; it must
+    stop when a side it heads towards holds ``point_threshold`` critical points (rbd_lidar's rule).
+
+    Args:
+        collision: the reading's collision flag.
+        points: critical points per side (FRONT, LEFT, BACK, RIGHT).
+        velocity: (vx, vy, wz) the A1 was last commanded before the scan.
+        state: the main controller's state at the scan.
+        point_threshold: critical points that make a side occupied (rbd_lidar ``~point_threshold``).
+
+    Returns:
+        True when the zone demands zero velocity.
+    """
+    if state not in GUARDED_STATES:
+        return bool(collision)
+    return any(int(points[s]) >= point_threshold for s in heading_sides(*velocity))
+
+
+class StopOnsets:
+    """Scan stamps from which the zone demanded a stop: the rising edges of :func:`stop_demanded`.
+
+    Args:
+        point_threshold: critical points that make a side occupied (rbd_lidar ``~point_threshold``).
+    """
+
+    def __init__(self, point_threshold: int = 5) -> None:
+        self.point_threshold = int(point_threshold)
+        self.onsets = []  # type: List[float]
+        self._demanded = False
+
+    def update(self, stamp: float, collision: bool, points: Sequence[int], valid: bool,
+               velocity: Tuple[float, float, float], state: str) -> bool:
+        """One zone reading; True (and its stamp appended to :attr:`onsets`) when it starts a demanded stop.
+
+        Args:
+            stamp: the scan's stamp [s].
+            collision: the reading's collision flag.
+            points: critical points per side.
+            valid: False for a stale or erroneous reading (never an onset: it is a sensor stop).
+            velocity: (vx, vy, wz) last commanded to the A1 at or before the scan.
+            state: the main controller's state.
+        """
+        demanded = valid and stop_demanded(collision, points, velocity, state, self.point_threshold)
+        onset = demanded and not self._demanded
+        self._demanded = demanded
+        if onset:
+            self.onsets.append(stamp)
+        return onset
 
 
 def percentile(values: Sequence[float], q: float) -> Optional[float]:
