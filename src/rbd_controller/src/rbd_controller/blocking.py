@@ -1,10 +1,14 @@
 """What blocks the robot: static (a wall, a bag put down) or moving (a person). ROS-free.
 
 Fed with the critical points of every scan (rbd_lidar's ``collision_points``) in the map
-frame while the robot stands stopped. The blocker is *static* when its points lie on the LiDAR
-map (occupied cells) or when the point set stayed where it was for ``static_after`` seconds;
-*moving* as soon as the set moved (its points are no longer near the earlier ones, or its
-centroid shifted). People are waited for, as the thesis robot does; only static blockers start
+frame while the robot stands stopped. The blocker is *moving* as soon as the set moved (its
+points are no longer near the earlier ones, or its centroid shifted), whatever the map says;
+*static* when the point set stayed where it was for ``static_after`` seconds, or already after
+``map_confirm`` seconds when its points lie on the LiDAR map (occupied cells). The map alone is no
+proof: it is built live from the scans (rbd_localization's log-odds map), so a visitor who walks
+the same loop, or stood somewhere while the map grew, is on it too; being unmoved for
+``map_confirm`` (a person walking at 0.3 m/s or faster has moved by more than ``max_shift``)
+is what makes the map's verdict count. People are waited for, as the thesis robot does; only static blockers start
 the avoidance. A person who stands still for ``static_after`` counts as static: the avoidance
 then steps away from them and walks around, never towards (the position controller's zone
 guard), and a person who starts to move again is classified moving at the next scan.
@@ -54,7 +58,10 @@ class BlockClassifier:
             noise ±30 mm plus the robot's own pose noise).
         min_match: fraction of points (both ways) that must match for "unchanged".
         max_shift: centroid shift that counts as motion [m].
-        map_fraction: fraction of points on occupied map cells that makes them static at once.
+        map_fraction: fraction of points on occupied map cells that makes them static after
+            ``map_confirm``.
+        map_confirm: seconds points on the map must stay unmoved to count as static [s] (capped
+            at static_after).
         horizon: scans older than this are forgotten [s].
         max_gap: scans without blocking points for longer than this end the observation [s].
 
@@ -69,10 +76,12 @@ class BlockClassifier:
         min_match: float = 0.6,
         max_shift: float = 0.12,
         map_fraction: float = 0.7,
+        map_confirm: float = 0.5,
         horizon: float = 10.0,
         max_gap: float = 1.5,
     ) -> None:
-        for name, v in (("static_after", static_after), ("match_radius", match_radius), ("horizon", horizon)):
+        for name, v in (("static_after", static_after), ("match_radius", match_radius), ("horizon", horizon),
+                        ("map_confirm", map_confirm)):
             if not math.isfinite(v) or v <= 0.0:
                 raise ValueError("%s must be a finite number > 0, got %r" % (name, v))
         self.static_after = float(static_after)
@@ -80,6 +89,7 @@ class BlockClassifier:
         self.min_match = float(min_match)
         self.max_shift = float(max_shift)
         self.map_fraction = float(map_fraction)
+        self.map_confirm = min(float(map_confirm), self.static_after)
         self.horizon = max(float(horizon), self.static_after + 1.0)
         self.max_gap = float(max_gap)
         self.scans = []  # type: List[Tuple[float, np.ndarray]]
@@ -116,11 +126,6 @@ class BlockClassifier:
             self.reason = "no blocking points"
             return CLEAR
         t_last, last = self.scans[-1]
-        if occupied is not None:
-            on_map = sum(1 for x, y in last.tolist() if occupied(x, y)) / float(len(last))
-            if on_map >= self.map_fraction:
-                self.reason = "%.0f %% of the blocking points are on the LiDAR map" % (100.0 * on_map)
-                return STATIC
         centre = last.mean(axis=0)
         oldest = t_last
         next_check = 0.0  # compare with about ten scans per static_after, not every one
@@ -136,7 +141,7 @@ class BlockClassifier:
             if t_last - t < next_check:
                 oldest = t
                 continue
-            next_check = t_last - t + self.static_after / 10.0
+            next_check = t_last - t + min(self.static_after / 10.0, self.map_confirm / 2.0)
             shift = float(np.hypot(*(pts.mean(axis=0) - centre)))
             fwd = near_fraction(last, pts, self.match_radius)
             bwd = near_fraction(pts, last, self.match_radius)
@@ -151,8 +156,15 @@ class BlockClassifier:
                     return MOVING
                 break  # something else stood there before
             oldest = t
-        if t_last - oldest >= self.static_after:
-            self.reason = "blocking points unmoved for %.1f s" % (t_last - oldest)
+        unmoved = t_last - oldest
+        if occupied is not None and unmoved >= self.map_confirm:
+            on_map = sum(1 for x, y in last.tolist() if occupied(x, y)) / float(len(last))
+            if on_map >= self.map_fraction:
+                self.reason = "%.0f %% of the blocking points are on the LiDAR map, unmoved for %.1f s" % (
+                    100.0 * on_map, unmoved)
+                return STATIC
+        if unmoved >= self.static_after:
+            self.reason = "blocking points unmoved for %.1f s" % unmoved
             return STATIC
-        self.reason = "observed for %.1f s of %.1f s" % (t_last - oldest, self.static_after)
+        self.reason = "observed for %.1f s of %.1f s" % (unmoved, self.static_after)
         return UNKNOWN
