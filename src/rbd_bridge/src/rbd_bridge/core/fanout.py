@@ -1,10 +1,4 @@
-"""One topic message on its way to many clients: encode once, send directly or queue; replay window.
-
-ROS-free. The ROS edge wraps each received message in a :class:`TopicMessage` and calls
-:func:`prepare` (encode once per compression some subscriber wants) and
-:func:`send_direct` (idle clients get the finished frame at once); the sessions queue the
-rest. :class:`ReplayWindow` is the rule for publishes right after an advertise.
-"""
+"""One topic message on its way to many clients: encode once, send directly or queue; replay window. ROS-free."""
 
 import collections
 import json
@@ -15,7 +9,7 @@ from typing import Any, Callable, Iterable, List
 
 from rbd_bridge.core import encoding
 
-__all__ = ["TopicMessage", "ReplayWindow", "prepare", "send_direct"]
+__all__ = ["TopicMessage", "ReplayWindow", "prepare", "send_direct", "deliver"]
 
 _log = logging.getLogger("rbd_bridge")
 
@@ -103,6 +97,16 @@ def send_direct(message: TopicMessage, sessions: Iterable[Any]) -> List[Any]:
         if not sent:
             rest.append(session)
     return rest
+
+
+def deliver(message: TopicMessage, sessions: Iterable[Any], subscribed: Any) -> None:
+    """Hand message to each of sessions still in subscribed (its throttle and queue decide); errors are logged."""
+    for session in sessions:
+        if session in subscribed:
+            try:
+                session.deliver(message.topic, message)
+            except Exception:
+                _log.exception("delivery to client %s failed", session.client_id)
 
 
 class ReplayWindow:

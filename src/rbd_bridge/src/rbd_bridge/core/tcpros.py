@@ -1,10 +1,7 @@
-"""Reading a TCPROS topic stream on an asyncio event loop (no rospy, no thread).
+"""Reading a TCPROS topic stream (4-byte little-endian length, then the message) on an asyncio loop.
 
-After its handshake, a TCPROS topic connection carries messages, each a 4-byte
-little-endian length followed by that many bytes of serialized message.
-:class:`TcprosFramer` cuts a byte stream into those payloads; :class:`LoopReader` feeds it
-from a connected socket registered with the event loop (non-blocking reads in the loop's
-own thread), and hands every batch of complete payloads to a callback.
+:class:`TcprosFramer` cuts the stream into payloads; :class:`LoopReader` feeds it from a
+socket watched by the loop (non-blocking reads in the loop's thread). No rospy, no thread.
 """
 
 import logging

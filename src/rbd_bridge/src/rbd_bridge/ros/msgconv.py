@@ -1,21 +1,11 @@
-"""ROS message <-> JSON-ready dict conversion with rosbridge v2 semantics.
+"""ROS message <-> JSON-ready dict conversion with rosbridge v2 semantics (README, Message mapping).
 
-Needs only genpy message classes (no master). Rules (as rosbridge does them):
-
-- ``time`` / ``duration`` <-> ``{"secs": int, "nsecs": int}``;
-- ``uint8[]`` / ``char[]`` (also fixed-size) go out as base64 strings and come in as base64
-  strings or lists of ints;
-- NaN / +-Inf go out as ``null`` (``null`` coming in for a float field means NaN);
-- an int is accepted for a float field; 64-bit ints stay exact (Python ints);
-- missing fields take their defaults (reported back as a warning), unknown fields are
-  rejected, ``header.stamp`` is filled with the current time when the header or its stamp is
-  missing.
-
-Converters are compiled once per message class and cached.
+Needs only genpy message classes (no master); converters are compiled once per class and cached.
 """
 
 import base64
 import binascii
+import functools
 import math
 import threading
 import time
@@ -100,16 +90,14 @@ def _time_out(value: Any) -> Any:
     return {"secs": value.secs, "nsecs": value.nsecs}
 
 
-def _b64(value: Any) -> Any:
+def _raw_bytes(value: Any) -> Any:
     if isinstance(value, str):  # old genpy hands out str for uint8[]
         value = value.encode("latin-1")
-    return base64.b64encode(bytes(value)).decode("ascii")
-
-
-def _raw_bytes(value: Any) -> Any:
-    if isinstance(value, str):
-        value = value.encode("latin-1")
     return bytes(value)
+
+
+def _b64(value: Any) -> Any:
+    return base64.b64encode(_raw_bytes(value)).decode("ascii")
 
 
 _out_cache = {}
@@ -128,10 +116,7 @@ def _compile_out(cls: Any, binary: bool) -> Any:
             conv = _raw_bytes if binary else _b64
         elif base in _FLOATS:
             if is_array:
-                if binary:
-                    conv = _typed(base)
-                else:
-                    conv = _float_list
+                conv = _typed(base) if binary else _float_list
             elif not binary:
                 conv = _finite
         elif base in ("time", "duration"):
@@ -324,20 +309,13 @@ def _compile_in(cls: Any) -> Any:
             elem = _time_in(base)
         else:
             nested = _nested_class(base)
-            elem = _nested_in(nested)
+            elem = functools.partial(_fill, nested)
             if nested._type == "std_msgs/Header" and not is_array:
                 header_slot = name
         fields[name] = _array_in(elem, fixed) if is_array else elem
     plan = (fields, header_slot)
     _in_cache[cls] = plan
     return plan
-
-
-def _nested_in(nested_cls: Any) -> Any:
-    def conv(value: Any, path: str, ctx: Any) -> Any:
-        return _fill(nested_cls, value, path, ctx)
-
-    return conv
 
 
 def _fill(cls: Any, data: Any, path: str, ctx: Any) -> Any:
