@@ -129,7 +129,6 @@ class Session:
         self.services = set()
         self._fragments = encoding.Reassembler()
         self._ids = itertools.count(1)
-        self.received = 0
         self.errors = 0
         self.max_message_size = None
         # set by a transport that can send a frame at once, from any thread:
@@ -140,17 +139,16 @@ class Session:
 
     # ----------------------------------------------------------------- input
 
-    def receive(self, data: Any, _depth: int = 0) -> None:
+    def receive(self, data: Any) -> None:
         """Handle one frame from the client (str or bytes). Never raises."""
         if self.closed:
             return
-        self.received += 1
         try:
             frame = self._decode(data)
         except BridgeError as exc:
             self._rejected_frame(exc, {})
             return
-        self._handle(frame, _depth)
+        self._handle(frame, 0)
 
     def _handle(self, frame: Dict[str, Any], depth: int) -> None:
         try:
@@ -305,7 +303,6 @@ class Session:
         except encoding.DecodeError as exc:
             raise BridgeError("fragment: %s" % exc) from None
         if text is not None:
-            self.received -= 1
             self._handle(self._decode(text), depth + 1)
 
     def _op_set_level(self, frame: Dict[str, Any]) -> None:

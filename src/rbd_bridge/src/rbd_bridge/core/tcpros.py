@@ -88,7 +88,6 @@ class LoopReader:
         self.on_close = on_close
         self.framer = TcprosFramer()
         self.closed = False
-        self.bytes = 0
         self.messages = 0
         self._fd = sock.fileno()
         self._rbuf = bytearray(_READ_SIZE)
@@ -130,7 +129,6 @@ class LoopReader:
             if n == 0:
                 self.stop(None)
                 return
-            self.bytes += n
             if not self.feed(view[:n]) or n < _READ_SIZE:
                 return
 

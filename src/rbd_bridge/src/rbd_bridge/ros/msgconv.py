@@ -18,18 +18,10 @@ from rbd_bridge.core.types import ConversionError, TypedArray, normalize_type
 
 __all__ = ["get_message_class", "get_service_class", "msg_to_dict", "dict_to_msg", "message_typedefs"]
 
-_INT_RANGES = {
-    "int8": (-(2**7), 2**7 - 1),
-    "byte": (-(2**7), 2**7 - 1),
-    "uint8": (0, 2**8 - 1),
-    "char": (0, 2**8 - 1),
-    "int16": (-(2**15), 2**15 - 1),
-    "uint16": (0, 2**16 - 1),
-    "int32": (-(2**31), 2**31 - 1),
-    "uint32": (0, 2**32 - 1),
-    "int64": (-(2**63), 2**63 - 1),
-    "uint64": (0, 2**64 - 1),
-}
+_INT_RANGES = {"byte": (-(2**7), 2**7 - 1), "char": (0, 2**8 - 1)}  # ROS 1: byte is int8, char is uint8
+for _bits in (8, 16, 32, 64):
+    _INT_RANGES["int%d" % _bits] = (-(2 ** (_bits - 1)), 2 ** (_bits - 1) - 1)
+    _INT_RANGES["uint%d" % _bits] = (0, 2**_bits - 1)
 _FLOATS = ("float32", "float64")
 _BINARY = ("uint8", "char")
 
