@@ -21,7 +21,7 @@ class TopicMessage:
     ``raw()`` gives (serialized bytes, secs, nsecs) for ``cbor-raw``.
     """
 
-    __slots__ = ("topic", "_to_dict", "_raw", "_frames", "latched", "_wire")
+    __slots__ = ("topic", "_to_dict", "_raw", "_frames", "latched", "wired")
 
     def __init__(
         self, topic: str, to_dict: Callable[..., Any], raw: Callable[..., Any] = None, latched: Any = False
@@ -32,7 +32,7 @@ class TopicMessage:
         self._raw = raw
         self._frames = {}
         self.latched = latched
-        self._wire = {}
+        self.wired = {}  # the transport's frames by compression (see wire)
 
     def frame(self, compression: str) -> Any:
         """Return the whole ``publish`` frame (str for none/png, bytes for cbor*)."""
@@ -43,9 +43,9 @@ class TopicMessage:
 
     def wire(self, compression: str, make: Callable[[Any], bytes]) -> bytes:
         """The frame as the transport sends it (``make(frame)``, cached: one transport per process)."""
-        wire = self._wire.get(compression)
+        wire = self.wired.get(compression)
         if wire is None:
-            wire = self._wire[compression] = make(self.frame(compression))
+            wire = self.wired[compression] = make(self.frame(compression))
         return wire
 
     def _encode(self, compression: str) -> Any:

@@ -304,7 +304,7 @@ class _Connection(asyncio.Protocol):
         sock = self.sock
         if sock is None or self.paused or self.closing or self.proto is None:
             return False
-        frame = message.wire(compression, wire)
+        frame = message.wired.get(compression) or message.wire(compression, wire)  # (no call per client)
         with self.lock:
             if self.closing or self.paused or self.head is not None or len(self.out):
                 return False
