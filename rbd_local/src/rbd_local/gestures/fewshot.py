@@ -30,7 +30,7 @@ nothing is learned from the visitor but the shows themselves.
 
 import numpy as np
 
-from rbd_local.gestures.hand import MIDDLE_MCP, PALM, WRIST
+from rbd_local.gestures import features
 
 NONE = "none"
 POINTS = 16
@@ -63,11 +63,7 @@ def embed(window: np.ndarray) -> np.ndarray:
         raise ValueError("window must be (T>=4, 21, 2|3), got %s" % (w.shape,))
     if not np.all(np.isfinite(w)):
         raise ValueError("window contains NaN or infinite key points")
-    xy = w[:, :, :2]
-    size = float(np.median(np.linalg.norm(xy[:, MIDDLE_MCP] - xy[:, WRIST], axis=1)))
-    if size < 1e-6:
-        raise ValueError("degenerate hand: zero size")
-    path = (xy[:, list(PALM)].mean(axis=1) - xy[0, list(PALM)].mean(axis=0)) / size
+    path, _ = features.palm_path(w)
     n = len(path)
     cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
     total = cum[-1]

@@ -28,6 +28,8 @@ RANDOM_KINDS = ("static", "random_walk", "random_points")
 UNKNOWN_KINDS = ("swipe_left", "swipe_up", "diagonal", "vertical_wave", "push_towards", "fist_pump")
 NONE_KINDS = RANDOM_KINDS + UNKNOWN_KINDS
 DEFAULT_SAMPLES = 24
+#: Share of the window a motion takes (uniform in this range).
+ACTIVITY = (0.35, 1.0)
 IMAGE_SIZE = (640, 480)
 
 
@@ -36,8 +38,8 @@ def _ease(tau: np.ndarray) -> np.ndarray:
 
 
 def _activity(rng: np.random.Generator, t: np.ndarray) -> np.ndarray:
-    """Gesture progress in [0, 1]: the gesture fills 60-100 % of the window."""
-    frac = rng.uniform(0.6, 1.0)
+    """Gesture progress in [0, 1]: the gesture fills :data:`ACTIVITY` of the window."""
+    frac = rng.uniform(*ACTIVITY)
     start = rng.uniform(0.0, 1.0 - frac)
     return np.clip((t - start) / frac, 0.0, 1.0)
 
