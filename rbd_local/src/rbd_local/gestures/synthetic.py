@@ -30,6 +30,8 @@ NONE_KINDS = RANDOM_KINDS + UNKNOWN_KINDS
 DEFAULT_SAMPLES = 24
 #: Share of the window a motion takes (uniform in this range).
 ACTIVITY = (0.35, 1.0)
+#: Largest camera shake: standard deviation of a shift of the whole hand per frame [hand sizes].
+SHAKE = 0.1
 IMAGE_SIZE = (640, 480)
 
 
@@ -136,6 +138,7 @@ def random_hand(rng: np.random.Generator) -> dict:
         "curl": _random_curl(rng),
         "depth": rng.normal(0.0, 0.1, NUM_LANDMARKS),
         "jitter": rng.uniform(0.01, 0.05),
+        "shake": rng.uniform(0.0, SHAKE),
     }
 
 
@@ -179,6 +182,7 @@ def generate(
     pts = np.einsum("nij,nkj->nki", rot, shapes) * (size * scale)[:, None, None]
     pts += np.asarray(start) + path[:, None, :] * size
     pts += rng.normal(0.0, jitter * size, pts.shape)
+    pts += rng.normal(0.0, hand.get("shake", 0.0) * size, (samples, 1, 2))  # the camera shakes
     out = np.empty((samples, NUM_LANDMARKS, 3))
     out[:, :, :2] = pts
     out[:, :, 2] = depth * size * scale[:, None] + rng.normal(0.0, jitter * size, (samples, NUM_LANDMARKS))
