@@ -3,7 +3,8 @@
 Embedding (:func:`embed`) of one classifier window of key points:
 
 1. the palm centre's path, in units of the hand's size (wrist to middle-finger base), so the
-   position and the distance of the hand do not matter;
+   position and the distance of the hand do not matter, smoothed against camera shake
+   (:func:`~rbd_local.gestures.features.palm_path`, the classifier's path too);
 2. the *active* part of the path: from where 4 % of the path length is covered to where
    96 % is, so a gesture made early or late in the window, fast or slowly, gives the same
    points; it is resampled to :data:`POINTS` points evenly spaced in time;
