@@ -286,10 +286,24 @@ class SyntheticLidarTest(unittest.TestCase):
         self.assertGreater(st.points[CollisionState.FRONT], 5)
         type(self).cmd = None
         self.cmd_pub.publish(Twist())
+        # Standing still with the person still inside the walking zone: the collision found while
+        # walking is held (~hold_when_stopped) as long as they stay, though the rest zone is clear.
+        self.assertTrue(all(s.collision for s in self.state_of_next("near", 20)))
+        # They step away: released; back at 0.8 m while the robot stands: clear (the rest zone).
+        self.settle("clear", False)
         self.settle("near", False)
+        # Without the hold, the rest zone releases the walking collision at once (stop-and-go).
+        client = dynamic_reconfigure.client.Client("/rbd_lidar", timeout=10)
+        client.update_configuration({"hold_when_stopped": False})
+        type(self).cmd = Twist()
+        self.cmd.linear.x = 0.3
+        self.settle("near", True)
+        type(self).cmd = None
+        self.cmd_pub.publish(Twist())
+        self.settle("near", False)
+        client.update_configuration({"hold_when_stopped": True})
 
         # dynamic_reconfigure: a 0.9 m front zone catches it at rest; back to 0.7 m clears it.
-        client = dynamic_reconfigure.client.Client("/rbd_lidar", timeout=10)
         client.update_configuration({"zone_front": 0.9})
         self.settle("near", True)
         client.update_configuration({"zone_front": 0.7})
