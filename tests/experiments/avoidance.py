@@ -392,6 +392,8 @@ def exp_detect(ctx):
     zone = ctx.zone()
     watch = Watch()
     place = rospy.ServiceProxy("/rbd_sim/place_box", PlaceBox)
+    # Run first on a fresh stack (``--only detect``), the controller may not be up yet.
+    rospy.wait_for_service("/rbd_controller/em_stop", 60.0)
     rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)(True)
     try:
         if not wait_for(lambda: watch.pose() is not None and watch.state == "EMERGENCY_STOP", 10.0):
