@@ -39,6 +39,30 @@ def test_bad_windows_raise_value_error(bad):
         features.window_features(bad)
 
 
+def test_palm_path_smoother_keeps_steady_motion_and_damps_frame_jitter():
+    n = synthetic.DEFAULT_SAMPLES
+    s = features.smoother(n, 1.0)
+    line = np.stack([np.linspace(0.0, 3.0, n), np.linspace(1.0, -2.0, n)], axis=1)
+    np.testing.assert_allclose(s @ line, line, atol=1e-9)  # a steady motion, ends included, is not pulled in
+    noise = np.random.default_rng(1).normal(0.0, 1.0, (n, 4000))
+    assert np.std((s @ noise)[3:-3]) < 0.6 and np.std((s @ noise)[[0, -1]]) < 1.0  # and never amplified
+    np.testing.assert_allclose(features.smoother(n, 0.0), np.eye(n))
+
+
+def test_features_tolerate_a_shaking_camera(shipped_model):
+    # a camera that shakes moves all 21 key points together by a few pixels each frame
+    rng = np.random.default_rng(11)
+    ok = total = 0
+    for kind in ("swipe_right", "push_down", "circle"):
+        for _ in range(20):
+            w = synthetic.generate(kind, rng)
+            size = features.hand_size(w[0])
+            w[:, :, :2] += rng.normal(0.0, 0.1 * size, (len(w), 1, 2))
+            ok += shipped_model.decide(shipped_model.predict_proba(w))[0] == kind
+            total += 1
+    assert ok >= 0.9 * total, "%d of %d shaky windows recognised" % (ok, total)
+
+
 def test_resample_is_linear_in_time():
     times = np.array([0.0, 0.1, 0.3])
     frames = np.zeros((3, 21, 3))

@@ -112,3 +112,26 @@ def test_entry_points_exist():
     for target in scripts.values():
         module, func = target.split(":")
         assert callable(getattr(importlib.import_module(module), func))
+
+
+def test_evaluation_clip_cache_tracks_once_and_gives_the_same_key_points(tmp_path):
+    from rbd_local import evaluation
+
+    kp = np.arange(4 * 21 * 3, dtype=np.float64).reshape(4, 21, 3)
+    kp[1] = np.nan  # a frame without a hand stays one
+    calls = []
+
+    def make():
+        calls.append(1)
+        return [evaluation.Clip("circle", np.array([0.0, 0.1, 0.2, 0.3]), kp, "15 fps"),
+                evaluation.Clip("still", np.array([0.0, 0.5]), kp[:2], "15 fps")]
+
+    first = evaluation.cached_clips(str(tmp_path), "key a", make)
+    again = evaluation.cached_clips(str(tmp_path), "key a", make)
+    assert len(calls) == 1 and [c.kind for c in again] == ["circle", "still"]
+    np.testing.assert_array_equal(again[0].keypoints, first[0].keypoints)  # NaN where NaN
+    np.testing.assert_array_equal(again[1].times, [0.0, 0.5])
+    assert again[0].condition == "15 fps" and again[0].detected == 3
+    evaluation.cached_clips(str(tmp_path), "key b", make)  # another key: tracked again
+    evaluation.cached_clips("", "key a", make)  # no cache directory: always tracked
+    assert len(calls) == 3

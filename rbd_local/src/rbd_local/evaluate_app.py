@@ -36,6 +36,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="seed of the clips")
     p.add_argument("--conditions", default="", help="comma-separated condition name prefixes (default: all)")
     p.add_argument("--photos", default="", help="cache directory of the opencv-doc photos")
+    p.add_argument("--cache", default="", help="keep the tracked key points of every clip set in this directory "
+                   "and reuse them (a rerun after a model change skips MediaPipe; the key covers the clips' "
+                   "code, photos, seed, plan, condition, enhancement and MediaPipe's version)")
     p.add_argument("--readme", help="README to write the table into")
     p.add_argument("--json", help="also write the raw numbers to this file")
     return p
@@ -53,6 +56,21 @@ def _taught_models(base: GestureModel, teach_clips: dict, shows: int) -> Gesture
     return model
 
 
+def _clip_code_version(photo_paths: list[str]) -> str:
+    """What tracked clips depend on besides their arguments: the clip and detector code, the photos, MediaPipe."""
+    import hashlib
+
+    import mediapipe
+
+    from rbd_local.gestures import detector, photo_clip
+
+    h = hashlib.sha256(mediapipe.__version__.encode())
+    for path in [realclips.__file__, photo_clip.__file__, detector.__file__, evaluation.__file__] + list(photo_paths):
+        with open(path, "rb") as fh:
+            h.update(fh.read())
+    return h.hexdigest()[:16]
+
+
 def evaluate(args: argparse.Namespace) -> list[dict]:
     """Run the evaluation; one result dictionary per table row."""
     import os
@@ -66,9 +84,14 @@ def evaluate(args: argparse.Namespace) -> list[dict]:
     sprites = evaluation.load_sprites([photos["handSrc.jpg"], photos["handDst.jpg"]])
     base = GestureModel.load(DEFAULT_MODEL)
     rows = []
+    version = _clip_code_version([photos["handSrc.jpg"], photos["handDst.jpg"]])
+
+    def tracked(plan: dict, cond: realclips.Condition, seed: int, enhance: bool) -> list:
+        key = "%s|%r|%r|%d|%s|complexity0" % (version, sorted(plan.items()), sorted(vars(cond).items()), seed, enhance)
+        return evaluation.cached_clips(args.cache, key, lambda: evaluation.make_clips(sprites, plan, cond, seed, det))
+
     with HandDetector(model_complexity=0) as det:
-        teach_clips = {name: evaluation.make_clips(sprites, {name: 5}, realclips.BASELINE, args.seed + 1, det)
-                       for name in TAUGHT}
+        teach_clips = {name: tracked({name: 5}, realclips.BASELINE, args.seed + 1, True) for name in TAUGHT}
         models = {n: _taught_models(base, teach_clips, n) for n in (3, 5)}
         wanted = [c.strip() for c in args.conditions.split(",") if c.strip()]
         plan = {g: args.per_gesture for g in realclips.BUILT_IN + tuple(TAUGHT)}
@@ -84,7 +107,7 @@ def evaluate(args: argparse.Namespace) -> list[dict]:
             for enhance, suffix in variants:
                 det.enhance_dark = enhance
                 t0 = time.monotonic()
-                clips = evaluation.make_clips(sprites, plan, cond, args.seed + 100 + k, det)
+                clips = tracked(plan, cond, args.seed + 100 + k, enhance)
                 builtin = evaluation.score(base, clips, {g: g for g in realclips.BUILT_IN})
                 row = {"condition": cond.name + suffix, "in_range": cond.in_range,
                        "detected": builtin["detected"], "frames": builtin["frames"],

@@ -7,6 +7,9 @@ is then replayed over the key points for every model to score, so a model taught
 clips is scored on others without running MediaPipe again.
 """
 
+import hashlib
+import os
+
 import numpy as np
 
 from rbd_local.gestures import realclips
@@ -62,6 +65,45 @@ def make_clips(sprites: list, plan: dict, cond: realclips.Condition, seed: int, 
             times, frames = realclips.make_clip(sprites, kind, cond, rng)
             out.append(Clip(kind, times, realclips.track_clip(detector, frames), cond.name))
     return out
+
+
+def save_clips(path: str, clips: list[Clip]) -> None:
+    """Write tracked clips to an ``.npz`` file (no pickles), atomically."""
+    data = {"kinds": np.array([c.kind for c in clips], dtype=str).reshape(-1),
+            "conditions": np.array([c.condition for c in clips], dtype=str).reshape(-1)}
+    for i, c in enumerate(clips):
+        data["times%d" % i] = np.asarray(c.times, dtype=np.float64)
+        data["keypoints%d" % i] = np.asarray(c.keypoints, dtype=np.float64)
+    tmp = path + ".part"
+    with open(tmp, "wb") as fh:
+        np.savez_compressed(fh, **data)
+    os.replace(tmp, path)
+
+
+def load_clips(path: str) -> list[Clip]:
+    """Read clips written by :func:`save_clips`."""
+    with np.load(path, allow_pickle=False) as data:
+        return [Clip(str(k), data["times%d" % i], data["keypoints%d" % i], str(c))
+                for i, (k, c) in enumerate(zip(data["kinds"], data["conditions"], strict=True))]
+
+
+def cached_clips(cache_dir: str, key: str, make: object) -> list[Clip]:
+    """The clips stored under ``key`` in ``cache_dir``, or ``make()``'s, stored there first.
+
+    Args:
+        cache_dir: directory of the cache ("" or None: no cache, always ``make()``).
+        key: everything the clips depend on (hashed into the file name).
+        make: callable returning the tracked clips.
+    """
+    if not cache_dir:
+        return make()
+    os.makedirs(cache_dir, exist_ok=True)
+    path = os.path.join(cache_dir, "clips-%s.npz" % hashlib.sha256(key.encode()).hexdigest()[:20])
+    if os.path.isfile(path):
+        return load_clips(path)
+    clips = make()
+    save_clips(path, clips)
+    return clips
 
 
 def replay(model: GestureModel, clip: Clip, min_consecutive: int = 2, cooldown_s: float = 1.5,

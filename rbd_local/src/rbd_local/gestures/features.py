@@ -12,6 +12,63 @@ from rbd_local.gestures.hand import FINGER_TIPS, MIDDLE_MCP, NUM_LANDMARKS, PALM
 
 KEYFRAMES = 6
 HARMONICS = 4
+#: Width (standard deviation) of the palm path's smoothing kernel [window samples]; 0 turns it off.
+SMOOTH_SAMPLES = 1.0
+
+_SMOOTHERS = {}
+
+
+def smoother(n: int, sigma: float) -> np.ndarray:
+    """The (n, n) matrix of a local-linear Gaussian smoother for a path of n samples.
+
+    Row i fits a straight line to the path by least squares with Gaussian weights of width
+    ``sigma`` samples around sample i and takes the line's value at i. Inside the path this is
+    a Gaussian blur; at both ends it is still unbiased for a steady motion (a plain blur would
+    pull the ends inwards). It uses only the samples of the window, so it delays nothing.
+    """
+    key = (int(n), float(sigma))
+    if key not in _SMOOTHERS:
+        idx = np.arange(n, dtype=np.float64)
+        if sigma <= 0 or n < 3:
+            mat = np.eye(n)
+        else:
+            mat = np.empty((n, n))
+            for i in range(n):
+                d = idx - i
+                w = np.exp(-0.5 * (d / sigma) ** 2)
+                s0, s1, s2 = w.sum(), (w * d).sum(), (w * d * d).sum()
+                # value at d = 0 of the weighted least-squares line through (d, x): sum_j a_j x_j
+                mat[i] = w * (s2 - s1 * d) / (s0 * s2 - s1 * s1)
+        _SMOOTHERS[key] = mat
+    return _SMOOTHERS[key]
+
+
+def palm_path(window: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The palm centre's smoothed path in hand sizes, starting at 0, and the hand size per frame.
+
+    The palm centre is the mean of the wrist and the four finger bases; the hand size is the
+    wrist to middle-finger base distance (its median over the window is the unit). The path is
+    smoothed with :func:`smoother` (:data:`SMOOTH_SAMPLES`): a camera that shakes, or key points
+    that jump from frame to frame, move the whole hand by a few pixels per frame, which a
+    gesture's features (path length, reversals, turning) would otherwise count as motion.
+
+    Args:
+        window: (T, 21, >=2) key points in pixels, finite (not checked here).
+
+    Returns:
+        ((T, 2) path [hand sizes], (T,) hand size per frame [pixels]).
+
+    Raises:
+        ValueError: on a degenerate (zero-size) hand.
+    """
+    xy = window[:, :, :2]
+    sizes = np.linalg.norm(xy[:, MIDDLE_MCP] - xy[:, WRIST], axis=1)
+    size = float(np.median(sizes))
+    if size < 1e-6:
+        raise ValueError("degenerate hand: zero size")
+    centre = xy[:, list(PALM)].mean(axis=1)
+    path = smoother(len(centre), SMOOTH_SAMPLES) @ ((centre - centre[0]) / size)
+    return path - path[0], sizes
 
 
 def feature_names() -> list[str]:
@@ -55,12 +112,7 @@ def window_features(window: np.ndarray) -> np.ndarray:
     if not np.all(np.isfinite(w)):
         raise ValueError("window contains NaN or infinite key points")
     xy = w[:, :, :2]
-    sizes = np.linalg.norm(xy[:, MIDDLE_MCP] - xy[:, WRIST], axis=1)
-    size = float(np.median(sizes))
-    if size < 1e-6:
-        raise ValueError("degenerate hand: zero size")
-    centre = xy[:, list(PALM)].mean(axis=1)
-    path = (centre - centre[0]) / size
+    path, sizes = palm_path(w)
     n = len(path)
     d = path[-1]
     steps = np.diff(path, axis=0)

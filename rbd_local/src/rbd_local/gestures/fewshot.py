@@ -3,7 +3,8 @@
 Embedding (:func:`embed`) of one classifier window of key points:
 
 1. the palm centre's path, in units of the hand's size (wrist to middle-finger base), so the
-   position and the distance of the hand do not matter;
+   position and the distance of the hand do not matter, smoothed against camera shake
+   (:func:`~rbd_local.gestures.features.palm_path`, the classifier's path too);
 2. the *active* part of the path: from where 4 % of the path length is covered to where
    96 % is, so a gesture made early or late in the window, fast or slowly, gives the same
    points; it is resampled to :data:`POINTS` points evenly spaced in time;
@@ -30,7 +31,7 @@ nothing is learned from the visitor but the shows themselves.
 
 import numpy as np
 
-from rbd_local.gestures.hand import MIDDLE_MCP, PALM, WRIST
+from rbd_local.gestures import features
 
 NONE = "none"
 POINTS = 16
@@ -63,11 +64,7 @@ def embed(window: np.ndarray) -> np.ndarray:
         raise ValueError("window must be (T>=4, 21, 2|3), got %s" % (w.shape,))
     if not np.all(np.isfinite(w)):
         raise ValueError("window contains NaN or infinite key points")
-    xy = w[:, :, :2]
-    size = float(np.median(np.linalg.norm(xy[:, MIDDLE_MCP] - xy[:, WRIST], axis=1)))
-    if size < 1e-6:
-        raise ValueError("degenerate hand: zero size")
-    path = (xy[:, list(PALM)].mean(axis=1) - xy[0, list(PALM)].mean(axis=0)) / size
+    path, _ = features.palm_path(w)
     n = len(path)
     cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
     total = cum[-1]

@@ -28,6 +28,10 @@ RANDOM_KINDS = ("static", "random_walk", "random_points")
 UNKNOWN_KINDS = ("swipe_left", "swipe_up", "diagonal", "vertical_wave", "push_towards", "fist_pump")
 NONE_KINDS = RANDOM_KINDS + UNKNOWN_KINDS
 DEFAULT_SAMPLES = 24
+#: Share of the window a motion takes (uniform in this range).
+ACTIVITY = (0.35, 1.0)
+#: Largest camera shake: standard deviation of a shift of the whole hand per frame [hand sizes].
+SHAKE = 0.1
 IMAGE_SIZE = (640, 480)
 
 
@@ -36,8 +40,8 @@ def _ease(tau: np.ndarray) -> np.ndarray:
 
 
 def _activity(rng: np.random.Generator, t: np.ndarray) -> np.ndarray:
-    """Gesture progress in [0, 1]: the gesture fills 60-100 % of the window."""
-    frac = rng.uniform(0.6, 1.0)
+    """Gesture progress in [0, 1]: the gesture fills :data:`ACTIVITY` of the window."""
+    frac = rng.uniform(*ACTIVITY)
     start = rng.uniform(0.0, 1.0 - frac)
     return np.clip((t - start) / frac, 0.0, 1.0)
 
@@ -134,6 +138,7 @@ def random_hand(rng: np.random.Generator) -> dict:
         "curl": _random_curl(rng),
         "depth": rng.normal(0.0, 0.1, NUM_LANDMARKS),
         "jitter": rng.uniform(0.01, 0.05),
+        "shake": rng.uniform(0.0, SHAKE),
     }
 
 
@@ -177,6 +182,7 @@ def generate(
     pts = np.einsum("nij,nkj->nki", rot, shapes) * (size * scale)[:, None, None]
     pts += np.asarray(start) + path[:, None, :] * size
     pts += rng.normal(0.0, jitter * size, pts.shape)
+    pts += rng.normal(0.0, hand.get("shake", 0.0) * size, (samples, 1, 2))  # the camera shakes
     out = np.empty((samples, NUM_LANDMARKS, 3))
     out[:, :, :2] = pts
     out[:, :, 2] = depth * size * scale[:, None] + rng.normal(0.0, jitter * size, (samples, NUM_LANDMARKS))

@@ -24,7 +24,6 @@ import threading
 import numpy as np
 
 from rbd_local.gestures import features
-from rbd_local.gestures.hand import MIDDLE_MCP, PALM, WRIST
 from rbd_local.gestures.model import GestureModel
 
 MIN_SHOW_EXTENT = 0.6  # hand sizes: a palm that stays within this in the best window made no gesture
@@ -36,12 +35,10 @@ def _path_stats(window: np.ndarray) -> tuple[float, float, float]:
 
     Lengths in hand sizes; the centre is the time of the motion's middle as a share of the window.
     """
-    xy = window[:, :, :2]
-    size = float(np.median(np.linalg.norm(xy[:, MIDDLE_MCP] - xy[:, WRIST], axis=1)))
-    centre = xy[:, list(PALM)].mean(axis=1)
-    steps = np.linalg.norm(np.diff(centre, axis=0), axis=1) / max(size, 1e-6)
+    path, _ = features.palm_path(window)
+    steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
     total = float(steps.sum())
-    extent = float(np.ptp(centre, axis=0).max()) / max(size, 1e-6)
+    extent = float(np.ptp(path, axis=0).max())
     if total <= 0:
         return 0.0, extent, 0.5
     mid = (np.arange(len(steps)) + 0.5) / len(steps)
@@ -84,9 +81,9 @@ def extract_show(times: np.ndarray, keypoints: np.ndarray, window_s: float, samp
             continue
         try:
             w = features.resample(t[start:end + 1], k[start:end + 1], samples)
-        except ValueError:
+            length, extent, centre = _path_stats(w)
+        except ValueError:  # too few frames, or a zero-size hand
             continue
-        length, extent, centre = _path_stats(w)
         candidates.append((length, abs(centre - 0.5), w, extent))
     if not candidates:
         return None

@@ -1,10 +1,4 @@
-"""One topic message on its way to many clients: encode once, send directly or queue; replay window.
-
-ROS-free. The ROS edge wraps each received message in a :class:`TopicMessage` and calls
-:func:`prepare` (encode once per compression some subscriber wants) and
-:func:`send_direct` (idle clients get the finished frame at once); the sessions queue the
-rest. :class:`ReplayWindow` is the rule for publishes right after an advertise.
-"""
+"""One topic message on its way to many clients: encode once, send directly or queue; replay window. ROS-free."""
 
 import collections
 import json
@@ -15,7 +9,7 @@ from typing import Any, Callable, Iterable, List
 
 from rbd_bridge.core import encoding
 
-__all__ = ["TopicMessage", "ReplayWindow", "prepare", "send_direct"]
+__all__ = ["TopicMessage", "ReplayWindow", "prepare", "send_direct", "deliver"]
 
 _log = logging.getLogger("rbd_bridge")
 
@@ -27,7 +21,7 @@ class TopicMessage:
     ``raw()`` gives (serialized bytes, secs, nsecs) for ``cbor-raw``.
     """
 
-    __slots__ = ("topic", "_to_dict", "_raw", "_frames", "latched", "_wire")
+    __slots__ = ("topic", "_to_dict", "_raw", "_frames", "latched", "wired")
 
     def __init__(
         self, topic: str, to_dict: Callable[..., Any], raw: Callable[..., Any] = None, latched: Any = False
@@ -38,7 +32,7 @@ class TopicMessage:
         self._raw = raw
         self._frames = {}
         self.latched = latched
-        self._wire = {}
+        self.wired = {}  # the transport's frames by compression (see wire)
 
     def frame(self, compression: str) -> Any:
         """Return the whole ``publish`` frame (str for none/png, bytes for cbor*)."""
@@ -49,9 +43,9 @@ class TopicMessage:
 
     def wire(self, compression: str, make: Callable[[Any], bytes]) -> bytes:
         """The frame as the transport sends it (``make(frame)``, cached: one transport per process)."""
-        wire = self._wire.get(compression)
+        wire = self.wired.get(compression)
         if wire is None:
-            wire = self._wire[compression] = make(self.frame(compression))
+            wire = self.wired[compression] = make(self.frame(compression))
         return wire
 
     def _encode(self, compression: str) -> Any:
@@ -103,6 +97,16 @@ def send_direct(message: TopicMessage, sessions: Iterable[Any]) -> List[Any]:
         if not sent:
             rest.append(session)
     return rest
+
+
+def deliver(message: TopicMessage, sessions: Iterable[Any], subscribed: Any) -> None:
+    """Hand message to each of sessions still in subscribed (its throttle and queue decide); errors are logged."""
+    for session in sessions:
+        if session in subscribed:
+            try:
+                session.deliver(message.topic, message)
+            except Exception:
+                _log.exception("delivery to client %s failed", session.client_id)
 
 
 class ReplayWindow:

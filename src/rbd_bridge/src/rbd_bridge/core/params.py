@@ -1,9 +1,4 @@
-"""Reading the node's numeric parameters the way rosbridge's launch files pass them.
-
-rosbridge_websocket.launch passes ``max_message_size`` as the text ``None`` when it is not
-set, and roslaunch hands every ``$(arg)`` over as a string or number. :func:`number` maps
-those forms to a value, the default, or a clear error.
-"""
+"""Node parameters as rosbridge's launch files pass them (``"None"``, strings, numbers). ROS-free."""
 
 from typing import Any, Callable, Optional
 

@@ -1,10 +1,4 @@
-"""The bridge's ROS publishers by topic, and the linger of one nobody uses any more (ROS-free).
-
-A publisher whose last client left stays ``linger`` seconds (0 = none) before the ROS edge
-unregisters it: a ROS subscriber whose connection meets an unregister is refused, and rospy
-then never connects it to the next advertise of the topic. An advertise with the same type
-and latching meanwhile takes it up again; another type or latching replaces it.
-"""
+"""The bridge's ROS publishers by topic, and the linger of one nobody uses any more (ROS-free; README)."""
 
 import time
 from typing import Any, Callable, List, Tuple

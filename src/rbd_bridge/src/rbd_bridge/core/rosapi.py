@@ -1,17 +1,9 @@
-"""rosapi services served in-process by the bridge (rosapi is not in Debian).
+"""rosapi (ROS 1) services served in-process for WebSocket clients only, filtered by the allow-lists. ROS-free.
 
-Clients call ``/rosapi/<name>`` with ``call_service`` exactly as with rosbridge_suite's
-rosapi node; request and response field names are rosapi's (ROS 1). The services are not
-registered with the ROS master: only WebSocket clients can reach them. Results are
-filtered through the bridge's allow-lists. Parameter values travel as JSON strings.
-
-ROS-free: ``RosApi`` needs a *graph* object with rosgraph.Master's XML-RPC methods
-(``getTopicTypes``, ``getSystemState``, ``lookupService``), a *params* object with
-``get(name)``, ``set(name, value)``, ``has(name)``, ``delete(name)``, ``search(name)``,
-``names()``, and a *types* object with ``typedefs(type_name, part)`` (rosapi ``TypeDef``
-dicts of a message, or of a service's ``"request"``/``"response"``) and
-``full_text(type_name)``, both raising ``ConversionError``; the node passes ROS-backed
-ones (:mod:`rbd_bridge.ros.graph`), tests may pass fakes.
+Needs a *graph* with rosgraph.Master's ``getTopicTypes``, ``getSystemState`` and
+``lookupService``; *params* with ``get``, ``set``, ``has``, ``delete``, ``search``
+(by name) and ``names()``; *types* with ``typedefs(type_name, part)`` and
+``full_text(type_name)``, raising ``ConversionError`` (:mod:`rbd_bridge.ros.graph`, or fakes).
 """
 
 import json
@@ -92,6 +84,36 @@ class RosApi:
         self.types = types
         self.now = now
         self.lookup_service_type = service_type
+        may_call, may_read, names = policy.may_call, policy.may_read_param, self._service_names
+        self._handlers = {
+            "topics": self._topics,
+            "topic_type": lambda a: {"type": dict(self._topic_types()).get(_str_arg(a, "topic"), "")},
+            "topics_for_type": lambda a: {"topics": [t for t, ty in self._topic_types() if ty == _str_arg(a, "type")]},
+            "topics_and_raw_types": self._topics_and_raw_types,
+            "services": lambda a: {"services": names()},
+            "service_type": lambda a: {"type": self._service_type_of(_str_arg(a, "service"))},
+            "services_for_type": lambda a: {
+                "services": [s for s in names() if self._service_type_of(s) == _str_arg(a, "type")]
+            },
+            "service_providers": lambda a: {"providers": self._on(a, "service", 2, may_call)},
+            "service_node": lambda a: {"node": (self._on(a, "service", 2, may_call) or [""])[0]},
+            "service_host": self._service_host,
+            "nodes": self._nodes,
+            "node_details": self._node_details,
+            "publishers": lambda a: {"publishers": self._on(a, "topic", 0, policy.may_see_topic)},
+            "subscribers": lambda a: {"subscribers": self._on(a, "topic", 1, policy.may_see_topic)},
+            "message_details": lambda a: self._details(a, ""),
+            "service_request_details": lambda a: self._details(a, "request"),
+            "service_response_details": lambda a: self._details(a, "response"),
+            "get_param": self._get_param,
+            "set_param": self._set_param,
+            "has_param": lambda a: {"exists": bool(self.params.has(self._param_name(a)))},
+            "delete_param": self._delete_param,
+            "search_param": self._search_param,
+            "get_param_names": lambda a: {"names": sorted(n for n in self.params.names() if may_read(n))},
+            "get_time": lambda a: {"time": dict(zip(("secs", "nsecs"), self.now()))},
+            "action_servers": self._action_servers,
+        }
 
     @staticmethod
     def handles(service: str) -> bool:
@@ -110,7 +132,7 @@ class RosApi:
             if len(args) > len(order):
                 raise RosApiError("rosapi/%s: too many arguments" % name)
             args = dict(zip(order, args))
-        return getattr(self, "_" + name)(args or {})
+        return self._handlers[name](args or {})
 
     # ------------------------------------------------------------ graph
 
@@ -134,16 +156,14 @@ class RosApi:
         except Exception:
             return ""
 
+    def _on(self, args: Any, key: str, part: int, allowed: Callable[[str], bool]) -> Any:
+        """The nodes of the system state's part (publishers, subscribers, providers) of an allowed name."""
+        name = _str_arg(args, key)
+        return _nodes_of(self.graph.getSystemState()[part], name) if allowed(name) else []
+
     def _topics(self, args: Any) -> Any:
         pairs = self._topic_types()
         return {"topics": [t for t, _ in pairs], "types": [ty for _, ty in pairs]}
-
-    def _topic_type(self, args: Any) -> Any:
-        return {"type": dict(self._topic_types()).get(_str_arg(args, "topic"), "")}
-
-    def _topics_for_type(self, args: Any) -> Any:
-        wanted = _str_arg(args, "type")
-        return {"topics": [t for t, ty in self._topic_types() if ty == wanted]}
 
     def _topics_and_raw_types(self, args: Any) -> Any:
         reply = self._topics(args)
@@ -155,36 +175,6 @@ class RosApi:
                 texts.append("")
         reply["typedefs_full_text"] = texts
         return reply
-
-    def _nodes_on(self, args: Any, part: int) -> Any:
-        topic = _str_arg(args, "topic")
-        return _nodes_of(self.graph.getSystemState()[part], topic) if self.policy.may_see_topic(topic) else []
-
-    def _publishers(self, args: Any) -> Any:
-        return {"publishers": self._nodes_on(args, 0)}
-
-    def _subscribers(self, args: Any) -> Any:
-        return {"subscribers": self._nodes_on(args, 1)}
-
-    def _services(self, args: Any) -> Any:
-        return {"services": self._service_names()}
-
-    def _service_type(self, args: Any) -> Any:
-        return {"type": self._service_type_of(_str_arg(args, "service"))}
-
-    def _services_for_type(self, args: Any) -> Any:
-        wanted = _str_arg(args, "type")
-        return {"services": [s for s in self._service_names() if self._service_type_of(s) == wanted]}
-
-    def _providers(self, args: Any) -> Any:
-        service = _str_arg(args, "service")
-        return _nodes_of(self.graph.getSystemState()[2], service) if self.policy.may_call(service) else []
-
-    def _service_providers(self, args: Any) -> Any:
-        return {"providers": self._providers(args)}
-
-    def _service_node(self, args: Any) -> Any:
-        return {"node": (self._providers(args) or [""])[0]}
 
     def _service_host(self, args: Any) -> Any:
         service = _str_arg(args, "service")
@@ -213,22 +203,11 @@ class RosApi:
         bases = set(t[:-5] for t in topics if t.endswith("/goal") and len(t) > 5)
         return {"action_servers": sorted(b for b in bases if all(b + s in topics for s in _ACTION_SUFFIXES))}
 
-    # ------------------------------------------------------------ types
-
-    def _details(self, args: Any, part: str = "") -> Any:
+    def _details(self, args: Any, part: str) -> Any:
         try:
             return {"typedefs": self.types.typedefs(_str_arg(args, "type"), part)}
         except ConversionError as exc:
             raise RosApiError(str(exc)) from None
-
-    def _message_details(self, args: Any) -> Any:
-        return self._details(args)
-
-    def _service_request_details(self, args: Any) -> Any:
-        return self._details(args, "request")
-
-    def _service_response_details(self, args: Any) -> Any:
-        return self._details(args, "response")
 
     # ------------------------------------------------------------ params
 
@@ -265,9 +244,6 @@ class RosApi:
         self.params.set(name, value)
         return {}
 
-    def _has_param(self, args: Any) -> Any:
-        return {"exists": bool(self.params.has(self._param_name(args)))}
-
     def _delete_param(self, args: Any) -> Any:
         name = self._param_name(args, write=True)
         if self.params.has(name):
@@ -277,10 +253,3 @@ class RosApi:
     def _search_param(self, args: Any) -> Any:
         found = self.params.search(_str_arg(args, "name")) or ""
         return {"global_name": found if found and self.policy.may_read_param(found) else ""}
-
-    def _get_param_names(self, args: Any) -> Any:
-        return {"names": sorted(n for n in self.params.names() if self.policy.may_read_param(n))}
-
-    def _get_time(self, args: Any) -> Any:
-        secs, nsecs = self.now()
-        return {"time": {"secs": secs, "nsecs": nsecs}}

@@ -1,9 +1,4 @@
-"""Allow-lists (glob patterns) and rosauth-compatible MAC authentication. ROS-free.
-
-The RoboDog default allow-list lets a WebSocket client send gestures and the operator
-heartbeat, read controller/LiDAR state, call the e-stop service and rosapi — nothing that
-moves the robot (DESIGN.md §5 invariant 4).
-"""
+"""Allow-lists (glob patterns; the RoboDog default moves nothing, DESIGN §5.4) and rosauth MACs. ROS-free."""
 
 import fnmatch
 import hashlib

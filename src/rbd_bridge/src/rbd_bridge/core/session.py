@@ -1,13 +1,9 @@
 """rosbridge v2 protocol session: parse, check, dispatch, merge subscriptions, queue output.
 
-ROS-free and transport-free. A :class:`Session` is driven from one thread (the event loop):
-``receive()`` takes client frames, a *backend* (:mod:`rbd_bridge.ros.backend`) does the ROS
-work: ``advertise``, ``unadvertise``, ``publish`` (returns the fields it defaulted),
-``subscribe`` (returns the type; then calls ``session.deliver``), ``unsubscribe``,
-``call_service`` (later ``done(ok, values)``), ``advertise_service``,
-``unadvertise_service``, ``service_response``, ``session_closed``, and ``begin_batch`` /
-``end_batch`` around the frames of one network read (it may hold its writes in between). Frames for the client go into a
-bounded :class:`rbd_bridge.core.outqueue.OutQueue` that the transport drains.
+ROS-free and transport-free, driven from the event loop thread: ``receive()`` takes client
+frames; a *backend* (:class:`rbd_bridge.ros.backend.RosBackend`, or a fake) does the ROS work
+(one method per op, ``session_closed``, and ``begin_batch`` / ``end_batch`` around the frames
+of one read). Frames for the client go into a bounded :class:`rbd_bridge.core.outqueue.OutQueue`.
 """
 
 import collections
@@ -41,7 +37,7 @@ class _TopicSub:
         self.fragment_size = None
         self.compression = "none"
         self.last = -1e18
-        self.pending = collections.deque()
+        self.pending = collections.deque(maxlen=0)
         self.timer = None
 
     def merge(self) -> None:
@@ -51,8 +47,7 @@ class _TopicSub:
         sizes = [o["fragment_size"] for o in opts if o["fragment_size"]]
         self.fragment_size = min(sizes) if sizes else None
         self.compression = opts[-1]["compression"]
-        while len(self.pending) > self.queue_length:
-            self.pending.popleft()
+        self.pending = collections.deque(self.pending, maxlen=self.queue_length)  # the newest kept
 
 
 def _get(frame: Dict[str, Any], key: str, kinds: Any, default: Any = None, required: bool = False) -> Any:
@@ -134,7 +129,6 @@ class Session:
         self.services = set()
         self._fragments = encoding.Reassembler()
         self._ids = itertools.count(1)
-        self.received = 0
         self.errors = 0
         self.max_message_size = None
         # set by a transport that can send a frame at once, from any thread:
@@ -145,17 +139,16 @@ class Session:
 
     # ----------------------------------------------------------------- input
 
-    def receive(self, data: Any, _depth: int = 0) -> None:
+    def receive(self, data: Any) -> None:
         """Handle one frame from the client (str or bytes). Never raises."""
         if self.closed:
             return
-        self.received += 1
         try:
             frame = self._decode(data)
         except BridgeError as exc:
             self._rejected_frame(exc, {})
             return
-        self._handle(frame, _depth)
+        self._handle(frame, 0)
 
     def _handle(self, frame: Dict[str, Any], depth: int) -> None:
         try:
@@ -207,9 +200,7 @@ class Session:
         if not self.authenticated and op != "auth":
             # as rosbridge: anything but auth on an unauthenticated connection ends it
             _log.warning("client %s (%s) sent %r before authenticating: closing", self.client_id, self.peer, op)
-            if self.close_cb is not None:
-                self.close_cb(1008, "authentication required")
-            self.close()
+            self._end(1008, "authentication required")
         elif op == "fragment":
             self._op_fragment(frame, depth)
         else:
@@ -262,8 +253,6 @@ class Session:
         if sub.queue_length <= 0:
             return
         sub.pending.append(message)
-        while len(sub.pending) > sub.queue_length:
-            sub.pending.popleft()
         if sub.timer is None:
             sub.timer = self.call_later(max(0.0, sub.last + sub.throttle - now), lambda: self._flush(topic))
 
@@ -314,7 +303,6 @@ class Session:
         except encoding.DecodeError as exc:
             raise BridgeError("fragment: %s" % exc) from None
         if text is not None:
-            self.received -= 1
             self._handle(self._decode(text), depth + 1)
 
     def _op_set_level(self, frame: Dict[str, Any]) -> None:
@@ -333,9 +321,7 @@ class Session:
         except AuthError as exc:
             _log.warning("client %s (%s) failed to authenticate: %s", self.client_id, self.peer, exc)
             self.status("error", str(exc), frame.get("id"))
-            if self.close_cb is not None:
-                self.close_cb(1008, "authentication failed")
-            self.close()
+            self._end(1008, "authentication failed")
             return
         self.authenticated = True
         _log.info("client %s (%s) authenticated", self.client_id, self.peer)
@@ -445,17 +431,14 @@ class Session:
                     reply["id"] = call_id
                 self.send(reply, fragment_size, compression)
 
-        if not self.policy.may_call(service):
-            _log.warning("client %s (%s): call_service %s denied by the allow-list", self.client_id, self.peer, service)
-            text = "service %s is not allowed by this bridge's allow-list" % service
-            self.status("error", "call_service %s: not allowed by this bridge's allow-list" % service, call_id)
-            done(False, text)  # a blocking client never hangs
-            return
         try:
+            if not self.policy.may_call(service):
+                _log.warning("client %s (%s): call_service %s denied", self.client_id, self.peer, service)
+                self._denied("call_service", service)
             self.backend.call_service(self, service, args, timeout if timeout and timeout > 0 else None, done)
         except BridgeError as exc:
             self.status("error", str(exc), call_id)
-            done(False, str(exc))
+            done(False, str(exc))  # a blocking client never hangs
 
     def _op_advertise_service(self, frame: Dict[str, Any]) -> None:
         service = _name(frame, "service")
@@ -479,6 +462,11 @@ class Session:
         self.backend.service_response(self, service, frame["id"], frame.get("values"), ok)
 
     # ----------------------------------------------------------------- teardown
+
+    def _end(self, code: int, reason: str) -> None:
+        if self.close_cb is not None:
+            self.close_cb(code, reason)
+        self.close()
 
     def close(self) -> None:
         """Release everything this client held in ROS (idempotent)."""

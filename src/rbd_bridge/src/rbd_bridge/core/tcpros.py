@@ -1,10 +1,7 @@
-"""Reading a TCPROS topic stream on an asyncio event loop (no rospy, no thread).
+"""Reading a TCPROS topic stream (4-byte little-endian length, then the message) on an asyncio loop.
 
-After its handshake, a TCPROS topic connection carries messages, each a 4-byte
-little-endian length followed by that many bytes of serialized message.
-:class:`TcprosFramer` cuts a byte stream into those payloads; :class:`LoopReader` feeds it
-from a connected socket registered with the event loop (non-blocking reads in the loop's
-own thread), and hands every batch of complete payloads to a callback.
+:class:`TcprosFramer` cuts the stream into payloads; :class:`LoopReader` feeds it from a
+socket watched by the loop (non-blocking reads in the loop's thread). No rospy, no thread.
 """
 
 import logging
@@ -91,7 +88,6 @@ class LoopReader:
         self.on_close = on_close
         self.framer = TcprosFramer()
         self.closed = False
-        self.bytes = 0
         self.messages = 0
         self._fd = sock.fileno()
         self._rbuf = bytearray(_READ_SIZE)
@@ -133,7 +129,6 @@ class LoopReader:
             if n == 0:
                 self.stop(None)
                 return
-            self.bytes += n
             if not self.feed(view[:n]) or n < _READ_SIZE:
                 return
 

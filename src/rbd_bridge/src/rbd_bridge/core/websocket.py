@@ -1,24 +1,12 @@
 """WebSocket transport on asyncio and wsproto, one :class:`rbd_bridge.core.session.Session` per client.
 
-wsproto (Sans-I/O) does the RFC 6455 work: the opening handshake (its ``WSConnection``),
-then framing, unmasking, message assembly, UTF-8 checking of text (invalid UTF-8 closes
-with 1007), ping/pong and close frames (its frame layer, ``FrameProtocol``; the event
-layer above it cost ~7 us more per message, measured). Around it stays the design that
-keeps the bridge fast: each network read is parsed once and its messages are handled in
-the same ``data_received`` call (no coroutine per frame), and frames to clients are
-written straight to the socket.
-
-wsproto's frame layer costs ~25 us per small frame (pure Python, a generator and objects
-per frame; the bridge's own parser took ~3.5 us), which failed the performance gate of
-issue 18. So the common frames a client sends - complete, final, masked text, binary,
-ping and pong frames without extension bits - are read by :meth:`_Connection._fast`; the
-first frame that is anything else (fragmented, close, unmasked, reserved bits or opcodes)
-hands the connection's stream to wsproto from that frame on, for good. Server frames are
-headers plus payload (:func:`wire`). A topic frame is framed once (:func:`wire`) and the same
-bytes go to every client; while a client's socket and asyncio's write buffer are full
-(``pause_writing``) its frames wait in its bounded
-:class:`rbd_bridge.core.outqueue.OutQueue`. No extension (permessage-deflate) is
-negotiated; clients fall back to plain frames, as RFC 6455 requires.
+wsproto does the handshake and any frame the fast parser (:meth:`_Connection._fast`) does
+not take: complete, final, masked text, binary, ping and pong frames are parsed here
+(wsproto's frame layer costs ~25 us a frame, the issue 18 gate); the first other frame
+hands the stream to wsproto for good. Each read is parsed once and handled in the same
+``data_received`` call; server frames are :func:`wire` (framed once per topic message),
+written straight to the socket or, while it is full, queued in the client's bounded
+:class:`rbd_bridge.core.outqueue.OutQueue`. No extension is negotiated.
 """
 
 import asyncio
@@ -316,7 +304,7 @@ class _Connection(asyncio.Protocol):
         sock = self.sock
         if sock is None or self.paused or self.closing or self.proto is None:
             return False
-        frame = message.wire(compression, wire)
+        frame = message.wired.get(compression) or message.wire(compression, wire)  # (no call per client)
         with self.lock:
             if self.closing or self.paused or self.head is not None or len(self.out):
                 return False

@@ -1,9 +1,6 @@
-"""The ROS backend the sessions talk to: topics, services and rosapi, optionally the fast path.
+"""The ROS backend of the sessions: topics (:mod:`rbd_bridge.ros.topics`), services, rosapi.
 
-All its methods run on the server's event loop thread (rospy callbacks hop to it with
-``call_soon_threadsafe``); blocking ROS calls (services, rosapi's master look-ups and
-parameters) run in the services' thread pool. The session-facing methods are those of
-:class:`rbd_bridge.ros.topics.Topics` and :class:`rbd_bridge.ros.services.Services`.
+Its methods run on the event loop thread; blocking ROS calls run in the services' pool.
 """
 
 from typing import Any

@@ -1,25 +1,15 @@
 """Opt-in patches of rospy internals that make the bridge faster (``~rospy_fast_path``, default on).
 
-Everything the bridge does to rospy's private parts is here, behind one switch; without
-it the bridge uses rospy as any node does (slower: a writer thread per subscriber
-connection, a receive thread per publisher connection).
-
-- **Into ROS** (direct writes). rospy's queued publisher hands every message to a
-  per-connection writer thread and yields the GIL (``time.sleep(0)``) on each publish. The
-  bridge's publishers have no rospy queue; each subscriber connection is wrapped in
-  :class:`_DirectConnection`: the event loop sends with a non-blocking ``send``; only what
-  the kernel does not take goes to a backlog of at most ``queue_size`` messages written by
-  that connection's own thread. The publishes decoded from one WebSocket read are held per
-  connection (the cork) and leave together (at most min(queue_size, ``_CORK_MESSAGES``)).
-- **Out of ROS** (direct reads, ``~direct_reads``). rospy still registers and makes each
-  TCPROS connection, handshake included; then its ``receive_loop`` is replaced: the thread
-  offers the socket to the event loop and ends, and the loop reads it
-  (:class:`rbd_bridge.core.tcpros.LoopReader`) and delivers in the same callback. A message
-  stays serialized until a client needs JSON or CBOR. If the take-over fails, rospy's own
-  receive loop serves that connection (exactly one of the two reads it).
+Everything the bridge does to rospy's private parts is here, behind one switch (README,
+Design). Into ROS: publisher connections are :class:`_DirectConnection` s (non-blocking
+sends from the loop, a bounded backlog per connection, publishes of one WebSocket read
+corked into one write). Out of ROS (``~direct_reads``): after rospy's handshake the event
+loop reads the socket (:class:`rbd_bridge.core.tcpros.LoopReader`); if that fails, rospy's
+own receive loop serves the connection.
 """
 
 import collections
+import concurrent.futures
 import functools
 import logging
 import socket
@@ -32,7 +22,7 @@ from rospy.exceptions import TransportTerminated
 from rospy.impl.tcpros_base import TCPROSTransport
 from rospy.topics import _PublisherImpl
 
-from rbd_bridge.core.fanout import TopicMessage, prepare, send_direct
+from rbd_bridge.core.fanout import TopicMessage, deliver, prepare, send_direct
 from rbd_bridge.core.tcpros import LoopReader
 from rbd_bridge.ros.msgconv import msg_to_dict
 
@@ -94,11 +84,7 @@ class _DirectConnection:
         cork = self._cork
         if cork is not None and cork.thread == threading.get_ident():
             with self._lock:
-                if self._error is not None:
-                    error, self._error = self._error, None
-                    raise error
-                if self._connection.done:
-                    raise TransportTerminated("connection closed")
+                self._check()
                 parts = self._parts
                 if parts is None:
                     self._parts = [data]
@@ -111,6 +97,14 @@ class _DirectConnection:
                     self._parts = False  # the limit: what is held leaves now, the rest writes through
                     self._write(b"".join(parts))
         return self._write(data)
+
+    def _check(self) -> None:
+        """Raise the writer thread's error, or TransportTerminated once closed (lock held)."""
+        if self._error is not None:
+            error, self._error = self._error, None
+            raise error
+        if self._connection.done:
+            raise TransportTerminated("connection closed")
 
     def uncork(self) -> None:
         """Send the held writes as one (errors close the connection; rospy sees it next time)."""
@@ -128,11 +122,7 @@ class _DirectConnection:
     def _write(self, data: bytes) -> bool:
         conn = self._connection
         with self._lock:
-            if self._error is not None:
-                error, self._error = self._error, None
-                raise error
-            if conn.done:
-                raise TransportTerminated("connection closed")
+            self._check()
             if not self._busy:
                 sock = conn.socket
                 if sock is None:
@@ -310,30 +300,24 @@ class FastPath:
 
     def _offer(self, conn: Any, topic: str) -> bool:
         """Rospy thread: ask the loop to adopt conn; True once it did (never both paths)."""
-        lock = threading.Lock()
-        done = threading.Event()
-        state = [None]  # None: undecided, True: the loop reads it, False: rospy does
+        decided = concurrent.futures.Future()
 
         def adopt() -> None:
-            with lock:
-                if state[0] is None:
-                    try:
-                        self._adopt(conn, topic)
-                        state[0] = True
-                    except Exception as exc:
-                        _log.warning("topic %s: direct read of %s failed: %s", topic, conn.endpoint_id, exc)
-                        state[0] = False
-            done.set()
+            if decided.set_running_or_notify_cancel():  # False: the thread stopped waiting
+                try:
+                    self._adopt(conn, topic)
+                    decided.set_result(True)
+                except Exception as exc:
+                    _log.warning("topic %s: direct read of %s failed: %s", topic, conn.endpoint_id, exc)
+                    decided.set_result(False)
 
         try:
             self.loop.call_soon_threadsafe(adopt)
+            return decided.result(_ADOPT_TIMEOUT)
         except RuntimeError:  # loop closed
             return False
-        done.wait(_ADOPT_TIMEOUT)
-        with lock:
-            if state[0] is None:
-                state[0] = False
-            return state[0]
+        except concurrent.futures.TimeoutError:  # no cancel once the loop is adopting it: its answer counts
+            return False if decided.cancel() else decided.result()
 
     def _adopt(self, conn: Any, topic: str) -> None:
         """Loop thread: start reading conn's socket here (raises if it cannot)."""
@@ -386,37 +370,24 @@ class FastPath:
         conn.stat_bytes += sum(len(p) + 4 for p in payloads)
         header = conn.header or {}
         latched = header.get("latching") == "1"
-        stamp = rospy.get_rostime()
-        secs, nsecs = stamp.secs, stamp.nsecs
+        now = rospy.get_rostime()
+        stamp = (now.secs, now.nsecs)
         sessions = list(sub.sessions)
         batch = len(payloads) > 1
         if batch:  # a burst: queue it all, then one write per client
             for session in sessions:
                 session.out.hold()
         try:
-            self._deliver(conn, sub, payloads, sessions, latched, header, (secs, nsecs), batch)
+            for payload in payloads:
+                message = TopicMessage(topic, _lazy_dict(sub.cls, payload), lambda p=payload: (p,) + stamp, latched)
+                if not prepare(message, sessions):
+                    continue
+                if latched:
+                    sub.latched[header.get("callerid", "")] = message
+                # idle clients get the framed message at once (latched ones go through deliver,
+                # after a queued latched copy; a burst is queued whole, then one write per client)
+                deliver(message, sessions if latched or batch else send_direct(message, sessions), sub.sessions)
         finally:
             if batch:
                 for session in sessions:
                     session.out.release()
-
-    @staticmethod
-    def _deliver(
-        conn: Any, sub: Any, payloads: Any, sessions: Any, latched: bool, header: Any, stamp: Any, batch: bool
-    ) -> None:
-        topic, cls = sub.topic, sub.cls
-        for payload in payloads:
-            message = TopicMessage(topic, _lazy_dict(cls, payload), lambda p=payload: (p,) + stamp, latched)
-            if not prepare(message, sessions):
-                continue
-            if latched:
-                sub.latched[header.get("callerid", "")] = message
-            # idle clients get the framed message at once (latched ones go through deliver,
-            # after a queued latched copy; a burst is queued whole, then one write per client)
-            rest = sessions if latched or batch else send_direct(message, sessions)
-            for session in rest:
-                if session in sub.sessions:
-                    try:
-                        session.deliver(topic, message)
-                    except Exception:
-                        _log.exception("delivery to client %s failed", session.client_id)

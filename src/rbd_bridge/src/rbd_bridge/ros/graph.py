@@ -28,31 +28,14 @@ class ThreadLocalMaster:
 
 
 class RosParams:
-    """The parameter server, as rosapi's parameter calls use it."""
+    """The parameter server, as rosapi's parameter calls use it: rospy's own functions."""
 
-    def get(self, name: str) -> Any:
-        """Value of name."""
-        return rospy.get_param(name)
-
-    def set(self, name: str, value: Any) -> None:
-        """Set name to value."""
-        rospy.set_param(name, value)
-
-    def has(self, name: str) -> bool:
-        """True if name is set."""
-        return rospy.has_param(name)
-
-    def delete(self, name: str) -> None:
-        """Delete name."""
-        rospy.delete_param(name)
-
-    def search(self, name: str) -> Any:
-        """The parameter server's upward search from this node's namespace."""
-        return rospy.search_param(name)
-
-    def names(self) -> Any:
-        """Every parameter name."""
-        return rospy.get_param_names()
+    get = staticmethod(rospy.get_param)
+    set = staticmethod(rospy.set_param)
+    has = staticmethod(rospy.has_param)
+    delete = staticmethod(rospy.delete_param)
+    search = staticmethod(rospy.search_param)
+    names = staticmethod(rospy.get_param_names)
 
 
 class RosTypes:

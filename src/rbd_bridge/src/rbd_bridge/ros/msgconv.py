@@ -1,21 +1,11 @@
-"""ROS message <-> JSON-ready dict conversion with rosbridge v2 semantics.
+"""ROS message <-> JSON-ready dict conversion with rosbridge v2 semantics (README, Message mapping).
 
-Needs only genpy message classes (no master). Rules (as rosbridge does them):
-
-- ``time`` / ``duration`` <-> ``{"secs": int, "nsecs": int}``;
-- ``uint8[]`` / ``char[]`` (also fixed-size) go out as base64 strings and come in as base64
-  strings or lists of ints;
-- NaN / +-Inf go out as ``null`` (``null`` coming in for a float field means NaN);
-- an int is accepted for a float field; 64-bit ints stay exact (Python ints);
-- missing fields take their defaults (reported back as a warning), unknown fields are
-  rejected, ``header.stamp`` is filled with the current time when the header or its stamp is
-  missing.
-
-Converters are compiled once per message class and cached.
+Needs only genpy message classes (no master); converters are compiled once per class and cached.
 """
 
 import base64
 import binascii
+import functools
 import math
 import threading
 import time
@@ -28,18 +18,10 @@ from rbd_bridge.core.types import ConversionError, TypedArray, normalize_type
 
 __all__ = ["get_message_class", "get_service_class", "msg_to_dict", "dict_to_msg", "message_typedefs"]
 
-_INT_RANGES = {
-    "int8": (-(2**7), 2**7 - 1),
-    "byte": (-(2**7), 2**7 - 1),
-    "uint8": (0, 2**8 - 1),
-    "char": (0, 2**8 - 1),
-    "int16": (-(2**15), 2**15 - 1),
-    "uint16": (0, 2**16 - 1),
-    "int32": (-(2**31), 2**31 - 1),
-    "uint32": (0, 2**32 - 1),
-    "int64": (-(2**63), 2**63 - 1),
-    "uint64": (0, 2**64 - 1),
-}
+_INT_RANGES = {"byte": (-(2**7), 2**7 - 1), "char": (0, 2**8 - 1)}  # ROS 1: byte is int8, char is uint8
+for _bits in (8, 16, 32, 64):
+    _INT_RANGES["int%d" % _bits] = (-(2 ** (_bits - 1)), 2 ** (_bits - 1) - 1)
+    _INT_RANGES["uint%d" % _bits] = (0, 2**_bits - 1)
 _FLOATS = ("float32", "float64")
 _BINARY = ("uint8", "char")
 
@@ -100,16 +82,14 @@ def _time_out(value: Any) -> Any:
     return {"secs": value.secs, "nsecs": value.nsecs}
 
 
-def _b64(value: Any) -> Any:
+def _raw_bytes(value: Any) -> Any:
     if isinstance(value, str):  # old genpy hands out str for uint8[]
         value = value.encode("latin-1")
-    return base64.b64encode(bytes(value)).decode("ascii")
-
-
-def _raw_bytes(value: Any) -> Any:
-    if isinstance(value, str):
-        value = value.encode("latin-1")
     return bytes(value)
+
+
+def _b64(value: Any) -> Any:
+    return base64.b64encode(_raw_bytes(value)).decode("ascii")
 
 
 _out_cache = {}
@@ -128,10 +108,7 @@ def _compile_out(cls: Any, binary: bool) -> Any:
             conv = _raw_bytes if binary else _b64
         elif base in _FLOATS:
             if is_array:
-                if binary:
-                    conv = _typed(base)
-                else:
-                    conv = _float_list
+                conv = _typed(base) if binary else _float_list
             elif not binary:
                 conv = _finite
         elif base in ("time", "duration"):
@@ -324,20 +301,13 @@ def _compile_in(cls: Any) -> Any:
             elem = _time_in(base)
         else:
             nested = _nested_class(base)
-            elem = _nested_in(nested)
+            elem = functools.partial(_fill, nested)
             if nested._type == "std_msgs/Header" and not is_array:
                 header_slot = name
         fields[name] = _array_in(elem, fixed) if is_array else elem
     plan = (fields, header_slot)
     _in_cache[cls] = plan
     return plan
-
-
-def _nested_in(nested_cls: Any) -> Any:
-    def conv(value: Any, path: str, ctx: Any) -> Any:
-        return _fill(nested_cls, value, path, ctx)
-
-    return conv
 
 
 def _fill(cls: Any, data: Any, path: str, ctx: Any) -> Any:

@@ -1,9 +1,4 @@
-"""Services: ``call_service`` into ROS (and rosapi) in a thread pool; services hosted by clients.
-
-Calls run in a worker pool (a ROS call blocks); their answers come back to the event loop.
-A client's ``advertise_service`` becomes a real ``rospy.Service`` whose handler forwards the
-request to the client and waits for its ``service_response``.
-"""
+"""Services: ``call_service`` into ROS (and rosapi) in a thread pool; services hosted by clients."""
 
 import concurrent.futures
 import itertools
@@ -44,38 +39,38 @@ class _Hosted:
         self.lock = threading.Lock()
         self.closed = False
         self.server = None
-        self.false_results = 0
+        self.false_logged = False
 
     def handle(self, request: Any) -> Any:
         """Rospy thread: forward the request to the client and wait for its answer."""
         call_id = "service_request:%s:%d" % (self.name, next(self.services.ids))
-        waiter = [threading.Event(), None, None]
+        answer = concurrent.futures.Future()
         with self.lock:
             if self.closed:
                 raise rospy.ServiceException("service %s: its WebSocket provider is gone" % self.name)
-            self.pending[call_id] = waiter
+            self.pending[call_id] = answer
         self.services.loop.call_soon_threadsafe(
             self.session.send_service_request, self.name, call_id, msg_to_dict(request)
         )
         timeout = self.services.service_timeout
-        if not waiter[0].wait(timeout):
+        try:
+            ok, values = answer.result(timeout)
+        except concurrent.futures.TimeoutError:
             with self.lock:
                 self.pending.pop(call_id, None)
             text = "service %s: WebSocket provider did not answer in %.1f s" % (self.name, timeout)
-            raise rospy.ServiceException(text)
-        ok, values = waiter[1], waiter[2]
+            raise rospy.ServiceException(text) from None
         if not ok and not isinstance(values, dict):
             raise rospy.ServiceException("service %s failed: %s" % (self.name, values))
-        if not ok:
+        if not ok and not self.false_logged:
             # rosbridge ignores the flag and returns the values (roslibpy handlers that
             # return False rely on it); say so once per service
-            self.false_results += 1
-            if self.false_results == 1:
-                _log.warning(
-                    "service %s: its WebSocket provider answered result=false; the values go to the caller"
-                    " as with rosbridge (logged once)",
-                    self.name,
-                )
+            self.false_logged = True
+            _log.warning(
+                "service %s: its WebSocket provider answered result=false; the values go to the caller"
+                " as with rosbridge (logged once)",
+                self.name,
+            )
         try:
             response, _ = dict_to_msg(self.cls._response_class, values if isinstance(values, dict) else {})
         except ConversionError as exc:
@@ -85,20 +80,17 @@ class _Hosted:
 
     def answer(self, call_id: Any, ok: bool, values: Any) -> bool:
         with self.lock:
-            waiter = self.pending.pop(call_id, None)
-        if waiter is None:
-            return False
-        waiter[1], waiter[2] = ok, values
-        waiter[0].set()
-        return True
+            answer = self.pending.pop(call_id, None)
+        if answer is not None:
+            answer.set_result((ok, values))
+        return answer is not None
 
     def close(self, reason: str) -> None:
         with self.lock:
             self.closed = True
             pending, self.pending = self.pending, {}
-        for waiter in pending.values():
-            waiter[1], waiter[2] = False, reason
-            waiter[0].set()
+        for answer in pending.values():
+            answer.set_result((False, reason))
         if self.server is not None:
             self.server.shutdown(reason)
 
@@ -137,23 +129,18 @@ class Services:
         self, session: Any, service: str, args: Any, timeout: Optional[float], done: Callable[..., Any]
     ) -> None:
         """Run the call in the pool; ``done(ok, values)`` is called on the loop (at most once)."""
-        state = {"done": False}
+        answered = []
 
         def finish(ok: bool, values: Any) -> None:
-            if not state["done"]:
-                state["done"] = True
+            if handle is not None:
+                handle.cancel()
+            if not answered:
+                answered.append(ok)
                 done(ok, values)
 
         timeout = timeout or self.call_timeout
-        handle = None
-        if timeout:
-            text = "service %s: no response within %.1f s" % (service, timeout)
-            handle = self.loop.call_later(timeout, finish, False, text)
-
-        def complete(result: Any) -> None:
-            if handle is not None:
-                handle.cancel()
-            finish(*result)
+        text = "service %s: no response within %.1f s" % (service, timeout)
+        handle = self.loop.call_later(timeout, finish, False, text) if timeout else None
 
         def work() -> None:
             try:
@@ -165,7 +152,7 @@ class Services:
                 result = (False, str(exc))
             except Exception as exc:  # rospy raises a zoo of types
                 result = (False, "service %s failed: %s" % (service, exc))
-            self.loop.call_soon_threadsafe(complete, result)
+            self.loop.call_soon_threadsafe(finish, *result)
 
         self.pool.submit(work)
 

@@ -1,12 +1,9 @@
 """Topics: one rospy.Publisher and one rospy.Subscriber per topic, shared by all clients.
 
-Publishing keeps the first second after an advertise for subscribers still connecting
-(:class:`rbd_bridge.core.fanout.ReplayWindow`, via rospy's public ``SubscribeListener``);
-a publisher nobody uses lingers before it is unregistered (:mod:`rbd_bridge.core.publishers`).
-Messages from ROS reach the clients through rospy's receive threads here: an isolated
-message goes straight to idle clients from that thread (:func:`rbd_bridge.core.fanout.send_direct`),
-bursts and everyone else through the event loop, one wake-up per burst. The opt-in
-:mod:`rbd_bridge.ros.fastpath` replaces both ROS sides with faster ones that patch rospy.
+Publishes right after an advertise are replayed to subscribers still connecting
+(:class:`rbd_bridge.core.fanout.ReplayWindow`); an unused publisher lingers
+(:mod:`rbd_bridge.core.publishers`). Without the fast path, messages from ROS arrive in
+rospy's threads: isolated ones go straight to idle clients, bursts through the event loop.
 """
 
 import collections
@@ -18,7 +15,7 @@ from typing import Any, Optional
 
 import rospy
 
-from rbd_bridge.core.fanout import ReplayWindow, TopicMessage, prepare, send_direct
+from rbd_bridge.core.fanout import ReplayWindow, TopicMessage, deliver, prepare, send_direct
 from rbd_bridge.core.publishers import Publication, Publications
 from rbd_bridge.core.types import BridgeError, ConversionError, normalize_type
 from rbd_bridge.ros.msgconv import dict_to_msg, get_message_class, msg_to_dict
@@ -102,12 +99,12 @@ class Topics:
         self._draining = False
 
     def master_type(self, topic: str) -> Optional[str]:
-        """The type the master knows for topic (None if none)."""
+        """The type the master knows for topic (None if none, or only ``*``)."""
         try:
-            types = dict(self.master.getTopicTypes())
+            type_name = dict(self.master.getTopicTypes()).get(topic)
         except Exception as exc:
             raise BridgeError("cannot reach the ROS master: %s" % exc) from None
-        return types.get(topic)
+        return None if type_name == "*" else type_name
 
     # ------------------------------------------------------------ into ROS
 
@@ -119,7 +116,7 @@ class Topics:
             stale.publisher.unregister()
         if pub is None:
             existing = self.master_type(topic)
-            if existing and existing not in (type_name, "*"):
+            if existing and existing != type_name:
                 raise BridgeError("advertise: %s already exists with type %s" % (topic, existing))
             window = ReplayWindow(self.window, queue_size, latch)
             hook = _Replay(window)
@@ -149,7 +146,7 @@ class Topics:
         pub = self.pubs.held.get(topic)
         if pub is None or session.client_id not in pub.clients:
             type_name = pub.type if pub is not None else self.master_type(topic)
-            if not type_name or type_name == "*":
+            if not type_name:
                 raise BridgeError("publish: cannot infer the type of %s (advertise it first)" % topic)
             self.advertise(session, topic, type_name, pub is not None and pub.latch, 100)
             pub = self.pubs.held[topic]
@@ -178,14 +175,11 @@ class Topics:
                 self.loop.call_soon(session.deliver, topic, message)
             return sub.type
         existing = self.master_type(topic)
-        if type_name:
-            type_name, cls = message_class(type_name)
-            if existing and existing not in (type_name, "*"):
-                raise BridgeError("subscribe: %s has type %s, not %s" % (topic, existing, type_name))
-        elif not existing or existing == "*":
+        if not type_name and not existing:
             raise BridgeError("subscribe: cannot infer the type of %s (it does not exist yet; give 'type')" % topic)
-        else:
-            type_name, cls = message_class(existing)
+        type_name, cls = message_class(type_name or existing)
+        if existing and existing != type_name:
+            raise BridgeError("subscribe: %s has type %s, not %s" % (topic, existing, type_name))
         sub = self.subs[topic] = _Sub(topic, type_name, cls)
         sub.sessions.add(session)
         # queue_size=None: everything one read holds is handed over (a slow WebSocket client
@@ -261,9 +255,4 @@ class Topics:
                 self._inbox.clear()
                 self._draining = True  # no direct send may overtake these
             for sub, message, only in items:
-                for session in list(sub.sessions) if only is None else only:
-                    if session in sub.sessions:
-                        try:
-                            session.deliver(sub.topic, message)
-                        except Exception:
-                            _log.exception("delivery to client %s failed", session.client_id)
+                deliver(message, list(sub.sessions) if only is None else only, sub.sessions)
