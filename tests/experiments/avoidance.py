@@ -392,15 +392,28 @@ def exp_detect(ctx):
     zone = ctx.zone()
     watch = Watch()
     place = rospy.ServiceProxy("/rbd_sim/place_box", PlaceBox)
+    # Run first on a fresh stack (``--only detect``), the controller may not be up yet.
+    rospy.wait_for_service("/rbd_controller/em_stop", 60.0)
     rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)(True)
     try:
         if not wait_for(lambda: watch.pose() is not None and watch.state == "EMERGENCY_STOP", 10.0):
             raise RuntimeError("no ground truth or not in EMERGENCY_STOP")
+        # Earlier experiments walk the robot (reaction, box, ...): wait until it stands, then read
+        # where the LiDAR is now. The prober's pose from its creation would put every box off by
+        # how far the robot moved since (0.12 m ahead after the reaction trials: the back boxes
+        # landed outside the back zone).
+        if not wait_for(lambda: watch.pose() is not None and watch.truth[-1][4] < 0.005, 10.0):
+            raise RuntimeError("the robot does not stand still in EMERGENCY_STOP")
+        zone.locate()
         x, y, yaw = watch.pose()
         # The LiDAR in the body frame: where the footprint's edges are, seen from it.
         dx, dy = zone.origin[0] - x, zone.origin[1] - y
         lx = math.cos(yaw) * dx + math.sin(yaw) * dy
         ly = -math.sin(yaw) * dx + math.cos(yaw) * dy
+        mount = zone.mount("base_link")
+        if math.hypot(lx - mount[0], ly - mount[1]) > 0.01:
+            raise RuntimeError("LiDAR at (%.3f, %.3f) m in the body on ground truth, mounted at (%.3f, %.3f) m"
+                               % (lx, ly, mount[0], mount[1]))
         half_l, half_w = A1_FOOTPRINT_LENGTH / 2.0, A1_FOOTPRINT_WIDTH / 2.0
         # (name, angle from the LiDAR, rbd_msgs/CollisionState side index, zone limit, footprint edge)
         sides = [("front", 0.0, 0, zone.zone[0], half_l - lx), ("back", math.pi, 2, zone.zone[1], half_l + lx),
@@ -428,7 +441,10 @@ def exp_detect(ctx):
                 "footprint (%.2f m)" % (name, row["zone_edge_min_height_m"], row["zone_edge_dist_m"],
                                         row["footprint_min_height_m"], row["footprint_dist_m"]))
         place(name="probe", remove=True)
-        return {"threshold": threshold, "sides": out,
+        x1, y1, _ = watch.pose()
+        if math.hypot(x1 - x, y1 - y) > 0.01:
+            raise RuntimeError("the robot moved %.3f m while the boxes were probed" % math.hypot(x1 - x, y1 - y))
+        return {"threshold": threshold, "sides": out, "lidar_in_body_m": [round(lx, 4), round(ly, 4)],
                 "floor_clearance_m": float(rospy.get_param("/rbd_lidar/floor_clearance", 0.1))}
     finally:
         watch.close()

@@ -317,13 +317,31 @@ class Zone:
         self.zone = tuple(float(rospy.get_param("/rbd_lidar/zone_" + s)) for s in ("front", "back", "left", "right"))
         self.blind = float(rospy.get_param("/rbd_lidar/blind_zone", 0.3))
         self.scan_period = 1.0 / float(rospy.get_param("/rbd_lidar/scan_rate", 10.0))
-        buf = tf2_ros.Buffer()
-        self._listener = tf2_ros.TransformListener(buf)
-        tf = buf.lookup_transform("world", frame, rospy.Time(0), rospy.Duration(30.0)).transform
-        self.origin = (tf.translation.x, tf.translation.y)
-        self.yaw = yaw_of(tf.rotation)
+        self.frame = frame
+        self._buf = tf2_ros.Buffer()
+        self._listener = tf2_ros.TransformListener(self._buf)
+        self.locate()
         if not wait_for(lambda: self.states, 30.0):
             raise RuntimeError("no /rbd_lidar/state")
+
+    def locate(self):
+        """Read where the frame is now (``origin``, ``yaw`` in the world).
+
+        The pose is read once here, not per probe: call this again once the robot has moved (an
+        experiment that walked it leaves it elsewhere than where the prober was created).
+        """
+        import rospy
+
+        tf = self._buf.lookup_transform("world", self.frame, rospy.Time(0), rospy.Duration(30.0)).transform
+        self.origin = (tf.translation.x, tf.translation.y)
+        self.yaw = yaw_of(tf.rotation)
+
+    def mount(self, parent):
+        """(x, y) [m] of the frame in `parent` (e.g. base_link), from TF."""
+        import rospy
+
+        t = self._buf.lookup_transform(parent, self.frame, rospy.Time(0), rospy.Duration(10.0)).transform.translation
+        return t.x, t.y
 
     def _on(self, msg):
         with self.lock:
