@@ -145,19 +145,20 @@ ZoneParams grownZone(const ZoneParams& base, double vx, double vy, double wz, co
   return z;
 }
 
-ZoneParams ZoneHold::apply(const ZoneParams& now, bool moving, bool latched, bool enabled) {
+ZoneParams ZoneHold::apply(const ZoneParams& base, const ZoneParams& grown, bool moving, bool latched,
+                           bool enabled) {
   holding_ = false;
-  if (!enabled || !latched || moving || !valid_) {
-    held_ = now;
-    valid_ = true;
-    return now;
+  const double b[4] = {base.front, base.back, base.left, base.right};
+  const double g[4] = {grown.front, grown.back, grown.left, grown.right};
+  if (!enabled || !latched || moving) {
+    for (int i = 0; i < 4; ++i) growth_[i] = std::max(0.0, g[i] - b[i]);
+    return grown;
   }
-  ZoneParams z = now;
+  ZoneParams z = grown;
   double* sides[4] = {&z.front, &z.back, &z.left, &z.right};
-  const double held[4] = {held_.front, held_.back, held_.left, held_.right};
   for (int i = 0; i < 4; ++i) {
-    if (held[i] > *sides[i]) {
-      *sides[i] = held[i];
+    if (b[i] + growth_[i] > g[i]) {
+      *sides[i] = b[i] + growth_[i];
       holding_ = true;
     }
   }

@@ -265,7 +265,7 @@ class LidarNode {
       moving = std::fabs(cmd_.linear.x) > 1e-3 || std::fabs(cmd_.linear.y) > 1e-3 ||
                std::fabs(cmd_.angular.z) > 1e-3;
     }
-    zone = hold_.apply(zone, moving, pipeline_.collision(), velocity_aware_ && hold_zone_);
+    zone = hold_.apply(base, zone, moving, pipeline_.collision(), velocity_aware_ && hold_zone_);
     pipeline_.setZone(zone);
     pipeline_.setPose(pose);
     ScanPipeline::Outputs& out = outputs_;
