@@ -116,11 +116,15 @@ class Peer:
     def alive(self):
         return self.proc.poll() is None
 
-    def stop(self):
+    def close_input(self):
+        """End its stdin: the peer's signal to finish (stop() waits for it)."""
         try:
             self.proc.stdin.close()
         except OSError:
             pass
+
+    def stop(self):
+        self.close_input()
         try:
             self.proc.wait(3.0)
         except subprocess.TimeoutExpired:
@@ -278,9 +282,11 @@ class TwoHosts:
 
     # ------------------------------------------------------------ tear-down
     def close(self):
-        for p in reversed(self.peers):
-            if p is not self.link:
-                p.stop()
+        peers = [p for p in reversed(self.peers) if p is not self.link]
+        for p in peers:  # all of them finish at once, then each is waited for
+            p.close_input()
+        for p in peers:
+            p.stop()
         for proc, log in reversed(self.procs):
             if proc.poll() is None:
                 _kill_group(proc, signal.SIGINT)
