@@ -1,7 +1,9 @@
 """System test: `make demo`'s scenario (tools/demo_scenario.py) on the whole simulated stack.
 
-Asserts the report measured on ground truth: every trick completed, no contact with people,
-the robot stopped for the visitor and resumed after the visitor left.
+Asserts the report measured on ground truth: every trick completed, no contact with people or
+the bag, the robot stopped for the visitor and resumed after the visitor left, and (with
+RBD_AVOIDANCE_EXPERIMENTS=1, over make test's budget) it got around the bag put down on its
+stroll (issue 17: obstacles avoided, time blocked).
 """
 
 import json
@@ -10,19 +12,34 @@ import subprocess
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+TRICKS = ["walk", "spin", "wiggle", "lie_down", "bow"]
+#: The stroll with the bag (issue 17) adds 100-130 s at load 2-5, over make test's serial-lane
+#: budget: it runs with RBD_AVOIDANCE_EXPERIMENTS=1 (as tests/experiments/test_avoidance_experiments.py).
+WITH_BAG = bool(os.environ.get("RBD_AVOIDANCE_EXPERIMENTS"))
 
 
 def test_demo_scenario(tmp_path):
     out = tmp_path / "demo"
+    tricks = TRICKS + (["stroll"] if WITH_BAG else [])
     proc = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "demo_scenario.py"), "--out", str(out),
-                           "--columns", "512"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                          timeout=600)
+                           "--columns", "512", "--tricks", ",".join(tricks)] + ([] if WITH_BAG else ["--bag", ""]),
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=600)
     assert (out / "report.json").exists(), proc.stdout[-5000:]
     report = json.loads((out / "report.json").read_text())
     assert report["collisions_with_people"] == 0, report
-    # "bow" is a gesture taught during the demo (teach mode) for a trick without a mapping entry
-    assert report["tricks_completed"] == ["walk", "spin", "wiggle", "lie_down", "bow"], proc.stdout[-5000:]
+    # "bow" is a gesture taught during the demo (teach mode) for a trick without a mapping entry;
+    # "stroll" is sent by the operator and a bag is put down on its way (issue 17)
+    assert report["tricks_completed"] == tricks, proc.stdout[-5000:]
     assert "real hand photos" in report["gesture_input"]
+    if WITH_BAG:
+        assert report["collisions_with_obstacles"] == 0, report
+        assert report["min_distance_to_obstacle_m"] > 0.0, report
+        assert report["obstacles_avoided"] >= 1, proc.stdout[-5000:]
+        assert report["avoidance_gave_up"] == [], report
+        # Stopped by the visitor and the bag, but not for ever: the bag costs the classification
+        # (static after 5 s; the LiDAR map may know it sooner) per encounter, not the thesis' "forever".
+        assert 1.0 < report["time_blocked_s"] < 60.0, report
+        assert report["time_avoiding_s"] > 0.0, report
     assert report["collision_stops"] >= 1, "the robot never stopped for the visitor"
     assert report["resumes"] >= 1, "the interrupted trick never resumed"
     assert report["min_distance_to_person_m"] > 0.0

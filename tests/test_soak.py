@@ -87,6 +87,33 @@ def test_verdict_fails_on_each_condition(change, match):
     assert len(reasons) == 1 and __import__("re").search(match, reasons[0]), reasons
 
 
+def test_box_watch_explains_a_contact():
+    w = soak_report.BoxWatch(keep_s=5.0)
+    w.on_state(0.0, "EXECUTING")
+    for i in range(11):  # walking at 0.3 m/s along x
+        w.on_truth(i * 0.1, (0.03 * i, 0.0, 0.0), (0.3, 0.0, 0.0))
+    drop = w.on_drop(1.0, "box0", (0.8, 0.0, 0.0, 0.4, 0.4), gap=0.15, zone_gap=0.0)
+    assert drop["gap_m"] == 0.15 and drop["speed_mps"] == 0.3 and drop["state"] == "EXECUTING"
+    w.on_zone(1.05, False, True)  # a stale report before the box was seen
+    w.on_zone(1.2, True, False)  # first collision after the drop
+    for i in range(11, 16):
+        w.on_truth(i * 0.1, (0.03 * i, 0.0, 0.0), (0.3, 0.0, 0.0))
+    w.on_state(1.3, "COLLISION_DETECTED")
+    w.on_clearance(1.5, "box0", 0.0)
+    w.on_clearance(1.4, "box0", 0.02)  # not smaller: the minimum stays
+    info = w.on_contact(1.5, "box0")
+    assert info["state"] == "COLLISION_DETECTED" and info["since_drop_s"] == 0.5
+    assert info["first_zone_collision_after_drop_s"] == 0.2
+    assert info["moved_since_first_zone_collision_m"] == pytest.approx(0.09, abs=1e-6)  # 1.2 s -> 1.5 s at 0.3 m/s
+    assert info["stale_zone_reports_last_3s"] == 1 and info["zone_collision_now"] is True
+    assert [s for _, s in info["states_since_drop"]] == ["EXECUTING", "COLLISION_DETECTED"]
+    assert drop["min_clearance_m"] == 0.0 and drop["min_clearance_state"] == "COLLISION_DETECTED"
+    assert drop["clearance_3s_m"] == 0.0  # within 3 s of the drop: the stop for it
+    w.on_clearance(5.0, "box0", -1.0)  # 4 s later (an overlap later on): not part of the stop any more
+    assert drop["clearance_3s_m"] == 0.0 and drop["min_clearance_m"] == -1.0
+    assert w.contacts == [info]
+
+
 def test_short_crowd_soak(tmp_path):
     seconds = float(os.environ.get("RBD_SOAK_SECONDS", "40"))
     out = tmp_path / "soak"

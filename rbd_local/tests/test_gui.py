@@ -81,6 +81,24 @@ def test_state_colour_follows_published_status(app, status, colour):
     assert all(abs(a - b) <= 12 for a, b in zip(rendered, hex_rgb(colour), strict=False)), (rendered, colour)
 
 
+@pytest.mark.parametrize(
+    "state, colour",
+    [("BLOCKED", "#6a1b9a"), ("ESCAPING", "#00838f"), ("AVOIDING", "#00838f"), ("DODGING", "#00838f")],
+)
+def test_avoidance_states_have_their_own_label_and_colour_but_the_estop_wins(app, state, colour):
+    app["bridge"].push(STATUS_TOPIC, {"data": "running"})
+    app["bridge"].push(STATE_TOPIC, {"data": state})
+    assert pump(app["root"], lambda: app["gui"].state_colour() == colour)
+    assert app["gui"].state_label.cget("text") == state
+    rendered = screen_pixel(app["gui"].state_label)
+    assert all(abs(a - b) <= 12 for a, b in zip(rendered, hex_rgb(colour), strict=False)), (rendered, colour)
+    app["bridge"].push(STATUS_TOPIC, {"data": "emergency"})
+    assert pump(app["root"], lambda: app["gui"].state_colour() == "#c62828")
+    app["bridge"].push(STATE_TOPIC, {"data": "WAITING_FOR_GESTURE"})
+    app["bridge"].push(STATUS_TOPIC, {"data": "idle"})
+    assert pump(app["root"], lambda: app["gui"].state_colour() == "#1565c0")
+
+
 def test_unknown_status_is_grey_not_a_crash(app):
     app["bridge"].push(STATUS_TOPIC, {"data": "bogus"})
     assert pump(app["root"], lambda: app["gui"].state_colour() == "#616161")

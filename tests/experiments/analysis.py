@@ -111,6 +111,30 @@ def find_flip(probe: Callable[[float], bool], near: float, far: float, resolutio
     return 0.5 * (near + far)
 
 
+def lowest_true(probe: Callable[[float], bool], low: float, high: float, resolution: float) -> Optional[float]:
+    """Smallest value in [low, high] at which probe(value) is True (bisection; probe grows monotonic).
+
+    Args:
+        probe: e.g. True when an obstacle of that height trips the zone.
+        low: a value that must be False.
+        high: a value that must be True.
+        resolution: stop when the bracket is narrower.
+
+    Returns:
+        The upper end of the final bracket (a value seen True), or None when probe(high) is False
+        or probe(low) is True.
+    """
+    if not probe(high) or probe(low):
+        return None
+    while high - low > resolution:
+        mid = 0.5 * (low + high)
+        if probe(mid):
+            high = mid
+        else:
+            low = mid
+    return high
+
+
 def zone_outline(zone: Sequence[float]) -> List[Tuple[float, float]]:
     """Closed polygon of the zone rectangle in the sensor frame (for plots)."""
     front, back, left, right = zone

@@ -571,8 +571,13 @@ def exp_reaction(ctx):
     return result
 
 
+import avoidance  # noqa: E402  (issue 17: box, wall, visitor)
+
 EXPERIMENTS = {"control": [("step", exp_step), ("rotation", exp_rotation), ("path", exp_path)],
-               "safety": [("zone", exp_zone), ("boundary", exp_boundary), ("reaction", exp_reaction)]}
+               "safety": [("zone", exp_zone), ("boundary", exp_boundary), ("reaction", exp_reaction),
+                          ("detect", avoidance.exp_detect), ("stopping", avoidance.exp_stopping),
+                          ("box", avoidance.exp_box), ("wall", avoidance.exp_wall),
+                          ("visitor", avoidance.exp_visitor)]}
 
 
 class Context:

@@ -8,11 +8,7 @@ previous result. RBD_EXPERIMENTS_OUT keeps the output directory.
 import json
 import math
 import os
-import shutil
-import signal
-import subprocess
 import sys
-import tempfile
 
 import pytest
 
@@ -21,6 +17,7 @@ sys.path.insert(0, HERE)
 
 import analysis  # noqa: E402
 import thesis  # noqa: E402
+from short_run import result, run_all  # noqa: E402
 
 # ---------------------------------------------------------------------------------------------
 # ROS-free: the measurement maths
@@ -95,6 +92,20 @@ def test_find_flip_bisects_and_refuses_a_bad_bracket():
     assert analysis.find_flip(lambda d: False, 0.4, 1.0, 0.01) is None  # never trips
 
 
+def test_lowest_true_bisects_up_and_refuses_a_bad_bracket():
+    calls = []
+
+    def taller_than(h):
+        calls.append(h)
+        return h >= 0.137
+
+    h = analysis.lowest_true(taller_than, 0.0, 0.6, 0.01)
+    assert 0.137 <= h < 0.147 and taller_than(h)
+    assert len(calls) <= 2 + 7 + 1
+    assert analysis.lowest_true(lambda h: False, 0.0, 0.6, 0.01) is None  # never seen
+    assert analysis.lowest_true(lambda h: True, 0.0, 0.6, 0.01) is None  # seen even at 0: bad bracket
+
+
 def test_rows_pass_and_fail_on_the_thesis_bounds():
     good = {"path": {"max_deviation_m": 0.05, "total_time_s": 25.0, "final_position_error_m": 0.01, "full": True},
             "boundary": {"sides": [{"side": "front", "target_m": 0.7, "measured_m": 0.75}]},
@@ -132,7 +143,7 @@ def test_root_readme_table_is_the_generated_one():
         committed = json.load(fh)
     assert thesis.render_table(committed["rows"]) in section
     assert not committed["results"].get("short"), "the README shows the full runs"
-    for name in ("step", "rotation", "path", "zone", "boundary", "reaction"):
+    for name in ("step", "rotation", "path", "zone", "boundary", "reaction", "box", "wall", "visitor"):
         assert "error" not in committed["results"][name], name
         assert not committed["results"][name]["short"], name
     for line in section.splitlines():
@@ -148,33 +159,7 @@ def test_root_readme_table_is_the_generated_one():
 
 @pytest.fixture(scope="module")
 def short_run():
-    keep = os.environ.get("RBD_EXPERIMENTS_OUT")
-    out = keep or tempfile.mkdtemp(prefix="rbd-experiments.")
-    # Own process group: on a timeout SIGINT reaches run_all and both experiment processes,
-    # which stop their simulator stacks (by PID) on the way out.
-    proc = subprocess.Popen([sys.executable, os.path.join(HERE, "run_all"), "--short", "--parallel", "--out", out],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True,
-                            start_new_session=True)
-    try:
-        stdout, _ = proc.communicate(timeout=400)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGINT)
-        stdout, _ = proc.communicate(timeout=60)
-    try:
-        with open(os.path.join(out, "results.json")) as fh:
-            data = json.load(fh)
-        data["stdout"] = stdout
-        data["out"] = out
-        yield data
-    finally:
-        if not keep:
-            shutil.rmtree(out, ignore_errors=True)
-
-
-def result(run, name):
-    r = run["results"][name]
-    assert "error" not in r, "%s: %s\n%s" % (name, r.get("error"), run["stdout"][-3000:])
-    return r
+    yield from run_all(["--short", "--parallel"], 400, keep=os.environ.get("RBD_EXPERIMENTS_OUT"))
 
 
 def test_fig18_steps_integrate_with_small_latency(short_run):
@@ -228,6 +213,19 @@ def test_reaction_time_every_intrusion_stops_within_a_scan(short_run):
     # Measured on ground truth: the body stands still within the thesis' maximum allowed reaction.
     assert r["truth_stop_s"], "no ground-truth stop measured"
     assert r["truth_stop_max_s"] <= thesis.THESIS_REACTION_MAX_S + thesis.LOAD_MARGIN_S
+
+
+# ---------------------------------------------------------------------------------------------
+# Issue 17: active collision avoidance, on ground truth
+# ---------------------------------------------------------------------------------------------
+def test_visitor_is_dodged_within_dodge_max_and_the_robot_returns_home(short_run):
+    runs = result(short_run, "visitor")["runs"]
+    assert runs
+    for r in runs:
+        assert r["dodged"] and r["contacts"] == 0, r["states"]
+        assert r["max_offset_m"] <= r["dodge_max_m"] + thesis.DODGE_SLACK_M
+        assert r["returned"] and r["final_offset_m"] <= thesis.HOME_TOL_M
+        assert r["arena_exit_samples"] == 0
 
 
 def test_table_written_and_every_bounded_row_passes(short_run):

@@ -3,6 +3,7 @@
 Used by ``tests/soak/run`` and unit-tested in ``tests/test_soak.py``.
 """
 
+import collections
 import math
 import re
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -117,6 +118,100 @@ class StateCounter:
             self.last_completion = t
 
 
+class BoxWatch:
+    """What happened around each dropped box, so that every box contact can be explained.
+
+    Fed with ground truth (pose and body twist), the controller's states and rbd_lidar's zone
+    states, each with its time [s]; keeps a few seconds of each. A drop records how far from the
+    footprint (and from the stop zone) the box landed and how fast the robot went; a contact
+    records the state, the speed and direction of motion, how long after the drop it happened,
+    when the zone first reported a collision after the drop and how far the robot moved after
+    that, and the stale-zone reports just before it.
+
+    Args:
+        keep_s: seconds of history kept.
+    """
+
+    def __init__(self, keep_s: float = 10.0) -> None:
+        self.keep_s = keep_s
+        self.truth = collections.deque()  # (t, x, y, yaw, vx, vy, wz)
+        self.zone = collections.deque()  # (t, collision, stale)
+        self.states = collections.deque()  # (t, state)
+        self.drops = []  # type: List[Dict[str, object]]
+        self.contacts = []  # type: List[Dict[str, object]]
+        self._first_collision = {}  # type: Dict[str, float]
+
+    def _trim(self, buf: collections.deque, t: float) -> None:
+        while buf and buf[0][0] < t - self.keep_s:
+            buf.popleft()
+
+    def on_truth(self, t: float, pose: Tuple[float, float, float], twist: Tuple[float, float, float]) -> None:
+        """A ground-truth sample: pose (x, y, yaw) and body twist (vx, vy, wz)."""
+        self.truth.append((t,) + tuple(pose) + tuple(twist))
+        self._trim(self.truth, t)
+
+    def on_zone(self, t: float, collision: bool, stale: bool) -> None:
+        """A zone state of rbd_lidar."""
+        self.zone.append((t, bool(collision), bool(stale)))
+        self._trim(self.zone, t)
+        if collision and self.drops:
+            self._first_collision.setdefault(self.drops[-1]["name"], t)
+
+    def on_state(self, t: float, state: str) -> None:
+        """A controller state message."""
+        if not self.states or self.states[-1][1] != state:
+            self.states.append((t, state))
+        self._trim(self.states, t)
+
+    def state(self) -> str:
+        """The latest controller state ("" before the first)."""
+        return self.states[-1][1] if self.states else ""
+
+    def on_drop(self, t: float, name: str, box: Sequence[float], gap: float, zone_gap: float) -> Dict[str, object]:
+        """A box (x, y, yaw, size_x, size_y) dropped ``gap`` from the footprint, ``zone_gap`` from the zone."""
+        last = self.truth[-1] if self.truth else None
+        drop = {"name": name, "t": t, "box": [round(v, 3) for v in box], "gap_m": round(gap, 3),
+                "zone_gap_m": round(zone_gap, 3), "state": self.state(),
+                "speed_mps": round(math.hypot(last[4], last[5]), 3) if last else None}
+        self.drops.append(drop)
+        return drop
+
+    def on_clearance(self, t: float, name: str, clearance: float) -> None:
+        """Footprint-box clearance [m] of box ``name`` at t: the smallest per drop, with the state then."""
+        drop = self.drops[-1] if self.drops and self.drops[-1]["name"] == name else None
+        if drop is not None and t - drop["t"] <= 3.0 and clearance < drop.get("clearance_3s_m", math.inf):
+            drop["clearance_3s_m"] = round(clearance, 3)  # the stop for the box: gap - this = stopping distance
+        if drop is not None and clearance < drop.get("min_clearance_m", math.inf):
+            drop["min_clearance_m"] = round(clearance, 3)
+            drop["min_clearance_after_s"] = round(t - drop["t"], 2)
+            drop["min_clearance_state"] = self.state()
+
+    def on_contact(self, t: float, name: str) -> Dict[str, object]:
+        """The footprint touched box ``name`` at t: the context of the contact."""
+        drop = next((d for d in reversed(self.drops) if d["name"] == name), None)
+        last = self.truth[-1] if self.truth else None
+        first = self._first_collision.get(name)
+        moved = None
+        if first is not None and last is not None:
+            after = [s for s in self.truth if s[0] >= first]
+            if after:
+                moved = round(math.hypot(last[1] - after[0][1], last[2] - after[0][2]), 3)
+        info = {
+            "t": round(t, 2), "box": name, "state": self.state(),
+            "since_drop_s": None if drop is None else round(t - drop["t"], 2),
+            "drop": drop,
+            "body_twist": None if last is None else [round(v, 3) for v in last[4:7]],
+            "states_since_drop": [(round(ts - drop["t"], 2), st) for ts, st in self.states
+                                  if drop is not None and ts >= drop["t"] - 1.0],
+            "first_zone_collision_after_drop_s": None if first is None or drop is None else round(first - drop["t"], 2),
+            "moved_since_first_zone_collision_m": moved,
+            "stale_zone_reports_last_3s": sum(1 for ts, _, st in self.zone if st and ts >= t - 3.0),
+            "zone_collision_now": self.zone[-1][1] if self.zone else None,
+        }
+        self.contacts.append(info)
+        return info
+
+
 def verdict(report: Dict[str, object]) -> List[str]:
     """Reasons the soak failed (empty when it passed)."""
     reasons = []
@@ -132,6 +227,13 @@ def verdict(report: Dict[str, object]) -> List[str]:
         reasons.append("memory growth beyond the bound: %s" % ", ".join(grown))
     if report["tricks_completed"] < 1:
         reasons.append("no trick completed (the stack did not work)")
+    if report.get("box_contacts"):
+        reasons.append("%d contact(s) between the footprint and a dropped box" % len(report["box_contacts"]))
+    if report.get("arena_exits"):
+        reasons.append("the robot left the arena %d time(s)" % report["arena_exits"])
+    if report.get("avoidance") == "on" and report.get("boxes_every_s") and report.get("blocked_forever"):
+        reasons.append("blocked forever (stationary > 60 s with a trick pending) %d time(s)"
+                       % len(report["blocked_forever"]))
     if report.get("error"):
         reasons.append("driver error: %s" % report["error"])
     return reasons
@@ -154,6 +256,13 @@ def render_text(report: Dict[str, object]) -> str:
         "  contacts footprint-person: %d" % len(report["contacts"]),
         "  min clearance footprint-person: %s" % ("n/a" if min_c is None else "%.2f m" % min_c),
         "  ground-truth samples: %d" % report["truth_samples"],
+        "  boxes (issue 17): avoidance %s, %d dropped every %.0f s; box contacts %d, min box clearance %s; arena "
+        "exits %d; blocked forever %d; obstacles avoided %d; gave up %d; tricks/hour %.1f"
+        % (report.get("avoidance", "on"), report.get("boxes_dropped", 0), report.get("boxes_every_s", 0),
+           len(report.get("box_contacts", [])), "n/a" if report.get("min_box_clearance_m") is None
+           else "%.2f m" % report["min_box_clearance_m"], report.get("arena_exits", 0),
+           len(report.get("blocked_forever", [])), report.get("obstacles_avoided", 0),
+           len(report.get("avoidance_gave_up", [])), report.get("tricks_per_hour", 0.0)),
         "  node deaths / respawns / vanished: %s / %s / %s"
         % (report["node_deaths"], report["respawns"], report["vanished_nodes"]),
         "  memory (RSS MB, every %.0f s; warm-up %.0f s; flat = slope <= %.0f MB/h or growth <= %.0f MB):"

@@ -6,7 +6,7 @@ import time
 import lcm
 import pytest
 
-from rbd_bringup.a1_monitor import HighCmdMonitor, command_speed, stop_delay, yaw_of
+from rbd_bringup.a1_monitor import HighCmdMonitor, command_speed, command_velocity, stop_delay, yaw_of
 from rbd_sim import unitree_wire as wire
 from rbd_testkit import wait_for
 from rbd_wire_oracle import unitree as vendor
@@ -40,6 +40,15 @@ def test_command_speed_only_counts_walking():
     assert speed(STAND, 0.3, 0.0, 0.5) == 0.0
 
 
+def test_command_velocity_keeps_the_direction_only_when_walking():
+    def velocity(*args):
+        return command_velocity(wire.decode_high_cmd(high_cmd(*args)))
+
+    assert velocity(WALK, -0.01, -0.12, 0.0) == pytest.approx((-0.01, -0.12, 0.0))
+    assert velocity(WALK, 0.0, 0.0, 0.4) == pytest.approx((0.0, 0.0, 0.4))
+    assert velocity(STAND, 0.3, 0.2, 0.5) == (0.0, 0.0, 0.0)
+
+
 def test_monitor_records_packets_over_lcm(url):
     mon = HighCmdMonitor(url)
     pub = lcm.LCM(url)
@@ -65,13 +74,16 @@ def test_monitor_records_packets_over_lcm(url):
 
 def test_monitor_custom_sink_and_clock(url):
     got = []
-    mon = HighCmdMonitor(url, record=lambda t, v: got.append((t, v)), clock=lambda: 42.0)
+    directions = []
+    mon = HighCmdMonitor(url, record=lambda t, v: got.append((t, v)), clock=lambda: 42.0,
+                         record_velocity=lambda t, v: directions.append((t, v)))
     pub = lcm.LCM(url)
     try:
-        assert wait_for(lambda: pub.publish("LCM_High_Cmd", high_cmd(WALK, 0.1)) or got, 5.0)
+        assert wait_for(lambda: pub.publish("LCM_High_Cmd", high_cmd(WALK, 0.0, -0.1)) or got, 5.0)
     finally:
         mon.close()
     assert got[0] == (42.0, pytest.approx(0.1)) and mon.snapshot() == []
+    assert directions[0] == (42.0, pytest.approx((0.0, -0.1, 0.0)))
 
 
 def test_stop_delay():

@@ -1,6 +1,17 @@
 import pytest
 
-from rbd_controller.fsm import RESUME, STOP_STATES, TRANSITIONS, WORK_STATES, Event, Fsm, State
+from rbd_controller.fsm import (
+    AVOID_STATES,
+    GUARDED_STATES,
+    RESUME,
+    STOP_STATES,
+    TRANSITIONS,
+    TRICK_STATES,
+    WORK_STATES,
+    Event,
+    Fsm,
+    State,
+)
 
 PATH_TO = {
     State.EMERGENCY_STOP: [],
@@ -9,13 +20,21 @@ PATH_TO = {
     State.EXECUTING: [Event.ESTOP_RELEASE, Event.GESTURE, Event.PATH_READY],
     State.COLLISION_DETECTED: [Event.ESTOP_RELEASE, Event.COLLISION],
     State.OPERATOR_LOST: [Event.ESTOP_RELEASE, Event.OPERATOR_LOST],
+    State.BLOCKED: [Event.ESTOP_RELEASE, Event.GESTURE, Event.PATH_READY, Event.COLLISION, Event.BLOCKED_STATIC],
+    State.ESCAPING: [Event.ESTOP_RELEASE, Event.GESTURE, Event.PATH_READY, Event.COLLISION, Event.BLOCKED_STATIC,
+                     Event.AVOID, Event.COLLISION_CLEAR],
+    State.AVOIDING: [Event.ESTOP_RELEASE, Event.GESTURE, Event.PATH_READY, Event.COLLISION, Event.BLOCKED_STATIC,
+                     Event.AVOID, Event.COLLISION_CLEAR, Event.ESCAPED],
+    State.DODGING: [Event.ESTOP_RELEASE, Event.DODGE],
 }
+NOT_GUARDED = tuple(s for s in WORK_STATES if s not in GUARDED_STATES)
 
 
 def fsm_in(state, hooks=None):
     fsm = Fsm(on_enter=hooks)
     for event in PATH_TO[state]:
-        assert fsm.fire(event)
+        # a guarded state only tracks the collision flag (no table entry for its clearing)
+        assert fsm.fire(event) or event == Event.COLLISION_CLEAR
     assert fsm.state == state
     return fsm
 
@@ -28,12 +47,8 @@ def test_power_up_is_emergency_stop():
 def test_values_match_controller_state_msg():
     from rbd_msgs.msg import ControllerState
 
-    used = {getattr(ControllerState, n) for n in dir(ControllerState) if n.isupper() and not n.startswith("_")}
     for state in State:
-        if hasattr(ControllerState, state.name):
-            assert getattr(ControllerState, state.name) == state.value
-        else:  # OPERATOR_LOST until rbd_msgs gets the constant: must not collide with one
-            assert state == State.OPERATOR_LOST and state.value not in used
+        assert getattr(ControllerState, state.name) == state.value, state
 
 
 @pytest.mark.parametrize("state", list(State))
@@ -41,6 +56,7 @@ def test_values_match_controller_state_msg():
 def test_every_table_entry(state, event):
     fsm = fsm_in(state)
     resume_before = fsm.resume
+    collision_before = fsm.collision and event not in (Event.COLLISION_CLEAR,)
     accepted = fsm.fire(event)
     expected = TRANSITIONS.get((state, event))
     assert accepted == (expected is not None)
@@ -48,6 +64,10 @@ def test_every_table_entry(state, event):
         assert fsm.state == state
     elif expected == RESUME:
         assert fsm.state == resume_before
+    elif (collision_before and expected in WORK_STATES and expected not in GUARDED_STATES
+          and state not in TRICK_STATES):
+        # leaving a stop/guarded state for a trick state with the zone still occupied: stop first
+        assert fsm.state == State.COLLISION_DETECTED and fsm.resume == expected
     else:
         assert fsm.state == expected
 
@@ -63,7 +83,7 @@ def test_estop_preempts_and_resumes(state):
     assert fsm.state == state
 
 
-@pytest.mark.parametrize("state", WORK_STATES)
+@pytest.mark.parametrize("state", NOT_GUARDED)
 def test_collision_preempts_and_resumes(state):
     fsm = fsm_in(state)
     fsm.fire(Event.COLLISION)
@@ -142,6 +162,8 @@ def test_stop_states_reachable_from_every_state():
     for state in State:
         for stop in STOP_STATES:
             event = Event.ESTOP if stop == State.EMERGENCY_STOP else Event.COLLISION
+            if state in GUARDED_STATES and event == Event.COLLISION:
+                event = Event.ZONE_STALE  # guarded motions stop on the zone per side, and on a stale zone
             fsm = fsm_in(state)
             fsm.fire(event)
             assert fsm.state in STOP_STATES
@@ -187,3 +209,96 @@ def test_collision_and_operator_loss_resume_in_order():
     assert fsm.state == State.COLLISION_DETECTED
     fsm.fire(Event.COLLISION_CLEAR)
     assert fsm.state == State.EXECUTING
+
+
+# --------------------------------------------------------------------------- issue 17: avoidance
+def test_avoidance_cycle_through_the_table():
+    entered = []
+    hooks = {s: (lambda prev, s=s: entered.append(s)) for s in State}
+    fsm = fsm_in(State.EXECUTING, hooks)
+    for event in (Event.COLLISION, Event.BLOCKED_STATIC, Event.AVOID, Event.COLLISION_CLEAR, Event.ESCAPED,
+                  Event.DETOUR_DONE):
+        fsm.fire(event)
+    assert entered[-5:] == [State.COLLISION_DETECTED, State.BLOCKED, State.ESCAPING, State.AVOIDING,
+                            State.EXECUTING]
+    assert fsm.state == State.EXECUTING
+
+
+def test_blocked_is_a_stop_state_that_waits_for_people_and_resumes_when_clear():
+    fsm = fsm_in(State.BLOCKED)
+    assert State.BLOCKED in STOP_STATES and fsm.resume == State.EXECUTING
+    fsm.fire(Event.OBSTACLE_MOVING)
+    assert fsm.state == State.COLLISION_DETECTED and fsm.resume == State.EXECUTING
+    fsm.fire(Event.BLOCKED_STATIC)
+    fsm.fire(Event.COLLISION_CLEAR)
+    assert fsm.state == State.EXECUTING
+    assert not fsm_in(State.COLLISION_DETECTED).fire(Event.AVOID)  # no avoidance before it is classified
+
+
+def test_estop_preempts_blocked_and_release_with_the_obstacle_still_there_classifies_again():
+    fsm = fsm_in(State.BLOCKED)
+    fsm.fire(Event.ESTOP)
+    assert fsm.state == State.EMERGENCY_STOP and fsm.resume == State.EXECUTING
+    assert not fsm.fire(Event.AVOID)
+    fsm.fire(Event.ESTOP_RELEASE)
+    assert fsm.state == State.COLLISION_DETECTED
+
+
+@pytest.mark.parametrize("state", GUARDED_STATES)
+def test_guarded_states_are_not_held_by_the_collision_flag_but_by_everything_else(state):
+    fsm = fsm_in(state)
+    assert fsm.fire(Event.COLLISION)
+    assert fsm.state == state and fsm.collision
+    for stop, expect in ((Event.ESTOP, State.EMERGENCY_STOP), (Event.OPERATOR_LOST, State.OPERATOR_LOST),
+                         (Event.ZONE_STALE, State.COLLISION_DETECTED)):
+        fsm = fsm_in(state)
+        fsm.fire(stop)
+        assert fsm.state == expect and fsm.resume == state, stop
+
+
+@pytest.mark.parametrize("state", AVOID_STATES)
+def test_avoidance_states_resume_after_an_estop(state):
+    fsm = fsm_in(state)
+    fsm.fire(Event.ESTOP)
+    fsm.fire(Event.ESTOP_RELEASE)
+    assert fsm.state == state
+
+
+def test_moving_obstacle_stops_an_escape():
+    fsm = fsm_in(State.ESCAPING)
+    fsm.fire(Event.OBSTACLE_MOVING)
+    assert fsm.state == State.COLLISION_DETECTED and fsm.resume == State.ESCAPING
+
+
+@pytest.mark.parametrize("state", [State.ESCAPING, State.AVOIDING])
+def test_give_up_returns_to_the_trick(state):
+    fsm = fsm_in(state)
+    fsm.fire(Event.GIVE_UP)
+    assert fsm.state == State.EXECUTING
+
+
+def test_dodge_cycle_and_dodge_from_a_collision_while_idle():
+    fsm = fsm_in(State.WAITING_FOR_GESTURE)
+    fsm.fire(Event.DODGE)
+    assert fsm.state == State.DODGING
+    fsm.fire(Event.DODGE_DONE)
+    assert fsm.state == State.WAITING_FOR_GESTURE
+    fsm.fire(Event.COLLISION)
+    fsm.fire(Event.DODGE)
+    assert fsm.state == State.DODGING and fsm.collision
+    assert not fsm_in(State.EXECUTING).fire(Event.DODGE)  # never while a trick runs
+
+
+def test_give_up_while_the_zone_is_occupied_stops_first():
+    fsm = fsm_in(State.BLOCKED)
+    fsm.fire(Event.GIVE_UP)
+    assert fsm.state == State.COLLISION_DETECTED and fsm.resume == State.EXECUTING
+    fsm.fire(Event.COLLISION_CLEAR)
+    assert fsm.state == State.EXECUTING
+
+
+def test_escaped_with_the_collision_flag_still_set_waits_for_it_to_clear():
+    fsm = fsm_in(State.ESCAPING)
+    fsm.fire(Event.COLLISION)
+    fsm.fire(Event.ESCAPED)
+    assert fsm.state == State.COLLISION_DETECTED and fsm.resume == State.AVOIDING

@@ -145,6 +145,25 @@ ZoneParams grownZone(const ZoneParams& base, double vx, double vy, double wz, co
   return z;
 }
 
+ZoneParams ZoneHold::apply(const ZoneParams& now, bool moving, bool latched, bool enabled) {
+  holding_ = false;
+  if (!enabled || !latched || moving || !valid_) {
+    held_ = now;
+    valid_ = true;
+    return now;
+  }
+  ZoneParams z = now;
+  double* sides[4] = {&z.front, &z.back, &z.left, &z.right};
+  const double held[4] = {held_.front, held_.back, held_.left, held_.right};
+  for (int i = 0; i < 4; ++i) {
+    if (held[i] > *sides[i]) {
+      *sides[i] = held[i];
+      holding_ = true;
+    }
+  }
+  return z;
+}
+
 ZoneParams zoneAroundOrigin(const ZoneParams& zone, double dx, double dy, bool* clamped) {
   ZoneParams z = zone;
   if (clamped) *clamped = false;

@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>
 #include <array>
+#include <cmath>
 #include <condition_variable>
 #include <mutex>
 #include <thread>
@@ -137,6 +138,7 @@ class LidarNode {
     motion_.rotation_lever = c.rotation_lever;
     motion_.max_growth = c.max_growth;
     velocity_aware_ = c.velocity_aware;
+    hold_zone_ = c.hold_when_stopped;
     stale_periods_ = c.stale_periods;
     scan_rate_ = c.scan_rate;
     pparams_.hysteresis_scans = static_cast<unsigned>(c.hysteresis_scans);
@@ -257,9 +259,13 @@ class LidarNode {
                         zone_frame_.c_str());
     }
     ZoneParams zone = base;
+    bool moving = false;
     if (velocity_aware_ && !cmd_time_.isZero() && (now - cmd_time_).toSec() < cmd_timeout_) {
       zone = grownZone(base, cmd_.linear.x, cmd_.linear.y, cmd_.angular.z, motion_);
+      moving = std::fabs(cmd_.linear.x) > 1e-3 || std::fabs(cmd_.linear.y) > 1e-3 ||
+               std::fabs(cmd_.angular.z) > 1e-3;
     }
+    zone = hold_.apply(zone, moving, pipeline_.collision(), velocity_aware_ && hold_zone_);
     pipeline_.setZone(zone);
     pipeline_.setPose(pose);
     ScanPipeline::Outputs& out = outputs_;
@@ -416,6 +422,8 @@ class LidarNode {
   ZoneParams zone_;
   MotionParams motion_;
   bool velocity_aware_ = true;
+  bool hold_zone_ = true;  // a collision found in a motion's grown zone holds that zone while stopped
+  ZoneHold hold_;
   int stale_periods_ = 3;
   double scan_rate_ = 10.0;
 

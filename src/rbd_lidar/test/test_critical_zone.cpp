@@ -600,3 +600,56 @@ TEST(CriticalZone, FastPathEqualsBruteForce) {
   }
   EXPECT_GT(compared_critical, 1000u);  // the comparison covered plenty of critical points
 }
+
+TEST(CriticalZone, ZoneHoldKeepsTheStoppedMotionsZoneUntilReleased) {
+  ZoneParams rest;
+  rbd_lidar::MotionParams motion;  // 0.7 s
+  const ZoneParams walking = rbd_lidar::grownZone(rest, 0.3, 0.0, 0.0, motion);
+  const ZoneParams stepping_back = rbd_lidar::grownZone(rest, -0.1, 0.0, 0.0, motion);
+  rbd_lidar::ZoneHold hold;
+  // Walking, no collision: the walking zone, nothing held.
+  ZoneParams z = hold.apply(walking, true, false);
+  EXPECT_NEAR(z.front, 0.91, 1e-9);
+  EXPECT_FALSE(hold.holding());
+  // The collision latched in the walking zone; the robot stands still: the front stays grown.
+  z = hold.apply(rest, false, true);
+  EXPECT_NEAR(z.front, 0.91, 1e-9);
+  EXPECT_NEAR(z.back, rest.back, 1e-9);
+  EXPECT_TRUE(hold.holding());
+  z = hold.apply(rest, false, true);
+  EXPECT_NEAR(z.front, 0.91, 1e-9);
+  // Disabled: the rest zone at once (the old stop-and-go behaviour).
+  EXPECT_NEAR(hold.apply(rest, false, true, false).front, rest.front, 1e-9);
+  // Latched again while standing: the hold was replaced by the rest zone when disabled.
+  EXPECT_NEAR(hold.apply(rest, false, true).front, rest.front, 1e-9);
+  // A new motion during the latch (stepping back) uses its own zone and replaces the hold.
+  hold.apply(walking, true, false);
+  hold.apply(rest, false, true);
+  z = hold.apply(stepping_back, true, true);
+  EXPECT_NEAR(z.front, rest.front, 1e-9);
+  EXPECT_NEAR(z.back, 0.55 + 0.07, 1e-9);
+  z = hold.apply(rest, false, true);
+  EXPECT_NEAR(z.front, rest.front, 1e-9);
+  EXPECT_NEAR(z.back, 0.62, 1e-9);
+  // Released: the rest zone again.
+  z = hold.apply(rest, false, false);
+  EXPECT_NEAR(z.back, rest.back, 1e-9);
+  EXPECT_FALSE(hold.holding());
+
+  // A return 0.85 m ahead: found walking at 0.3 m/s, and still critical standing in the held zone,
+  // although the rest zone (0.70 m) would release it.
+  const BeamModel m = simple({0.0}, 360);
+  ZoneParams cfg;
+  cfg.point_threshold = 1;
+  std::vector<uint32_t> img(360, 0);
+  img[0] = 850;
+  CriticalZone zone;
+  rbd_lidar::ZoneHold h;
+  ASSERT_TRUE(zone.configure(m, h.apply(rbd_lidar::grownZone(cfg, 0.3, 0, 0, motion), true, false),
+                             level(0.5), nullptr));
+  EXPECT_EQ(run(zone, img).total(), 1u);
+  ASSERT_TRUE(zone.configure(m, h.apply(cfg, false, true), level(0.5), nullptr));
+  EXPECT_EQ(run(zone, img).total(), 1u);
+  ASSERT_TRUE(zone.configure(m, cfg, level(0.5), nullptr));
+  EXPECT_EQ(run(zone, img).total(), 0u);
+}

@@ -230,3 +230,21 @@ def test_bad_crowd_gives_clear_errors(crowd, match):
 def test_crowd_name_clash_is_an_error():
     with pytest.raises(WorldError, match="already used"):
         world_from_dict({"people": [{"name": "crowd0", "path": [[5, 5]]}], "crowd": {"count": 1}})
+
+
+def test_place_box_add_move_remove_and_errors():
+    from rbd_sim.world import World
+
+    w = World()
+    assert w.place_box("bag", 1.0, 0.0, 0.3, 0.4, 0.4, 0.4) == "added"
+    assert w.place_box("bag", 2.0, 0.5, 0.0, 0.4, 0.4, 0.4) == "moved"
+    (b,) = [b for b in w.all_boxes() if b.name == "bag"]
+    assert (b.cx, b.cy, b.hx, b.hy, b.z1 - b.z0) == (2.0, 0.5, 0.2, 0.2, 0.4)
+    for bad in (("", 0, 0, 0, 1, 1, 1), ("b", float("nan"), 0, 0, 1, 1, 1), ("b", 0, 0, 0, 0.0, 1, 1),
+                ("b", 0, 0, 0, 1, 1, 11.0), ("b", 0, 0, 0, 21.0, 1, 1)):
+        with pytest.raises(WorldError):
+            w.place_box(*bad)
+    w.remove("bag")
+    assert w.all_boxes() == list(w.boxes)
+    with pytest.raises(WorldError, match="no such obstacle"):
+        w.remove("bag")

@@ -29,6 +29,14 @@ STATUS_COLOURS = {
     "idle": "#1565c0",  # blue
     "running": "#2e7d32",  # green
 }
+#: Active collision avoidance (issue 17): the main controller's avoidance states get their own
+#: label (the state) and colour over the position controller's status; the e-stop still wins.
+AVOIDANCE_COLOURS = {
+    "BLOCKED": "#6a1b9a",  # purple: stopped by a static obstacle, avoidance pending
+    "ESCAPING": "#00838f",  # teal: stepping away / walking around / dodging
+    "AVOIDING": "#00838f",
+    "DODGING": "#00838f",
+}
 UNKNOWN_COLOUR = "#616161"
 CONNECTED_COLOUR = "#2e7d32"
 DISCONNECTED_COLOUR = "#c62828"
@@ -158,6 +166,7 @@ class OperatorGui:
             elif kind == "state":
                 self.state = value
                 self.controller_label.configure(text="controller: %s" % value)
+                self._show_status(self.status)
             elif kind == "moves":
                 self._show_moves(value)
             elif kind == "gesture":
@@ -188,6 +197,9 @@ class OperatorGui:
 
     def _show_status(self, status: str) -> None:
         self.status = status
+        if self.state in AVOIDANCE_COLOURS and status != "emergency":
+            self.state_label.configure(text=self.state, fg_color=AVOIDANCE_COLOURS[self.state])
+            return
         colour = STATUS_COLOURS.get(status, UNKNOWN_COLOUR)
         self.state_label.configure(text=status.upper() if status in STATUS_COLOURS else "status: %s" % status,
                                    fg_color=colour)

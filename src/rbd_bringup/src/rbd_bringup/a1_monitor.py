@@ -36,6 +36,13 @@ def command_speed(cmd: wire.Command) -> float:
     return max(math.hypot(cmd.velocity[0], cmd.velocity[1]), abs(cmd.yawSpeed))
 
 
+def command_velocity(cmd: wire.Command) -> Tuple[float, float, float]:
+    """Commanded body velocity of a HighCmd: (forward [m/s], left [m/s], yaw [rad/s]); zeros unless walking."""
+    if cmd.mode != wire.MODE_VELOCITY_WALK:
+        return (0.0, 0.0, 0.0)
+    return (float(cmd.velocity[0]), float(cmd.velocity[1]), float(cmd.yawSpeed))
+
+
 class HighCmdMonitor:
     """Records every HighCmd the A1 receives on an LCM URL, in a background thread.
 
@@ -46,6 +53,8 @@ class HighCmdMonitor:
     Args:
         url: LCM URL, e.g. ``udpm://239.255.76.67:7667?ttl=0`` (the mock A1's ``/rbd_sim/lcm_url``).
         record: called with (time, speed) for every valid command; runs in the LCM thread.
+        record_velocity: if given, also called with (time, (vx, vy, wz)) for every valid command
+            (the direction of the motion, see :func:`command_velocity`); runs in the LCM thread.
         clock: time source for the samples (``time.monotonic`` or ``time.time``).
         channel: LCM channel of the commands.
     """
@@ -56,6 +65,7 @@ class HighCmdMonitor:
         record: Optional[Callable[[float, float], None]] = None,
         clock: Callable[[], float] = time.monotonic,
         channel: str = wire.CHANNEL_HIGH_CMD,
+        record_velocity: Optional[Callable[[float, Tuple[float, float, float]], None]] = None,
     ) -> None:
         import lcm  # here, so that importing the module needs no LCM
 
@@ -65,6 +75,7 @@ class HighCmdMonitor:
         self.samples = []  # type: List[Sample]
         self.bad = 0
         self._record = record if record is not None else self._append
+        self._record_velocity = record_velocity
         self._lc = lcm.LCM(url)
         self._lc.subscribe(channel, self._on_packet)
         self._stop = threading.Event()
@@ -81,7 +92,10 @@ class HighCmdMonitor:
         except wire.WireError:
             self.bad += 1
             return
-        self._record(self.clock(), command_speed(cmd))
+        now = self.clock()
+        self._record(now, command_speed(cmd))
+        if self._record_velocity is not None:
+            self._record_velocity(now, command_velocity(cmd))
 
     def _loop(self) -> None:
         while not self._stop.is_set():

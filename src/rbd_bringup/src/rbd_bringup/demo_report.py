@@ -12,7 +12,8 @@ def reaction_times(collision_onsets: Sequence[float], commands: Sequence[Tuple[f
     """Software reaction time per collision onset: scan time → first zero-velocity command at the A1.
 
     Args:
-        collision_onsets: stamps of the scans that first contained an intruder [s].
+        collision_onsets: stamps of the scans from which the zone demanded a stop [s] (the rising
+            edges of :func:`stop_demanded`; a guarded motion away from an intruder is no stop).
         commands: (time [s], commanded speed magnitude) of every HighCmd seen on LCM, in order.
 
     Returns:
@@ -28,6 +29,95 @@ def reaction_times(collision_onsets: Sequence[float], commands: Sequence[Tuple[f
         if after:
             out.append(after[0] - onset)
     return out
+
+
+#: Side order of rbd_msgs/CollisionState's ``points`` (FRONT, LEFT, BACK, RIGHT).
+FRONT, LEFT, BACK, RIGHT = 0, 1, 2, 3
+#: Controller states whose motions are gated per zone side (DESIGN: an avoidance motion starts with
+#: something in the zone and may only move away from it), not stopped by the collision flag.
+GUARDED_STATES = ("ESCAPING", "DODGING")
+
+
+def heading_sides(vx: float, vy: float, wz: float, eps: float = 1e-3) -> List[int]:
+    """Zone sides a body velocity moves towards (a turn sweeps all four).
+
+    Args:
+        vx: forward velocity [m/s].
+        vy: leftward velocity [m/s].
+        wz: yaw rate [rad/s].
+        eps: smaller magnitudes count as zero.
+
+    Returns:
+        Side indices (FRONT, LEFT, BACK, RIGHT) in that order.
+    """
+    if abs(wz) > eps:
+        return [FRONT, LEFT, BACK, RIGHT]
+    sides = []
+    if vx > eps:
+        sides.append(FRONT)
+    elif vx < -eps:
+        sides.append(BACK)
+    if vy > eps:
+        sides.append(LEFT)
+    elif vy < -eps:
+        sides.append(RIGHT)
+    return sorted(sides)
+
+
+def stop_demanded(
+    collision: bool, points: Sequence[int], velocity: Tuple[float, float, float], state: str, point_threshold: int = 5
+) -> bool:
+    """Whether a zone reading demands that the current motion stops.
+
+    A trick motion (every state but the guarded ones) must stop on the collision flag. A guarded
+    avoidance motion (ESCAPING, DODGING) is allowed to move away from what is in the zone; it must
+    stop when a side it heads towards holds ``point_threshold`` critical points (rbd_lidar's rule).
+
+    Args:
+        collision: the reading's collision flag.
+        points: critical points per side (FRONT, LEFT, BACK, RIGHT).
+        velocity: (vx, vy, wz) the A1 was last commanded before the scan.
+        state: the main controller's state at the scan.
+        point_threshold: critical points that make a side occupied (rbd_lidar ``~point_threshold``).
+
+    Returns:
+        True when the zone demands zero velocity.
+    """
+    if state not in GUARDED_STATES:
+        return bool(collision)
+    return any(int(points[s]) >= point_threshold for s in heading_sides(*velocity))
+
+
+class StopOnsets:
+    """Scan stamps from which the zone demanded a stop: the rising edges of :func:`stop_demanded`.
+
+    Args:
+        point_threshold: critical points that make a side occupied (rbd_lidar ``~point_threshold``).
+    """
+
+    def __init__(self, point_threshold: int = 5) -> None:
+        self.point_threshold = int(point_threshold)
+        self.onsets = []  # type: List[float]
+        self._demanded = False
+
+    def update(self, stamp: float, collision: bool, points: Sequence[int], valid: bool,
+               velocity: Tuple[float, float, float], state: str) -> bool:
+        """One zone reading; True (and its stamp appended to :attr:`onsets`) when it starts a demanded stop.
+
+        Args:
+            stamp: the scan's stamp [s].
+            collision: the reading's collision flag.
+            points: critical points per side.
+            valid: False for a stale or erroneous reading (never an onset: it is a sensor stop).
+            velocity: (vx, vy, wz) last commanded to the A1 at or before the scan.
+            state: the main controller's state.
+        """
+        demanded = valid and stop_demanded(collision, points, velocity, state, self.point_threshold)
+        onset = demanded and not self._demanded
+        self._demanded = demanded
+        if onset:
+            self.onsets.append(stamp)
+        return onset
 
 
 def percentile(values: Sequence[float], q: float) -> Optional[float]:
@@ -50,6 +140,9 @@ def build_report(
     reactions: Sequence[float],
     scan_period: float,
     duration: float,
+    avoidance_events: Sequence[str] = (),
+    obstacle_contacts: Sequence[Tuple[float, str]] = (),
+    min_obstacle_clearance: float = math.inf,
     gesture_input: str = "",
 ) -> Dict:
     """Collect the run's figures into one JSON-able dictionary.
@@ -65,6 +158,10 @@ def build_report(
         reactions: software reaction times [s] (see :func:`reaction_times`).
         scan_period: LiDAR scan period [s].
         duration: wall time of the scripted part [s].
+        avoidance_events: the controller's ``/rbd_controller/avoidance`` lines ("avoided: ...",
+            "gave_up: ...", ...).
+        obstacle_contacts: (time, obstacle) of every footprint contact with a placed box.
+        min_obstacle_clearance: smallest footprint-to-box clearance seen [m].
         gesture_input: what the gestures were made from (said plainly in the report).
 
     Returns:
@@ -73,11 +170,20 @@ def build_report(
     states = [s for _, s in state_log]
     stops = sum(1 for s in states if s in ("COLLISION_DETECTED", "EMERGENCY_STOP"))
     resumes = sum(
-        1 for a, b in zip(states, states[1:]) if a in ("COLLISION_DETECTED", "EMERGENCY_STOP") and b == "EXECUTING"
+        1 for a, b in zip(states, states[1:])
+        if a in ("COLLISION_DETECTED", "EMERGENCY_STOP", "BLOCKED") and b == "EXECUTING"
     )
     dyaw = math.atan2(math.sin(final_pose[2] - start_pose[2]), math.cos(final_pose[2] - start_pose[2]))
     p99 = percentile(reactions, 99)
+    blocked, avoiding = time_in(state_log, BLOCKED_STATES), time_in(state_log, AVOIDING_STATES)
     return {
+        "obstacles_avoided": sum(1 for e in avoidance_events if e.startswith("avoided")),
+        "avoidance_gave_up": [e for e in avoidance_events if e.startswith("gave_up")],
+        "time_blocked_s": round(blocked, 1),
+        "time_avoiding_s": round(avoiding, 1),
+        "collisions_with_obstacles": len(obstacle_contacts),
+        "min_distance_to_obstacle_m": None if math.isinf(min_obstacle_clearance) else round(
+            min_obstacle_clearance, 3),
         "tricks_requested": list(tricks_requested),
         "tricks_completed": list(tricks_completed),
         "collisions_with_people": len(contacts),
@@ -98,6 +204,21 @@ def build_report(
     }
 
 
+#: Stopped by something in the zone (a person, or a static obstacle before or without avoidance).
+BLOCKED_STATES = ("COLLISION_DETECTED", "BLOCKED")
+#: Getting around a static obstacle.
+AVOIDING_STATES = ("ESCAPING", "AVOIDING")
+
+
+def time_in(state_log: Sequence[Tuple[float, str]], states: Sequence[str]) -> float:
+    """Seconds the controller spent in any of states (state changes (time, state), in order)."""
+    total = 0.0
+    for (t0, s0), (t1, _s1) in zip(state_log, state_log[1:]):
+        if s0 in states:
+            total += t1 - t0
+    return total
+
+
 def render_text(report: Dict) -> str:
     """Human-readable report (the demo's last screen and report.txt)."""
     lines = [
@@ -110,6 +231,11 @@ def render_text(report: Dict) -> str:
         "min distance to person:  %s m" % report["min_distance_to_person_m"],
         "stops / resumes:         %d / %d (collision stops: %d)" % (
             report["stops"], report["resumes"], report["collision_stops"]),
+        "obstacles avoided:       %d (%d pose(s) skipped), contacts with obstacles %d, min distance %s m" % (
+            report.get("obstacles_avoided", 0), len(report.get("avoidance_gave_up", [])),
+            report.get("collisions_with_obstacles", 0), report.get("min_distance_to_obstacle_m")),
+        "time blocked:            %.1f s stopped by people or obstacles, %.1f s getting around obstacles" % (
+            report.get("time_blocked_s", 0.0), report.get("time_avoiding_s", 0.0)),
         "final pose error:        %.3f m, %.1f deg (ground truth vs start)" % (
             report["final_position_error_m"], report["final_yaw_error_deg"]),
         "software reaction time:  p50 %s s, p99 %s s over %d stops (goal <= %s s: one scan + 20 ms)" % (
@@ -131,7 +257,9 @@ def write_report(report: Dict, out_dir: str) -> None:
 
 
 def plot_run(path_xy: Sequence[Tuple[float, float]], people: Dict[str, List[Tuple[float, float, float]]],
-             stop_points: Sequence[Tuple[float, float]], png: str) -> None:
+             stop_points: Sequence[Tuple[float, float]], png: str,
+             boxes: Sequence[Tuple[float, float, float, float, float]] = (),
+             detours: Sequence[Sequence[Tuple[float, float]]] = ()) -> None:
     """PNG of the run: the robot's ground-truth path, where people stood, where it stopped.
 
     Args:
@@ -139,6 +267,8 @@ def plot_run(path_xy: Sequence[Tuple[float, float]], people: Dict[str, List[Tupl
         people: person name -> list of (x, y, radius) samples.
         stop_points: robot positions at collision stops [m].
         png: output file.
+        boxes: placed boxes (x, y, yaw, size_x, size_y) [m, rad].
+        detours: planned detours (the controller's /rbd_controller/detour), each a list of (x, y).
     """
     import matplotlib
 
@@ -155,6 +285,14 @@ def plot_run(path_xy: Sequence[Tuple[float, float]], people: Dict[str, List[Tupl
         py = [s[1] for s in samples]
         ax.plot(px, py, ".", ms=2, color="tab:orange", alpha=0.4, label="people" if i == 0 else None)
         ax.add_patch(plt.Circle((px[-1], py[-1]), samples[-1][2], color="tab:orange", fill=False))
+    for i, (bx, by, byaw, lx, ly) in enumerate(boxes):
+        c, s = math.cos(byaw), math.sin(byaw)
+        corners = [(lx / 2, ly / 2), (-lx / 2, ly / 2), (-lx / 2, -ly / 2), (lx / 2, -ly / 2), (lx / 2, ly / 2)]
+        ax.fill([bx + c * u - s * v for u, v in corners], [by + s * u + c * v for u, v in corners], color="tab:brown",
+                alpha=0.7, label="bag (static obstacle)" if i == 0 else None)
+    for i, plan in enumerate(d for d in detours if d):
+        ax.plot([p[0] for p in plan], [p[1] for p in plan], "o--", color="tab:purple", ms=3, lw=1,
+                label="planned detour" if i == 0 else None)
     if stop_points:
         sx, sy = zip(*stop_points)
         ax.plot(sx, sy, "x", color="red", ms=10, mew=2, label="collision stop")

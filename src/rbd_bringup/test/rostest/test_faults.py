@@ -37,6 +37,9 @@ from rbd_msgs.srv import PressRemote
 from rbd_testkit.ros import run_rostest
 from rbd_wire_oracle import unitree as vendor
 
+#: The e-stop during a detour (AVOIDING) needs a stroll with a dropped bag (~60 s): with the other
+#: avoidance system runs behind RBD_AVOIDANCE_EXPERIMENTS=1 (make test's serial lane is at its budget).
+AVOIDANCE_EXPERIMENTS = bool(os.environ.get("RBD_AVOIDANCE_EXPERIMENTS"))
 TRUTH_STILL = 0.02  # ground-truth speed below this is "stopped" [m/s, rad/s]
 MOVING = 0.08  # ground-truth speed above this is "walking"
 
@@ -78,6 +81,8 @@ class Monitor:
     def __init__(self):
         self.lock = threading.Lock()
         self.truth = []  # (t, speed)
+        self.pose = (0.0, 0.0, 0.0)  # latest ground-truth (x, y, yaw)
+        self.poses = []  # (t, x, y, yaw) of ground truth
         self.commands = []  # (t, speed) of every HighCmd the A1 receives
         self.states = []  # (t, state)
         self.cloud_mode = "pass"  # pass | silent | malformed
@@ -110,8 +115,11 @@ class Monitor:
             self.commands.append((t, speed))
 
     def on_truth(self, msg):
+        p, q = msg.pose.pose.position, msg.pose.pose.orientation
         with self.lock:
             self.truth.append((time.monotonic(), speed_of_twist(msg.twist.twist)))
+            self.pose = (p.x, p.y, math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z)))
+            self.poses.append((time.monotonic(),) + self.pose)
 
     def on_state(self, msg):
         with self.lock:
@@ -506,6 +514,188 @@ class Faults(unittest.TestCase):
         self.collision(False)
         self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume")
         self.record(run=i, state="COLLISION+ESTOP", cmd_stop_s=cmd, truth_stop_s=truth)
+        self.estop_while_escaping(i)
+        self.estop_while_dodging(i)
+        if AVOIDANCE_EXPERIMENTS:
+            self.estop_while_avoiding(i)
+
+    def estop_while_escaping(self, i):
+        """Issue 17: the e-stop preempts an avoidance motion as it preempts a trick.
+
+        A wall panel goes up 0.45 m ahead of the idle robot: the zone stops it, the wall is
+        classified static and the robot steps back (ESCAPING, a guarded translation). Mid-step the
+        e-stop is engaged: zero velocity at the A1 and on ground truth within the same bounds as for
+        a trick; nothing moves while engaged; after the release the escape goes on.
+        """
+        from rbd_msgs.srv import PlaceBox
+
+        m = self.m
+        self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0), "trick did not finish")
+        with m.lock:
+            x, y, yaw = m.pose
+        place = rospy.ServiceProxy("/rbd_sim/place_box", PlaceBox)
+        place(name="wall", x=x + 0.5 * math.cos(yaw), y=y + 0.5 * math.sin(yaw), yaw=yaw, size_x=0.1, size_y=2.0,
+              height=1.0, remove=False)
+        try:
+            self.assertTrue(wait_for(lambda: m.state == "ESCAPING" and m.speed() > 0.05, 30.0),
+                            "no escape from the wall: state %r" % m.state)
+            t0 = time.monotonic()
+            self.em_stop(True)
+            cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.5)
+            self.assertEqual(m.state, "EMERGENCY_STOP")
+            self.em_stop(False)
+            self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0),
+                            "the escape did not finish after the release: %r" % m.state)
+            with m.lock:
+                end = m.pose
+            # It stepped back, away from the wall (never towards it).
+            self.assertLess((end[0] - x) * math.cos(yaw) + (end[1] - y) * math.sin(yaw), -0.15)
+            self.record(run=i, state="ESCAPING", cmd_stop_s=cmd, truth_stop_s=truth)
+        finally:
+            place(name="wall", remove=True)
+
+    def along(self, origin):
+        """Ground-truth distance of the robot ahead of origin (x, y, yaw), along its heading [m]."""
+        with self.m.lock:
+            x, y, _ = self.m.pose
+        return (x - origin[0]) * math.cos(origin[2]) + (y - origin[1]) * math.sin(origin[2])
+
+    def estop_while_dodging(self, i):
+        """Issue 17: the e-stop preempts a dodge (DODGING, a guarded step away from a visitor).
+
+        With ``~dodge`` on, a visitor walks at the idle robot at 0.5 m/s; once it steps back the
+        e-stop is engaged: zero velocity at the A1 and on ground truth within a trick's bounds, and
+        still while engaged although the visitor stands 0.6 m ahead; after the release (the visitor
+        gone) it returns home.
+        """
+        from rbd_msgs.srv import PlaceObstacle
+
+        m = self.m
+        self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0), "not idle: %r" % m.state)
+        self.rehome()  # the escape left it ~0.4 m behind its home: no room within ~dodge_max (0.5 m)
+        with m.lock:
+            home = m.pose
+        place = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
+        rospy.set_param("/rbd_controller/dodge", True)
+
+        def dodging():  # stepping back, mid-step (the step is ~dodge_step, 0.3 m)
+            return m.state == "DODGING" and m.speed() > 0.05 and self.along(home) < -0.05
+
+        try:
+            time.sleep(1.3)  # the controller re-reads ~dodge every second
+            d = 2.2
+            while d > 0.6 and not dodging():
+                place(name="visitor", x=home[0] + d * math.cos(home[2]), y=home[1] + d * math.sin(home[2]),
+                      radius=0.22, height=1.7, remove=False)
+                d -= 0.5 * 0.05
+                time.sleep(0.05)
+            self.assertTrue(wait_for(dodging, 10.0), "no step back from the visitor: state %r, %.2f m from home"
+                            % (m.state, self.along(home)))
+            t0 = time.monotonic()
+            self.em_stop(True)
+            cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.5)
+            self.assertEqual(m.state, "EMERGENCY_STOP")
+            place(name="visitor", remove=True)
+            self.em_stop(False)
+            self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE" and abs(self.along(home)) < 0.08, 40.0),
+                            "no return home after the release: %r, %.2f m" % (m.state, self.along(home)))
+            self.record(run=i, state="DODGING", cmd_stop_s=cmd, truth_stop_s=truth)
+        finally:
+            place(name="visitor", remove=True)
+            rospy.set_param("/rbd_controller/dodge", False)
+
+    def goto(self, x, y, yaw):
+        """Walk the idle robot to a world pose (position controller) and make it home (e-stop, release)."""
+        from geometry_msgs.msg import Pose
+
+        from rbd_msgs.srv import SetPosition
+
+        m = self.m
+        goal = Pose()
+        goal.position.x, goal.position.y = x, y
+        goal.orientation.z, goal.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
+        rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)(pose=goal)
+
+        def there():
+            with m.lock:
+                px, py, pyaw = m.pose
+            return math.hypot(px - x, py - y) < 0.05 and abs(math.sin((pyaw - yaw) / 2.0)) < 0.03
+
+        self.assertTrue(wait_for(there, 40.0), "the robot did not get to (%.1f, %.1f)" % (x, y))
+        self.rehome()
+
+    def rehome(self):
+        """E-stop and release where the idle robot stands: its new home (as an operator who moved it)."""
+        m = self.m
+        self.em_stop(True)
+        self.assertTrue(wait_for(lambda: m.state == "EMERGENCY_STOP", 5.0))
+        self.em_stop(False)
+        self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 10.0))
+
+    def estop_while_avoiding(self, i):
+        """Issue 17: the e-stop preempts a detour (AVOIDING) as it preempts a trick.
+
+        From the lab's free middle (1, 0) facing -x (as tests/experiments' box run), the robot strolls
+        2 m out and back; a 0.4 m bag is dropped 0.5 m ahead of its footprint right after the start.
+        It stops, classifies the bag static, steps back and plans a detour; while it walks the
+        detour the e-stop is engaged: zero velocity at the A1 and on ground truth within a trick's
+        bounds; after the release the detour goes on to its end without touching the bag, then the
+        bag is taken away and the stroll completes.
+        """
+        from nav_msgs.msg import Path
+
+        from rbd_bringup.metrics import box_ahead, footprint_box_clearance
+        from rbd_msgs.srv import PlaceBox
+
+        m = self.m
+        self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0), "not idle: %r" % m.state)
+        with m.lock:
+            home = m.pose
+        place = rospy.ServiceProxy("/rbd_sim/place_box", PlaceBox)
+        detours = []  # arrival times of /rbd_controller/detour (a planned detour)
+        detour_sub = rospy.Subscriber("/rbd_controller/detour", Path, lambda _msg: detours.append(time.monotonic()))
+        try:
+            self.goto(1.0, 0.0, math.pi)
+            with m.lock:
+                start = m.pose
+            shown = [0.0]
+
+            def strolling():
+                if m.state == "WAITING_FOR_GESTURE" and time.monotonic() - shown[0] > 0.5:
+                    m.gesture.publish(String("stroll"))  # shown until taken, as the operator does
+                    shown[0] = time.monotonic()
+                return m.state == "EXECUTING" and m.speed() > 0.15 and self.along(start) > 0.1
+
+            self.assertTrue(wait_for(strolling, 30.0, 0.02), "the stroll did not start: %r" % m.state)
+            with m.lock:
+                robot = m.pose
+            bag = box_ahead(robot, 0.5, (0.4, 0.4))
+            t_bag = time.monotonic()
+            place(name="bag", x=bag[0], y=bag[1], yaw=bag[2], size_x=0.4, size_y=0.4, height=0.4, remove=False)
+            # Walking the planned detour: AVOIDING after the plan was published (not the escape's run-out).
+            self.assertTrue(wait_for(lambda: detours and m.state == "AVOIDING" and m.speed() > 0.05
+                                     and time.monotonic() - detours[-1] > 0.5, 60.0),
+                            "no detour walked around the bag: state %r, %d plan(s)" % (m.state, len(detours)))
+            t0 = time.monotonic()
+            self.em_stop(True)
+            cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.5)
+            self.assertEqual(m.state, "EMERGENCY_STOP")
+            self.em_stop(False)
+            self.assertTrue(wait_for(lambda: m.state == "AVOIDING" and m.speed() > 0.05, 20.0),
+                            "the detour did not go on after the release: %r" % m.state)
+            # to its end (DETOUR_DONE or GIVE_UP -> EXECUTING; a collision stop on the way resumes AVOIDING)
+            self.assertTrue(wait_for(lambda: m.state in ("EXECUTING", "WAITING_FOR_GESTURE"), 60.0),
+                            "the detour did not end: %r" % m.state)
+            with m.lock:
+                path = [p for p in m.poses if p[0] >= t_bag]
+            clearance = min(footprint_box_clearance((x, y), yaw, bag[:2], bag[2], (0.4, 0.4)) for _t, x, y, yaw in path)
+            self.assertGreater(clearance, 0.0, "the robot touched the bag")
+            self.record(run=i, state="AVOIDING", cmd_stop_s=cmd, truth_stop_s=truth, bag_clearance_m=clearance)
+        finally:
+            place(name="bag", remove=True)
+            detour_sub.unregister()
+        self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0), "the stroll did not finish")
+        self.goto(home[0], home[1], home[2])
 
     def fault_remote_estop(self, i):
         """L2 + B on the A1's own remote while the robot walks: zero velocity at the A1 from the HighCmd

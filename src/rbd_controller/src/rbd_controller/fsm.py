@@ -9,6 +9,25 @@ OPERATOR_LOST is the operator-link watchdog's stop (the laptop's heartbeat is go
 from the work states on OPERATOR_LOST (the core decides when, per policy), left on
 OPERATOR_BACK (heartbeats again) or ESTOP_RELEASE (an explicit release acknowledges the loss).
 It never gates the e-stop: ESTOP preempts it like any other state.
+
+Active collision avoidance (issue 17) adds four states, all entered and left through the table:
+
+- BLOCKED: a stop state like COLLISION_DETECTED, entered from it when the blocking points are
+  classified static (BLOCKED_STATIC) while a trick was interrupted; a moving blocker sends it
+  back (OBSTACLE_MOVING: people are waited for, as in the thesis), a clear zone resumes, and
+  AVOID (after ~blocked_timeout, avoidance enabled) starts ESCAPING.
+- ESCAPING: a guarded translation away from the blocking side until the zone is clear by a
+  margin (ESCAPED -> AVOIDING). It starts with the obstacle inside the zone, so the collision
+  flag does not preempt it: the position controller gates the motion per side on the zone.
+- AVOIDING: the planned detour, pose by pose, under the normal collision rules
+  (COLLISION -> COLLISION_DETECTED), then EXECUTING continues the trick (DETOUR_DONE).
+- DODGING: an idle robot steps away from an approaching visitor and back home (guarded, like
+  ESCAPING); DODGE_DONE returns to WAITING_FOR_GESTURE.
+
+GIVE_UP (no detour, too long, ~avoid_timeout) returns to EXECUTING with the blocked pose
+dropped (the core decides skip or home). E-stop, operator loss and a stale zone (ZONE_STALE)
+preempt every avoidance state as they preempt tricks; the avoidance states are resumable like
+the work states.
 """
 
 import enum
@@ -23,7 +42,11 @@ class State(enum.Enum):
     GENERATING_PATH = 2
     EXECUTING = 3
     COLLISION_DETECTED = 4
-    OPERATOR_LOST = 5  # not yet a constant in rbd_msgs/ControllerState (requested)
+    OPERATOR_LOST = 5
+    BLOCKED = 6
+    ESCAPING = 7
+    AVOIDING = 8
+    DODGING = 9
 
 
 class Event(enum.Enum):
@@ -40,13 +63,26 @@ class Event(enum.Enum):
     ABORT = "ABORT"  # the position controller refused a pose or timed out
     OPERATOR_LOST = "OPERATOR_LOST"  # operator heartbeat lost (watchdog, per policy)
     OPERATOR_BACK = "OPERATOR_BACK"  # operator heartbeat back
+    BLOCKED_STATIC = "BLOCKED_STATIC"  # the blocking points are static (map or unmoved for ~static_after)
+    OBSTACLE_MOVING = "OBSTACLE_MOVING"  # the blocking points move (a person): wait as the thesis robot
+    AVOID = "AVOID"  # blocked for ~blocked_timeout with avoidance on
+    ESCAPED = "ESCAPED"  # the zone is clear by the escape margin
+    DETOUR_DONE = "DETOUR_DONE"  # the last detour pose is reached
+    GIVE_UP = "GIVE_UP"  # no detour / too long / ~avoid_timeout: the blocked pose is dropped
+    DODGE = "DODGE"  # a visitor approaches the idle robot
+    DODGE_DONE = "DODGE_DONE"  # back home after a dodge
+    ZONE_STALE = "ZONE_STALE"  # the zone reports stale/invalid data or is silent: stop
 
 
 #: Target meaning "the state stored in the resume slot".
 RESUME = "RESUME"
 
-STOP_STATES = (State.EMERGENCY_STOP, State.COLLISION_DETECTED, State.OPERATOR_LOST)
-WORK_STATES = (State.WAITING_FOR_GESTURE, State.GENERATING_PATH, State.EXECUTING)
+STOP_STATES = (State.EMERGENCY_STOP, State.COLLISION_DETECTED, State.OPERATOR_LOST, State.BLOCKED)
+TRICK_STATES = (State.WAITING_FOR_GESTURE, State.GENERATING_PATH, State.EXECUTING)
+AVOID_STATES = (State.ESCAPING, State.AVOIDING, State.DODGING)
+WORK_STATES = TRICK_STATES + AVOID_STATES
+#: States whose motion is guarded per side by the position controller, not held by the collision flag.
+GUARDED_STATES = (State.ESCAPING, State.DODGING)
 
 TRANSITIONS = {
     (State.WAITING_FOR_GESTURE, Event.GESTURE): State.GENERATING_PATH,
@@ -64,11 +100,33 @@ TRANSITIONS = {
     (State.OPERATOR_LOST, Event.ESTOP_RELEASE): RESUME,
     (State.OPERATOR_LOST, Event.ESTOP): State.EMERGENCY_STOP,
     (State.OPERATOR_LOST, Event.COLLISION): State.OPERATOR_LOST,
+    # issue 17: avoidance
+    (State.COLLISION_DETECTED, Event.BLOCKED_STATIC): State.BLOCKED,
+    (State.COLLISION_DETECTED, Event.DODGE): State.DODGING,
+    (State.BLOCKED, Event.OBSTACLE_MOVING): State.COLLISION_DETECTED,
+    (State.BLOCKED, Event.COLLISION_CLEAR): RESUME,
+    (State.BLOCKED, Event.COLLISION): State.BLOCKED,
+    (State.BLOCKED, Event.ESTOP): State.EMERGENCY_STOP,
+    (State.BLOCKED, Event.OPERATOR_LOST): State.BLOCKED,
+    (State.BLOCKED, Event.AVOID): State.ESCAPING,
+    (State.BLOCKED, Event.GIVE_UP): State.EXECUTING,
+    (State.ESCAPING, Event.ESCAPED): State.AVOIDING,
+    (State.ESCAPING, Event.GIVE_UP): State.EXECUTING,
+    (State.ESCAPING, Event.OBSTACLE_MOVING): State.COLLISION_DETECTED,
+    (State.AVOIDING, Event.DETOUR_DONE): State.EXECUTING,
+    (State.AVOIDING, Event.GIVE_UP): State.EXECUTING,
+    (State.WAITING_FOR_GESTURE, Event.DODGE): State.DODGING,
+    (State.DODGING, Event.DODGE_DONE): State.WAITING_FOR_GESTURE,
 }  # type: Dict[Tuple[State, Event], object]
 for _state in WORK_STATES:
     TRANSITIONS[(_state, Event.ESTOP)] = State.EMERGENCY_STOP
     TRANSITIONS[(_state, Event.COLLISION)] = State.COLLISION_DETECTED
     TRANSITIONS[(_state, Event.OPERATOR_LOST)] = State.OPERATOR_LOST
+    TRANSITIONS[(_state, Event.ZONE_STALE)] = State.COLLISION_DETECTED
+for _state in GUARDED_STATES:
+    # Guarded motions start with something in the zone: the collision flag is only tracked; the
+    # position controller gates every command on the zone side it heads to.
+    TRANSITIONS[(_state, Event.COLLISION)] = _state
 
 
 class Fsm:
@@ -121,9 +179,14 @@ class Fsm:
             target = self.resume
             if source != State.COLLISION_DETECTED and self.collision:
                 target = State.COLLISION_DETECTED
-            elif source == State.COLLISION_DETECTED and self.operator_lost:
+            elif source in (State.COLLISION_DETECTED, State.BLOCKED) and self.operator_lost:
                 target = State.OPERATOR_LOST
-        if target in STOP_STATES and source in WORK_STATES:
+        if self.collision and target in WORK_STATES and target not in GUARDED_STATES and source not in TRICK_STATES:
+            # Leaving a stop or a guarded motion for a trick-like state while the zone still
+            # reports a collision (e.g. GIVE_UP while BLOCKED): stop first, go on when it clears.
+            self.resume = target
+            target = State.COLLISION_DETECTED
+        elif target in STOP_STATES and source in WORK_STATES:
             self.resume = source
         if target == source:
             return True

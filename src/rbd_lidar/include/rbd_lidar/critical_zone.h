@@ -96,6 +96,27 @@ struct MotionParams {
 // The stop zone grown for the commanded body velocity (vx, vy [m/s], wz [rad/s]).
 ZoneParams grownZone(const ZoneParams& base, double vx, double vy, double wz, const MotionParams& motion);
 
+// Keeps a stopped motion's zone until its collision is released. A collision latched while the
+// robot moved was found in the zone grown for that motion; once the robot stands still the zone
+// shrinks back to its rest size, and an obstacle between the two sizes would release the latch
+// at once: the robot resumes, grows the zone, stops again (stop-and-go towards a bag on the path,
+// never standing long enough to be judged blocked). While the latch holds and no motion is
+// commanded, every side stays at least as large as in the last motion commanded during the
+// latched period; a new motion (stepping back, a detour) replaces the held zone with its own.
+class ZoneHold {
+ public:
+  // The zone to check this scan: `now` (the zone for the current command), or while `latched` and
+  // not `moving`, `now` with every side at least the held zone's. `enabled` false: always `now`.
+  ZoneParams apply(const ZoneParams& now, bool moving, bool latched, bool enabled = true);
+  // Whether the last apply() returned a zone larger than `now` on some side.
+  bool holding() const { return holding_; }
+
+ private:
+  ZoneParams held_;
+  bool valid_ = false;
+  bool holding_ = false;
+};
+
 // A zone whose distances are measured from a point fixed to the body (the zone origin) instead of
 // from the LiDAR, expressed around the LiDAR: (dx, dy) [m] is the LiDAR's position relative to the
 // zone origin in the level frame (x = heading). Front/left shrink and back/right grow by the

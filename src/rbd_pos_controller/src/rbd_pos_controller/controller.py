@@ -2,11 +2,16 @@
 
 The node feeds poses, stop/release events and the clock in; step() returns the velocity to
 command. Transitions are one explicit table; the stop states zero the velocity on entry.
+
+GUARDED is the avoidance motion (issue 17: escape, dodge): a straight translation to a
+position without turning, capped at a low speed, gated per side by the LiDAR zone
+(:mod:`rbd_pos_controller.zone_guard`) instead of the slowdown scale, because it starts with
+something in the zone. E-stop and collision preempt it like every motion state.
 """
 
 import enum
 import math
-from typing import Callable, Optional
+from typing import Callable, Optional, Sequence
 
 from rbd_pos_controller.control_law import (
     Errors,
@@ -17,6 +22,7 @@ from rbd_pos_controller.control_law import (
     rotation_command,
     wrap_angle,
 )
+from rbd_pos_controller.zone_guard import ZoneGuard, cap_speed
 
 
 class State(enum.Enum):
@@ -27,6 +33,7 @@ class State(enum.Enum):
     LINEAR = "LINEAR"
     POST_ROTATION = "POST_ROTATION"
     BODY_POSE = "BODY_POSE"
+    GUARDED = "GUARDED"  # avoidance translation, gated per side by the zone
     EMERGENCY_STOP = "EMERGENCY_STOP"
     COLLISION_DETECTED = "COLLISION_DETECTED"
 
@@ -36,6 +43,8 @@ class Event(enum.Enum):
 
     GOAL_FAR = "GOAL_FAR"  # new goal, rho >= skip distance: turn towards it first
     GOAL_NEAR = "GOAL_NEAR"  # new goal, rho < skip distance: no pre-rotation
+    GOAL_GUARDED = "GOAL_GUARDED"  # new avoidance goal (translation only, zone-gated)
+    GUARDED_REACHED = "GUARDED_REACHED"  # the avoidance goal's position is reached (no rotation follows)
     ALIGNED = "ALIGNED"  # |gamma| within tolerance
     REACHED = "REACHED"  # rho within tolerance
     ORIENTED = "ORIENTED"  # |delta| within tolerance
@@ -46,7 +55,7 @@ class Event(enum.Enum):
     COLLISION_CLEAR = "COLLISION_CLEAR"
 
 
-MOTION_STATES = (State.PRE_ROTATION, State.LINEAR, State.POST_ROTATION, State.BODY_POSE)
+MOTION_STATES = (State.PRE_ROTATION, State.LINEAR, State.POST_ROTATION, State.BODY_POSE, State.GUARDED)
 STOP_STATES = (State.EMERGENCY_STOP, State.COLLISION_DETECTED)
 
 TRANSITIONS = {}  # type: Dict[Tuple[State, Event], State]
@@ -56,6 +65,7 @@ TRANSITIONS.update(
         (State.LINEAR, Event.REACHED): State.POST_ROTATION,
         (State.POST_ROTATION, Event.ORIENTED): State.BODY_POSE,
         (State.BODY_POSE, Event.BODY_POSE_DONE): State.WAITING_FOR_POSE,
+        (State.GUARDED, Event.GUARDED_REACHED): State.WAITING_FOR_POSE,
         (State.EMERGENCY_STOP, Event.ESTOP_RELEASE): State.WAITING_FOR_POSE,
         (State.COLLISION_DETECTED, Event.COLLISION_CLEAR): State.WAITING_FOR_POSE,
         (State.COLLISION_DETECTED, Event.ESTOP): State.EMERGENCY_STOP,
@@ -67,6 +77,7 @@ for _state in (State.WAITING_FOR_POSE,) + MOTION_STATES:
     # A new goal is accepted when idle and replaces the current one while moving.
     TRANSITIONS[(_state, Event.GOAL_FAR)] = State.PRE_ROTATION
     TRANSITIONS[(_state, Event.GOAL_NEAR)] = State.LINEAR
+    TRANSITIONS[(_state, Event.GOAL_GUARDED)] = State.GUARDED
     TRANSITIONS[(_state, Event.ESTOP)] = State.EMERGENCY_STOP
     TRANSITIONS[(_state, Event.COLLISION)] = State.COLLISION_DETECTED
 
@@ -76,6 +87,7 @@ STATUS = {
     State.LINEAR: "running",
     State.POST_ROTATION: "running",
     State.BODY_POSE: "running",
+    State.GUARDED: "running",
     State.EMERGENCY_STOP: "emergency",
     State.COLLISION_DETECTED: "collision",
 }
@@ -182,10 +194,18 @@ class PositionController:
         params: tolerances, gains and options.
         on_enter: optional callback(state) called after every state change (after the
             controller's own entry actions).
+        guard: the per-side zone gate of GUARDED goals (default: ZoneGuard()).
     """
 
-    def __init__(self, params: Optional[Params] = None, on_enter: Optional[Callable[[State], None]] = None) -> None:
+    def __init__(
+        self,
+        params: Optional[Params] = None,
+        on_enter: Optional[Callable[[State], None]] = None,
+        guard: Optional[ZoneGuard] = None,
+    ) -> None:
         self.params = params if params is not None else Params()
+        self.guard = guard if guard is not None else ZoneGuard()
+        self.guarded_speed = 0.0
         self.state = State.WAITING_FOR_POSE
         self.goal = None  # type: Optional[Goal]
         self.hold = None  # type: Optional[Tuple[float, float]]
@@ -264,6 +284,39 @@ class PositionController:
         self.collision = bool(detected)
         self.fire(Event.COLLISION if self.collision else Event.COLLISION_CLEAR)
 
+    def update_zone(self, now: float, points: Sequence[int], stale: bool = False, error: str = "") -> None:
+        """Feed one /rbd_lidar/state reading (critical points per side) received at now [s]."""
+        self.guard.update(now, points, stale, error)
+
+    def _refuse_unless_ready(self, now: float) -> None:
+        """Raise GoalRejectedError in a stop state or without a fresh pose (any new goal)."""
+        if self.state == State.EMERGENCY_STOP:
+            raise GoalRejectedError("emergency stop engaged")
+        if self.state == State.COLLISION_DETECTED:
+            raise GoalRejectedError("collision detected")
+        if not self.pose_fresh(now):
+            raise GoalRejectedError("no robot pose received within %.2f s" % self.params.pose_timeout)
+
+    def set_guarded_goal(self, goal: Goal, max_speed: float, now: float) -> None:
+        """Accept an avoidance goal: translate to (goal.x, goal.y) at <= max_speed, heading kept.
+
+        Raises:
+            GoalRejectedError: NaN/inf values, max_speed outside (0, max_vx], a stop state, no
+                fresh pose or no fresh zone reading.
+        """
+        if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in (goal.x, goal.y, max_speed)):
+            raise GoalRejectedError("guarded goal has non-finite values: %r, max_speed %r" % (goal, max_speed))
+        if not 0.0 < max_speed <= self.params.gains.max_vx:
+            raise GoalRejectedError(
+                "max_speed must be in (0, %.2f] m/s, got %r" % (self.params.gains.max_vx, max_speed)
+            )
+        self._refuse_unless_ready(now)
+        if not self.guard.fresh(now):
+            raise GoalRejectedError("no valid LiDAR zone state within %.2f s" % self.guard.timeout)
+        self.goal = Goal(goal.x, goal.y, self._pose[2])
+        self.guarded_speed = float(max_speed)
+        self.fire(Event.GOAL_GUARDED)
+
     def set_goal(self, goal: Goal, now: float) -> None:
         """Accept a new goal (replaces a running one).
 
@@ -273,12 +326,7 @@ class PositionController:
         values = (goal.x, goal.y, goal.yaw, goal.roll, goal.pitch, goal.body_height)
         if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
             raise GoalRejectedError("goal has non-finite values: %r" % (goal,))
-        if self.state == State.EMERGENCY_STOP:
-            raise GoalRejectedError("emergency stop engaged")
-        if self.state == State.COLLISION_DETECTED:
-            raise GoalRejectedError("collision detected")
-        if not self.pose_fresh(now):
-            raise GoalRejectedError("no robot pose received within %.2f s" % self.params.pose_timeout)
+        self._refuse_unless_ready(now)
         x, y, _ = self._pose
         self.goal = goal
         far = math.hypot(goal.x - x, goal.y - y) >= self.params.skip_rotation_distance
@@ -305,10 +353,26 @@ class PositionController:
         if not self.pose_fresh(now):
             self._last_cmd = ZERO
             return ZERO
+        if self.state == State.GUARDED:
+            # No slowdown scale here: it is 0 while anything is in the zone; the guard gates per side.
+            self._last_cmd = self._guarded_command(now)
+            return self._last_cmd
         cmd = self._motion_command()
         # Transitions may chain (e.g. a goal already reached skips straight to BODY_POSE).
         self._last_cmd = tuple(v * self.speed_scale for v in cmd)
         return self._last_cmd
+
+    def _guarded_command(self, now: float) -> Twist2D:
+        p = self.params
+        x, y, yaw = self._pose
+        goal = self.goal
+        err = Errors(x, y, yaw, goal.x, goal.y, goal.yaw)
+        if err.rho <= p.position_tolerance:
+            self.fire(Event.GUARDED_REACHED)
+            return ZERO
+        vx, vy = linear_command(err, p.gains, p.keep_direction)
+        vx, vy = cap_speed(vx, vy, self.guarded_speed)
+        return self.guard.filter((vx, vy, 0.0), now)
 
     def _motion_command(self) -> Twist2D:
         p = self.params

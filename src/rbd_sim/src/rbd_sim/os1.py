@@ -244,7 +244,7 @@ class Os1Model:
             sensor_translation,
             world.floor_z,
             world.ceiling_z,
-            world.boxes,
+            world.all_boxes(),
             world.all_cylinders(t),
             self.max_range,
             motion,

@@ -201,6 +201,7 @@ class World:
         cylinders: Static cylinders.
         people: Scripted people.
         placed: Run-time obstacles by name (see :meth:`place`).
+        placed_boxes: Run-time boxes by name (see :meth:`place_box`).
     """
 
     def __init__(self, name: str = "empty", floor_z: float = 0.0, ceiling_z: float = None) -> None:
@@ -211,6 +212,7 @@ class World:
         self.cylinders = []
         self.people = []
         self.placed = {}
+        self.placed_boxes = {}
 
     # -- run-time obstacles -------------------------------------------------------------------
     def place(self, name: str, x: float, y: float, radius: float, height: float) -> str:
@@ -239,15 +241,50 @@ class World:
         )
         return result
 
+    def place_box(self, name: str, x: float, y: float, yaw: float, size_x: float, size_y: float, height: float) -> str:
+        """Add or move the run-time box called name (a bag, a case, a wall panel).
+
+        Returns:
+            "added" or "moved".
+
+        Raises:
+            WorldError: empty name, non-finite values, sizes not in (0, 20] m, height not in (0, 10] m.
+        """
+        if not name:
+            raise WorldError("place_box: name must not be empty")
+        for label, v in (("x", x), ("y", y), ("yaw", yaw), ("size_x", size_x), ("size_y", size_y), ("height", height)):
+            if not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise WorldError("place_box %r: %s must be a finite number, got %r" % (name, label, v))
+        if not (0.0 < size_x <= 20.0 and 0.0 < size_y <= 20.0 and 0.0 < height <= 10.0):
+            raise WorldError("place_box %r: sizes must be in (0, 20] m and height in (0, 10] m (got %g, %g, %g)" % (
+                name, size_x, size_y, height))
+        result = "moved" if name in self.placed_boxes else "added"
+        boxes = dict(self.placed_boxes)  # swap, never mutate: the caster reads it from another thread
+        boxes[name] = Box(name, x, y, 0.5 * size_x, 0.5 * size_y, self.floor_z, self.floor_z + height, yaw,
+                          DEFAULT_REFLECTIVITY["placed"])
+        self.placed_boxes = boxes
+        return result
+
     def remove(self, name: str) -> None:
-        """Remove the run-time obstacle called name.
+        """Remove the run-time obstacle (cylinder or box) called name.
 
         Raises:
             WorldError: no obstacle has that name.
         """
+        if name in self.placed_boxes:
+            boxes = dict(self.placed_boxes)
+            del boxes[name]
+            self.placed_boxes = boxes
+            return
         if name not in self.placed:
-            raise WorldError("remove obstacle %r: no such obstacle (known: %s)" % (name, sorted(self.placed) or "none"))
+            known = sorted(self.placed) + sorted(self.placed_boxes)
+            raise WorldError("remove obstacle %r: no such obstacle (known: %s)" % (name, known or "none"))
         del self.placed[name]
+
+    def all_boxes(self) -> list:
+        """Static boxes (walls, tables, furniture) and run-time boxes."""
+        boxes = self.placed_boxes
+        return list(self.boxes) + [boxes[k] for k in sorted(boxes)]
 
     # -- snapshots ----------------------------------------------------------------------------
     def dynamic_cylinders(self, t: float) -> list:
