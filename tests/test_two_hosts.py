@@ -116,11 +116,15 @@ class Peer:
     def alive(self):
         return self.proc.poll() is None
 
-    def stop(self):
+    def close_input(self):
+        """End its stdin: the peer's signal to finish (stop() waits for it)."""
         try:
             self.proc.stdin.close()
         except OSError:
             pass
+
+    def stop(self):
+        self.close_input()
         try:
             self.proc.wait(3.0)
         except subprocess.TimeoutExpired:
@@ -278,9 +282,11 @@ class TwoHosts:
 
     # ------------------------------------------------------------ tear-down
     def close(self):
-        for p in reversed(self.peers):
-            if p is not self.link:
-                p.stop()
+        peers = [p for p in reversed(self.peers) if p is not self.link]
+        for p in peers:  # all of them finish at once, then each is waited for
+            p.close_input()
+        for p in peers:
+            p.stop()
         for proc, log in reversed(self.procs):
             if proc.poll() is None:
                 _kill_group(proc, signal.SIGINT)
@@ -510,28 +516,36 @@ def test_robot_camera_gesture_over_the_link(hosts):
     counts0 = h.link_counts()
     t0 = time.monotonic()
     log = open(os.path.join(h.home, "robot_camera_app.log"), "w")
+    # --max-seconds only bounds a run that never ends otherwise: the app is stopped (SIGINT: it
+    # prints its statistics and exits) as soon as the robot walks on its gesture.
     app = subprocess.Popen(
         ["ip", "netns", "exec", h.laptop_ns, sys.executable, "-m", "rbd_local.gesture_app", "--robot-camera",
-         "--headless", "--host", h.robot_ip, "--port", str(BRIDGE_PORT), "--max-seconds", "25", "--stats"],
+         "--headless", "--host", h.robot_ip, "--port", str(BRIDGE_PORT), "--max-seconds", "75", "--stats"],
         env=h.lenv, stdout=subprocess.PIPE, stderr=log, universal_newlines=True, start_new_session=True)
+    out_lines = []
+    reader = threading.Thread(target=lambda: out_lines.extend(app.stdout), daemon=True)
+    reader.start()
     try:
-        out, _ = app.communicate(timeout=90)
+        walking = h.probe.wait("S", t0, timeout=75.0, pred=lambda p: p[0] == "EXECUTING")
+        moving = walking and h.probe.wait("T", walking[0], timeout=10.0, pred=lambda p: float(p[0]) > MOVING)
+        _kill_group(app, signal.SIGINT)
+        app.wait(30)
     finally:
         if app.poll() is None:
             _kill_group(app, signal.SIGKILL)
             app.wait()
+        reader.join(10.0)
         log.close()
+    out = "".join(out_lines)
     lines = [json.loads(x) for x in out.splitlines() if x.startswith("{")]
     sent = [x for x in lines if "command" in x]
     stats = [x["stats"] for x in lines if "stats" in x]
+    assert walking, "the gesture seen by the robot's camera did not start a trick"
+    assert moving, "the robot did not move after the gesture from its camera"
     assert stats, "rbd-gesture printed no statistics (log %s)" % log.name
     cam = stats[-1]["robot_camera"]
     assert cam["shown"] > 0 and cam["bad"] == 0, cam
     assert sent and sent[0]["command"] == "walk" and sent[0]["linked"], out[-2000:]
-    walking = h.probe.wait("S", t0, timeout=0.0, pred=lambda p: p[0] == "EXECUTING")
-    assert walking, "the gesture seen by the robot's camera did not start a trick"
-    moving = h.probe.wait("T", walking[0], timeout=0.0, pred=lambda p: float(p[0]) > MOVING)
-    assert moving, "the robot did not move after the gesture from its camera"
     h.set_link()  # the emulator reports its packet counts with each answer
     forwarded = h.link_counts()[0] - counts0[0]
     assert forwarded > 0, "the camera frames did not cross the emulated link"

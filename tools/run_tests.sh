@@ -37,8 +37,11 @@ t_all=$(date +%s)
 serial_pytest=(tests/test_demo.py tests/test_soak.py tests/test_two_hosts.py tests/experiments
                tests/test_sim_gui.py src/rbd_bringup/test/test_robot_bringup.py src/rbd_bringup/test/test_replay.py)
 # A rostest file starts a simulated stack when it includes one of these launch files or plays a bag;
-# a file that measures rates or latencies says `make test: serial lane` in a comment.
+# a file that measures rates or latencies says `make test: serial lane` in a comment. A file that
+# matches but only starts sensor stand-ins (no mock A1, driver or controllers: as light as
+# people.test) and bounds no latency says `make test: side lane` in a comment, with its reason.
 sim_pattern='launch/(sim|mock_a1|sensors)\.launch|pkg="rosbag"|make test: serial lane'
+side_marker='make test: side lane'
 
 phase() {  # phase NAME START: append the wall time since START to the phases table
   printf '%s\t%s\n' "$1" "$(( $(date +%s) - $2 ))" >> "$phases"
@@ -63,7 +66,11 @@ collect_targets() {
   local t f
   for t in $(make -s -C build help | sed -n 's/^\.\.\. \(run_tests_.*_\(gtest\|rostest\|nosetests\)_[^/]*\)$/\1/p' | sort); do
     f=$(test_file "$t")
-    if [ -n "$f" ] && grep -Eq "$sim_pattern" "$f"; then serial_targets+=("$t"); else side_targets+=("$t"); fi
+    if [ -n "$f" ] && grep -Eq "$sim_pattern" "$f" && ! grep -q "$side_marker" "$f"; then
+      serial_targets+=("$t")
+    else
+      side_targets+=("$t")
+    fi
   done
 }
 

@@ -127,12 +127,16 @@ class SimLidarTest(unittest.TestCase):
         self.assertEqual([c[1] for c in calls], [True, False])
 
     def test_front_boundary(self) -> None:
-        """A wide cylinder approaching in 10 mm steps trips the zone at 700 +- 80 mm."""
+        """A wide cylinder approaching in 10 mm steps trips the zone at 700 +- 80 mm.
+
+        The approach starts at 0.85 m, outside the bound: a zone reaching further out trips on the
+        first step and fails the bound as it would from further away.
+        """
         self._wait_clear()
         x = self.gt.pose.pose.position.x
         y = self.gt.pose.pose.position.y
         radius = 0.3
-        gap = 1.0
+        gap = 0.85
         tripped = None
         while gap > 0.4:
             self.place(name="b", x=x + gap + radius, y=y, radius=radius, height=1.7, remove=False)
