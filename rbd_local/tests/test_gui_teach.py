@@ -178,6 +178,11 @@ def test_the_robots_tricks_are_offered_with_a_preview_of_their_moves(teach_windo
     assert list(panel.tricks) == list(tricks)
     assert panel.trick_menu.cget("values") == list(tricks)
     # a trick no built-in gesture triggers is preselected: the first such one of rbd_navigation
+    # (after a robot without tricks, so whatever another test chose in this window is gone)
+    panel.post_tricks({})
+    assert pump(root, lambda: not panel.tricks, 15)
+    panel.reload_tricks()
+    assert pump(root, lambda: panel.tricks, 15), panel.preview_label.cget("text")
     from rbd_local.gestures.config import load_config
 
     mapped = set(load_config()["gestures"].values())
