@@ -77,6 +77,17 @@ ZoneResult run(const CriticalZone& zone, const std::vector<uint32_t>& img) {
   return r;
 }
 
+// Critical points of a single-row LiDAR (0.5 m up, level) with one return `range_mm` straight
+// ahead, checked against `zone` with one point making a collision.
+uint32_t criticalAhead(ZoneParams zone, uint32_t range_mm) {
+  zone.point_threshold = 1;
+  std::vector<uint32_t> img(360, 0);
+  img[0] = range_mm;
+  CriticalZone cz;
+  EXPECT_TRUE(cz.configure(simple({0.0}, 360), zone, level(0.5), nullptr));
+  return run(cz, img).total();
+}
+
 }  // namespace
 
 TEST(BeamModel, MatchesOusterXyzFormula) {
@@ -431,19 +442,10 @@ TEST(CriticalZone, VelocityAwareGrowth) {
   EXPECT_NEAR(g.front, 0.70, 1e-9);
 
   // A return 0.85 m ahead is clear at rest and critical when walking forward at 0.3 m/s.
-  const BeamModel m = simple({0.0}, 360);
-  ZoneParams z;
-  z.point_threshold = 1;
-  std::vector<uint32_t> img(360, 0);
-  img[0] = 850;
-  CriticalZone zone;
-  ASSERT_TRUE(zone.configure(m, z, level(0.5), nullptr));
-  EXPECT_EQ(run(zone, img).total(), 0u);
-  ASSERT_TRUE(zone.configure(m, rbd_lidar::grownZone(z, 0.3, 0, 0, motion), level(0.5), nullptr));
-  EXPECT_EQ(run(zone, img).total(), 1u);
+  EXPECT_EQ(criticalAhead(base, 850), 0u);
+  EXPECT_EQ(criticalAhead(rbd_lidar::grownZone(base, 0.3, 0, 0, motion), 850), 1u);
   // Walking backwards does not grow the front.
-  ASSERT_TRUE(zone.configure(m, rbd_lidar::grownZone(z, -0.3, 0, 0, motion), level(0.5), nullptr));
-  EXPECT_EQ(run(zone, img).total(), 0u);
+  EXPECT_EQ(criticalAhead(rbd_lidar::grownZone(base, -0.3, 0, 0, motion), 850), 0u);
 }
 
 // Zone distances measured from a body point: a LiDAR 0.08 m behind it (and 0.02 m to the right)
@@ -642,18 +644,8 @@ TEST(CriticalZone, ZoneHoldKeepsTheStoppedMotionsGrowthUntilReleased) {
 
   // A return 0.85 m ahead: found walking at 0.3 m/s, and still critical standing in the held zone,
   // although the rest zone (0.70 m) would release it.
-  const BeamModel m = simple({0.0}, 360);
-  ZoneParams cfg;
-  cfg.point_threshold = 1;
-  std::vector<uint32_t> img(360, 0);
-  img[0] = 850;
-  CriticalZone zone;
   rbd_lidar::ZoneHold h;
-  ASSERT_TRUE(zone.configure(m, h.apply(cfg, rbd_lidar::grownZone(cfg, 0.3, 0, 0, motion), true, false),
-                             level(0.5), nullptr));
-  EXPECT_EQ(run(zone, img).total(), 1u);
-  ASSERT_TRUE(zone.configure(m, h.apply(cfg, cfg, false, true), level(0.5), nullptr));
-  EXPECT_EQ(run(zone, img).total(), 1u);
-  ASSERT_TRUE(zone.configure(m, cfg, level(0.5), nullptr));
-  EXPECT_EQ(run(zone, img).total(), 0u);
+  EXPECT_EQ(criticalAhead(h.apply(rest, walking, true, false), 850), 1u);
+  EXPECT_EQ(criticalAhead(h.apply(rest, rest, false, true), 850), 1u);
+  EXPECT_EQ(criticalAhead(rest, 850), 0u);
 }
