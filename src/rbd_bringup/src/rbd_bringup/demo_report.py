@@ -41,6 +41,10 @@ GUARDED_STATES = ("ESCAPING", "DODGING")
 def heading_sides(vx: float, vy: float, wz: float, eps: float = 1e-3) -> List[int]:
     """Zone sides a body velocity moves towards (a turn sweeps all four).
 
+    Written here on purpose rather than imported from rbd_pos_controller's zone guard
+    (``sides_towards``, the same rule): the report measures whether the guard stopped what it
+    had to, from the HighCmd stream, so it does not share the guard's code.
+
     Args:
         vx: forward velocity [m/s].
         vy: leftward velocity [m/s].
