@@ -13,13 +13,16 @@ sideways (a lasting shift, like a real ZED relocalising into a wrong place) and 
 - the trick still completes and ends at its goal.
 
 One ``FAULT_RESULT {json}`` line is printed (and appended to $RBD_FAULT_LOG if set).
+
+It runs on sim_smoke.test's stack (that is this fault's system; one start-up instead of two):
+``Zed2JumpFault`` is a mixin of test_sim_smoke.py's case, whose class set-up starts the relay
+(``Zed2Relay``) before either test, so the EKF fuses the ZED2 whichever test runs first.
 """
 
 import bisect
 import math
 import threading
 import time
-import unittest
 
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray
@@ -30,7 +33,6 @@ from std_srvs.srv import SetBool
 
 import rbd_testkit
 from rbd_bringup import a1_monitor
-from rbd_testkit.ros import run_rostest
 
 
 def shifted(msg, dx, dy):
@@ -58,10 +60,13 @@ def distance_to_polyline(px, py, points):
     return best
 
 
-class Zed2Jump(unittest.TestCase):
-    """The whole fault in one test case."""
+class Zed2Relay:
+    """The ZED2 relay (shifts by ``offset``) and what the fault measures, for the node's lifetime.
 
-    def setUp(self):
+    One per node: a second relay would keep publishing the unshifted pose.
+    """
+
+    def __init__(self):
         self.lock = threading.Lock()
         self.offset = (0.0, 0.0)
         self.truth_t, self.truth = [], []  # stamp [s], (x, y, speed)
@@ -121,13 +126,18 @@ class Zed2Jump(unittest.TestCase):
                     if kv.key == "rejected":
                         self.rejected = max(self.rejected, int(kv.value))
 
+
+class Zed2JumpFault:
+    """The fault as one test method; the TestCase it is mixed into sets ``z = Zed2Relay()`` first."""
+
     # ------------------------------------------------------------ helpers
     def wait_for(self, predicate, timeout):
         return rbd_testkit.wait_for(predicate, timeout, abort=rospy.is_shutdown)
 
     def speed(self):
-        with self.lock:
-            return self.truth[-1][2] if self.truth else 0.0
+        z = self.z
+        with z.lock:
+            return z.truth[-1][2] if z.truth else 0.0
 
     def record(self, **result):
         result["fault"] = "zed2_jump"
@@ -144,43 +154,48 @@ class Zed2Jump(unittest.TestCase):
         max_speed = float(g("~max_speed", 0.45))
         goal_tolerance = float(g("~goal_tolerance", 0.1))
 
-        self.assertTrue(self.wait_for(lambda: self.state and self.truth and self.relayed > 10, 90.0), "system not up")
+        z = self.z
+        self.assertTrue(self.wait_for(lambda: z.state and z.truth and z.relayed > 10, 90.0), "system not up")
         self.assertTrue(
-            self.wait_for(lambda: len(self.pose_errors) > 20, 30.0), "no /rbd_localization/pose from the relayed ZED2"
+            self.wait_for(lambda: len(z.pose_errors) > 20, 30.0), "no /rbd_localization/pose from the relayed ZED2"
         )
+        # Known state: the path of a trick before this one (the smoke test's spin) is not this walk's.
+        self.assertTrue(self.wait_for(lambda: z.state in ("EMERGENCY_STOP", "WAITING_FOR_GESTURE"), 90.0), z.state)
+        with z.lock:
+            del z.path[:]
         # Release the e-stop and show "walk" until the robot walks.
         rospy.wait_for_service("/rbd_controller/em_stop", 30.0)
         em_stop = rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)
         deadline = time.monotonic() + 45.0
         last_gesture = 0.0
-        while not (self.state == "EXECUTING" and self.speed() > 0.08):
-            self.assertLess(time.monotonic(), deadline, "robot never walked (state %r)" % self.state)
-            if self.state == "EMERGENCY_STOP":
+        while not (z.state == "EXECUTING" and self.speed() > 0.08):
+            self.assertLess(time.monotonic(), deadline, "robot never walked (state %r)" % z.state)
+            if z.state == "EMERGENCY_STOP":
                 em_stop(False)
-            if self.state == "WAITING_FOR_GESTURE" and time.monotonic() - last_gesture > 0.4:
-                self.gesture.publish(String("walk"))
+            if z.state == "WAITING_FOR_GESTURE" and time.monotonic() - last_gesture > 0.4:
+                z.gesture.publish(String("walk"))
                 last_gesture = time.monotonic()
             time.sleep(0.05)
         t_start = rospy.get_time()
-        rejected_before = self.rejected
+        rejected_before = z.rejected
         time.sleep(jump_delay)
         # Sideways to the walk (+y): a controller following the jumped pose would lunge off the path.
-        with self.lock:
-            self.offset = (0.0, jump)
+        with z.lock:
+            z.offset = (0.0, jump)
         t_jump = rospy.get_time()
         time.sleep(jump_duration)
-        with self.lock:
-            self.offset = (0.0, 0.0)
+        with z.lock:
+            z.offset = (0.0, 0.0)
         t_clear = rospy.get_time()
-        finished = self.wait_for(lambda: self.state == "WAITING_FOR_GESTURE", 60.0)
+        finished = self.wait_for(lambda: z.state == "WAITING_FOR_GESTURE", 60.0)
         time.sleep(1.0)  # diagnostics (1 Hz) catch up
         t_end = rospy.get_time()
 
-        with self.lock:
-            start = self.truth[bisect.bisect_left(self.truth_t, t_start) - 1]
-            path = [(start[0], start[1])] + list(self.path)  # from where the trick started
-            truth = [(t, s) for t, s in zip(self.truth_t, self.truth) if t_start <= t <= t_end]
-            errors = [e for t, e in self.pose_errors if t_start <= t <= t_end]
+        with z.lock:
+            start = z.truth[bisect.bisect_left(z.truth_t, t_start) - 1]
+            path = [(start[0], start[1])] + list(z.path)  # from where the trick started
+            truth = [(t, s) for t, s in zip(z.truth_t, z.truth) if t_start <= t <= t_end]
+            errors = [e for t, e in z.pose_errors if t_start <= t <= t_end]
         self.assertTrue(len(path) > 1, "no planned path on /rbd_controller/path")
         self.assertTrue(truth and errors, "no ground truth / localization pose recorded")
         deviation = max(distance_to_polyline(s[0], s[1], path) for _t, s in truth)
@@ -194,18 +209,14 @@ class Zed2Jump(unittest.TestCase):
             max_pose_error_m=round(pose_error, 3),
             max_path_deviation_m=round(deviation, 3),
             max_speed_mps=round(top_speed, 3),
-            zed_rejected=self.rejected - rejected_before,
+            zed_rejected=z.rejected - rejected_before,
             finished=finished,
             goal_error_m=round(goal_error, 3),
         )
-        self.assertGreater(self.rejected, rejected_before, "the EKF never reported a rejected ZED2 sample")
+        self.assertGreater(z.rejected, rejected_before, "the EKF never reported a rejected ZED2 sample")
         self.assertLessEqual(pose_error, max_pose_error, "localization followed the ZED2 jump")
         self.assertLessEqual(deviation, max_path_deviation, "the robot left the planned path (lunge)")
         self.assertLessEqual(top_speed, max_speed, "the robot moved faster than the limits")
-        self.assertTrue(finished, "the trick did not complete after the jump (state %r)" % self.state)
+        self.assertTrue(finished, "the trick did not complete after the jump (state %r)" % z.state)
         self.assertLessEqual(goal_error, goal_tolerance, "the trick ended away from its goal")
 
-
-if __name__ == "__main__":
-    rospy.init_node("test_fault_zed2_jump")
-    run_rostest("rbd_bringup", "test_fault_zed2_jump", Zed2Jump)

@@ -4,7 +4,8 @@ assert zero velocity at the A1 within the bound, clear the fault, assert recover
 
 Measured on ground truth (/rbd_sim/ground_truth twist) and on the LCM_High_Cmd stream the mock
 A1 receives. The faults are chosen with the private param ``~fault`` (one name, or several
-separated by spaces, run in order on the same system); every measurement is printed as one
+separated by spaces, run in order on the same system, ``~repeat`` rounds; ``NAME:N`` runs that one
+only in the last N rounds); every measurement is printed as one
 ``FAULT_RESULT {json}`` line (and appended to $RBD_FAULT_LOG if set) for docs/RELIABILITY.md.
 ``~sdk_layout`` (default 3.3.4) is the Unitree SDK layout the mock A1 was launched with: checked
 on the wire (HighState size) and in the driver's diagnostics before any fault.
@@ -52,6 +53,29 @@ def speed_of_twist(t):
 wait_for = functools.partial(rbd_testkit.wait_for, abort=rospy.is_shutdown)
 
 
+def fault_plan(spec, repeat):
+    """The faults of ``spec`` ("a b:1 ...") round by round: a list of ``repeat`` lists of names.
+
+    A plain name runs in every round, ``NAME:N`` in the last N rounds only; within a round the
+    faults run in the order of ``spec`` (a fault that moves the robot's home, as estop_states'
+    escape, goes last, so that the others' earlier rounds start where they always did).
+    """
+    rounds = [[] for _ in range(repeat)]
+    for item in spec.split():
+        name, _, n = item.partition(":")
+        n = repeat if not n else int(n)
+        if n < 1 or n > repeat:
+            raise ValueError("%r: rounds must be 1..%d" % (item, repeat))
+        for i in range(repeat - n, repeat):
+            rounds[i].append(name)
+    return rounds
+
+
+def fault_names():
+    """The names of the faults of ``~fault`` (without their round counts)."""
+    return [item.partition(":")[0] for item in rospy.get_param("~fault").split()]
+
+
 def children(pid):
     """PIDs of the child processes of ``pid`` (Linux /proc)."""
     out = []
@@ -90,7 +114,7 @@ class Monitor:
         self.malformed_sent = 0
         self.pose_pass = True
         self.last_pose = None
-        self.heartbeat = "operator_link" in rospy.get_param("~fault").split()  # on from the start when tested
+        self.heartbeat = "operator_link" in fault_names()  # on from the start when tested
         self.diag = None  # the driver's last DiagnosticStatus
         self.remote_held = []  # (t, held) from /rbd_a1_driver/remote_estop_held
         self.cloud_pub = rospy.Publisher("/reliability/points", PointCloud2, queue_size=2)
@@ -101,7 +125,7 @@ class Monitor:
         rospy.Subscriber("/rbd_controller/state", String, self.on_state, queue_size=20)
         rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diag, queue_size=20)
         rospy.Subscriber("/rbd_a1_driver/remote_estop_held", Bool, self.on_remote, queue_size=20)
-        faults = set(rospy.get_param("~fault").split())
+        faults = set(fault_names())
         if faults & {"lidar_silent", "lidar_malformed"}:  # rbd_lidar reads /reliability/points in these tests
             rospy.Subscriber("/ouster/points", PointCloud2, self.on_cloud, queue_size=2, buff_size=2 ** 24)
         if "pose_silent" in faults:  # the position controller follows /reliability/pose
@@ -294,8 +318,8 @@ class Faults(unittest.TestCase):
     def test_fault(self):
         self.wait_ready()
         repeat = int(rospy.get_param("~repeat", 1))
-        for i in range(repeat):
-            for fault in rospy.get_param("~fault").split():
+        for i, faults in enumerate(fault_plan(rospy.get_param("~fault"), repeat)):
+            for fault in faults:
                 self.fault = fault
                 rospy.loginfo("fault %s, round %d of %d", fault, i + 1, repeat)
                 try:
@@ -784,4 +808,4 @@ class Faults(unittest.TestCase):
 
 if __name__ == "__main__":
     rospy.init_node("test_faults")
-    run_rostest("rbd_bringup", rospy.get_param("~suite", "faults_" + rospy.get_param("~fault").split()[0]), Faults)
+    run_rostest("rbd_bringup", rospy.get_param("~suite", "faults_" + fault_names()[0]), Faults)

@@ -4,6 +4,12 @@
 Also the A1 wire of SDK 3.3.4 end to end: /joint_states from the mock's motor states through the
 driver (standing angles, legs moving in the trick), and the status light: the LEDs the driver puts
 in HighCmd, shown by the mock as /rbd_sim/led, red in EMERGENCY_STOP, the GUI's blue when idle.
+
+The same stack runs the fault "ZED2 jumping 1 m" (test_fault_zed2_jump.py; the EKF reads the
+ZED2 through that test's relay, started with the class before either test). The two run in the
+order of RBD_TEST_SEED; each begins from its own known state: this one engages the e-stop when the
+fault's walk ran first (the power-up state is the first state the node saw), the fault's walk
+starts from the e-stop or an idle robot.
 """
 
 import functools
@@ -21,6 +27,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState, PointCloud2
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
+from test_fault_zed2_jump import Zed2JumpFault, Zed2Relay
 from visualization_msgs.msg import Marker
 
 import rbd_testkit
@@ -38,7 +45,23 @@ EXPECTED_NODES = [
 wait_for = functools.partial(rbd_testkit.wait_for, abort=rospy.is_shutdown)
 
 
-class SimSmoke(unittest.TestCase):
+def yaw_difference(a, b):
+    """a - b wrapped to (-pi, pi]."""
+    return math.atan2(math.sin(a - b), math.cos(a - b))
+
+
+class SimSmoke(Zed2JumpFault, unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.z = Zed2Relay()  # before either test: the EKF fuses the relayed ZED2
+        cls.first_state = None  # the power-up state: the first /rbd_controller/state the node sees
+
+        def first(msg):
+            if cls.first_state is None:
+                cls.first_state = msg.data
+
+        rospy.Subscriber("/rbd_controller/state", String, first)
+
     def setUp(self):
         self.truth = None
         self.state = ""
@@ -83,7 +106,12 @@ class SimSmoke(unittest.TestCase):
 
     def test_system(self):
         self.assertTrue(wait_for(lambda: self.truth is not None and self.state, 60.0), "no ground truth / state")
-        self.assertEqual(self.state, "EMERGENCY_STOP", "power-up state must be EMERGENCY_STOP")
+        self.assertEqual(self.first_state, "EMERGENCY_STOP", "power-up state must be EMERGENCY_STOP")
+        if self.state != "EMERGENCY_STOP":  # the ZED2 fault's walk ran first: e-stop again (known state)
+            self.assertTrue(wait_for(lambda: self.state == "WAITING_FOR_GESTURE", 90.0), self.states[-5:])
+            rospy.wait_for_service("/rbd_controller/em_stop", 10.0)
+            self.assertTrue(rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)(True).success)
+            self.assertTrue(wait_for(lambda: self.state == "EMERGENCY_STOP", 5.0), self.states[-5:])
 
         def missing():
             running = set(rosnode.get_node_names())
@@ -128,7 +156,8 @@ class SimSmoke(unittest.TestCase):
 
         # Show the spin gesture until the controller takes it (a collision stop may come and go
         # meanwhile), then watch the trick on ground truth.
-        yaws = []
+        yaws = []  # relative to the yaw before the trick
+        yaw0 = yaw_of(self.truth.pose.pose.orientation)
         deadline = time.monotonic() + 30.0
         while self.state not in ("GENERATING_PATH", "EXECUTING") and time.monotonic() < deadline:
             if self.state == "WAITING_FOR_GESTURE":
@@ -137,7 +166,7 @@ class SimSmoke(unittest.TestCase):
         self.assertIn(self.state, ("GENERATING_PATH", "EXECUTING"), self.states)
 
         def back_waiting():
-            yaws.append(yaw_of(self.truth.pose.pose.orientation))
+            yaws.append(yaw_difference(yaw_of(self.truth.pose.pose.orientation), yaw0))
             return self.state == "WAITING_FOR_GESTURE"
 
         del self.thighs[:]
