@@ -4,6 +4,9 @@ Asserts the report measured on ground truth: every trick completed, no contact w
 the bag, the robot stopped for the visitor and resumed after the visitor left, and (with
 RBD_AVOIDANCE_EXPERIMENTS=1, over make test's budget) it got around the bag put down on its
 stroll (issue 17: obstacles avoided, time blocked).
+
+Without the demo's OUT/recording (``--record-seconds 0``: ~10 s of recording nothing here asserts):
+test_replay.py records with the same ``rosrun rbd_bringup record`` and replays it.
 """
 
 import json
@@ -22,7 +25,8 @@ def test_demo_scenario(tmp_path):
     out = tmp_path / "demo"
     tricks = TRICKS + (["stroll"] if WITH_BAG else [])
     proc = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "demo_scenario.py"), "--out", str(out),
-                           "--columns", "512", "--tricks", ",".join(tricks)] + ([] if WITH_BAG else ["--bag", ""]),
+                           "--columns", "512", "--tricks", ",".join(tricks), "--record-seconds", "0"]
+                          + ([] if WITH_BAG else ["--bag", ""]),
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=600)
     assert (out / "report.json").exists(), proc.stdout[-5000:]
     report = json.loads((out / "report.json").read_text())
