@@ -653,6 +653,7 @@ def main():
     columns = args.columns or (512 if args.short else 1024)
     stack = start_stack(args.stack, args.out, args.seed, columns)
     failed = []
+    written = set()
     try:
         import rospy
 
@@ -674,9 +675,17 @@ def main():
             result["seconds"] = time.monotonic() - t0
             with open(os.path.join(args.out, name + ".json"), "w") as fh:
                 json.dump(result, fh, indent=2, sort_keys=True)
+            written.add(name)
             log("%s done in %.1f s" % (name, result["seconds"]))
             if "error" not in result:  # the result next to the thesis value
                 print(thesis.render_table(thesis.rows({name: result})), flush=True)
+    except Exception as exc:  # the stack itself failed: every experiment not run says why
+        log("%s stack FAILED: %s\n%s" % (args.stack, exc, stack.tails(40)))
+        for name in names:
+            if name not in written:
+                with open(os.path.join(args.out, name + ".json"), "w") as fh:
+                    json.dump({"error": "%s stack: %s" % (args.stack, exc), "short": args.short}, fh)
+                failed.append(name)
     finally:
         stack.close(timeout=25.0)  # roslaunch itself escalates SIGINT -> SIGTERM after 15 s
     return 1 if failed else 0
