@@ -77,7 +77,6 @@ class RosApi:
     def __init__(
         self, policy: Any, graph: Any, params: Any, now: Callable[..., Any], service_type: Any, types: Any = None
     ) -> None:
-        """Keep the adapters."""
         self.policy = policy
         self.graph = graph
         self.params = params

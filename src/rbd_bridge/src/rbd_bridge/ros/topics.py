@@ -85,7 +85,6 @@ class Topics:
     """
 
     def __init__(self, loop: Any, master: Any, window: float = 1.0, fast: Any = None, linger: float = 5.0) -> None:
-        """No topic yet."""
         self.loop = loop
         self.master = master
         self.window = window
