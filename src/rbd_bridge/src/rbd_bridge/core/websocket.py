@@ -1,12 +1,7 @@
 """WebSocket transport on asyncio and wsproto, one :class:`rbd_bridge.core.session.Session` per client.
 
-wsproto does the handshake and any frame the fast parser (:meth:`_Connection._fast`) does
-not take: complete, final, masked text, binary, ping and pong frames are parsed here
-(wsproto's frame layer costs ~25 us a frame, the issue 18 gate); the first other frame
-hands the stream to wsproto for good. Each read is parsed once and handled in the same
-``data_received`` call; server frames are :func:`wire` (framed once per topic message),
-written straight to the socket or, while it is full, queued in the client's bounded
-:class:`rbd_bridge.core.outqueue.OutQueue`. No extension is negotiated.
+wsproto does the handshake and the frames :meth:`_Connection._fast` does not take (README,
+Design: why); no extension is negotiated.
 """
 
 import asyncio

@@ -1,11 +1,8 @@
 """Opt-in patches of rospy internals that make the bridge faster (``~rospy_fast_path``, default on).
 
 Everything the bridge does to rospy's private parts is here, behind one switch (README,
-Design). Into ROS: publisher connections are :class:`_DirectConnection` s (non-blocking
-sends from the loop, a bounded backlog per connection, publishes of one WebSocket read
-corked into one write). Out of ROS (``~direct_reads``): after rospy's handshake the event
-loop reads the socket (:class:`rbd_bridge.core.tcpros.LoopReader`); if that fails, rospy's
-own receive loop serves the connection.
+Design): publisher connections that never block (:class:`_DirectConnection`), subscribed
+connections read by the event loop after rospy's handshake (``~direct_reads``).
 """
 
 import collections
