@@ -220,11 +220,8 @@ class Services:
 
     def advertise_service(self, session: Any, service: str, type_name: str) -> None:
         """Serve service in ROS on behalf of session."""
-        try:
-            type_name = normalize_type(type_name)
-            cls = get_service_class(type_name)
-        except ConversionError as exc:
-            raise BridgeError(str(exc)) from None
+        type_name = normalize_type(type_name)  # (ConversionError: Session names the op)
+        cls = get_service_class(type_name)
         hosted = self.hosted.get(service)
         if hosted is not None:
             if hosted.session is not session:
