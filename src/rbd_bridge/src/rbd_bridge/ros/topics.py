@@ -158,20 +158,18 @@ class Topics:
     def subscribe(self, session: Any, topic: str, type_name: Optional[str]) -> str:
         """Share one rospy.Subscriber per topic among all sessions; return the type."""
         sub = self.subs.get(topic)
+        existing = sub.type if sub is not None else self.master_type(topic)
+        if not type_name and not existing:
+            raise BridgeError("subscribe: cannot infer the type of %s (it does not exist yet; give 'type')" % topic)
+        type_name = normalize_type(type_name or existing)
+        if existing and existing != type_name:
+            raise BridgeError("subscribe: %s has type %s, not %s" % (topic, existing, type_name))
         if sub is not None:
-            if type_name and normalize_type(type_name) != sub.type:
-                raise BridgeError("subscribe: %s has type %s, not %s" % (topic, sub.type, type_name))
             sub.sessions.add(session)
             for message in list(sub.latched.values()):
                 self.loop.call_soon(session.deliver, topic, message)
             return sub.type
-        existing = self.master_type(topic)
-        if not type_name and not existing:
-            raise BridgeError("subscribe: cannot infer the type of %s (it does not exist yet; give 'type')" % topic)
-        type_name = normalize_type(type_name or existing)
         cls = get_message_class(type_name)
-        if existing and existing != type_name:
-            raise BridgeError("subscribe: %s has type %s, not %s" % (topic, existing, type_name))
         sub = self.subs[topic] = _Sub(topic, type_name, cls)
         sub.sessions.add(session)
         # queue_size=None: everything one read holds is handed over (a slow WebSocket client
