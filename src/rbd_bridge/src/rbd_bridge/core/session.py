@@ -358,9 +358,7 @@ class Session:
     def _op_subscribe(self, frame: Dict[str, Any]) -> None:
         topic = _name(frame, "topic")
         type_name = _get(frame, "type", (str,)) or None
-        sub_id = frame.get("id")
-        if sub_id is not None and (not isinstance(sub_id, (str, int)) or isinstance(sub_id, bool)):
-            raise BridgeError("subscribe: 'id' must be a string or an integer")
+        sub_id = _get(frame, "id", (str, int))
         compression = _get(frame, "compression", (str,), default="none")
         if compression not in COMPRESSIONS:
             raise BridgeError("subscribe: unknown compression %r (none, png, cbor, cbor-raw)" % compression[:20])
@@ -408,9 +406,7 @@ class Session:
 
     def _op_call_service(self, frame: Dict[str, Any]) -> None:
         service = _name(frame, "service")
-        args = frame.get("args")
-        if args is not None and not isinstance(args, (list, dict)):
-            raise BridgeError("call_service: 'args' must be a list or an object")
+        args = _get(frame, "args", (list, dict))
         timeout = _get(frame, "timeout", (int, float))
         fragment_size = _get(frame, "fragment_size", (int,))
         compression = "png" if frame.get("compression") == "png" else "none"
