@@ -19,7 +19,6 @@ import sys
 import threading
 import time
 import types
-import xmlrpc.client
 
 import cbor2
 import pytest
@@ -30,6 +29,7 @@ from rbd_bridge_testing import (
     WsClient,
     master_of,
     probe_call,
+    server_outbound,
     start_bridge,
     start_echo,
     start_probe,
@@ -273,13 +273,6 @@ def test_param_manipulation(roslibpy_client):
     assert param.get() == "test_value"
     param.delete()
     assert param.get() is None
-
-
-def server_outbound(env, node):
-    """Topics on which ``node`` has a connected subscriber (the node's own getBusInfo)."""
-    code, _, info = xmlrpc.client.ServerProxy(master_of(env).lookupNode(node)).getBusInfo("/rbd_bridge_test")
-    # rospy's rows: [id, destination, direction, transport, topic, connected, ...]
-    return {row[4] for row in info if code == 1 and row[2] == "o" and (len(row) < 6 or row[5])}
 
 
 def test_actionlib_fibonacci(roslibpy_client, open_bridge):
