@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "rbd_localization/geometry.h"
+#include "rbd_localization/node_main.h"
 
 namespace rbd_localization {
 
@@ -589,6 +590,20 @@ void EkfNode::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& stat) 
   } else {
     stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "publishing");
   }
+}
+
+int ekfLocalizationNodeMain(int argc, char** argv) {
+  ros::init(argc, argv, "ekf_localization_node");
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  EkfNode node(nh, pnh);
+  std::string error;
+  if (!node.init(&error)) {
+    ROS_FATAL("ekf_localization_node: bad configuration: %s", error.c_str());
+    return 1;
+  }
+  ros::spin();
+  return 0;
 }
 
 }  // namespace rbd_localization

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rbd_localization/geometry.h"
+#include "rbd_localization/node_main.h"
 #include "rbd_localization/scan_slice.h"
 
 namespace rbd_localization {
@@ -374,6 +375,20 @@ void MapCorrectionNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   } else {
     stat.summary(diagnostic_msgs::DiagnosticStatus::OK, last_status_);
   }
+}
+
+int mapCorrectionNodeMain(int argc, char** argv) {
+  ros::init(argc, argv, "map_correction_node");
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  MapCorrectionNode node(nh, pnh);
+  std::string error;
+  if (!node.init(&error)) {
+    ROS_FATAL("map_correction_node: bad configuration: %s", error.c_str());
+    return 1;
+  }
+  ros::spin();
+  return 0;
 }
 
 }  // namespace rbd_localization
