@@ -509,26 +509,35 @@ def exp_reaction(ctx):
     monitor = Monitor(rospy.get_param("/rbd_sim/lcm_url"))
     status = {"v": ""}
     rospy.Subscriber("/rbd_pos_controller/status", String, lambda m: status.update(v=m.data), queue_size=10)
+
+    def where():  # what the error of a failed wait reports
+        return "(controller %s, position controller %r, states %s)" % (
+            monitor.state or "silent", status["v"], " ".join(s for _, s in monitor.state_log[-8:]))
+
     try:
         if not monitor.wait_state(("EMERGENCY_STOP",), 60.0):
-            raise RuntimeError("controller did not come up")
+            raise RuntimeError("controller did not come up " + where())
+        # The monitor's own ground-truth subscription (every trial reads monitor.pose at once).
+        if not wait_for(lambda: monitor.pose is not None, 30.0):
+            raise RuntimeError("no ground truth at the monitor within 30 s " + where())
         rospy.wait_for_service("/rbd_controller/em_stop", 30.0)
         rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)(False)
         if not monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0):
-            raise RuntimeError("e-stop release did not reach WAITING_FOR_GESTURE")
+            raise RuntimeError("e-stop release did not reach WAITING_FOR_GESTURE " + where())
         set_position = rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)
         trials = 2 if ctx.short else 10
         done = 0
         for i in range(trials):
-            wait_for(lambda: status["v"] == "idle" and monitor.state == "WAITING_FOR_GESTURE", 20.0)
+            if not wait_for(lambda: status["v"] == "idle" and monitor.state == "WAITING_FOR_GESTURE", 20.0):
+                log("reaction trial %d: robot not idle after 20 s %s" % (i + 1, where()))
             x, y, yaw = monitor.pose
             goal = Pose()
             goal.position.x, goal.position.y = x + 1.5 * math.cos(yaw), y + 1.5 * math.sin(yaw)
             goal.orientation.z, goal.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
             if not set_position(pose=goal).accepted:
-                raise RuntimeError("goal refused")
+                raise RuntimeError("trial %d: goal refused %s" % (i + 1, where()))
             if not wait_for(lambda: monitor.commands and monitor.commands[-1][1] > 0.1, 10.0):
-                raise RuntimeError("robot did not start walking")
+                raise RuntimeError("trial %d: robot did not start walking %s" % (i + 1, where()))
             time.sleep(0.3 + 0.1 * (i % 3))  # different scan phases
             x, y, yaw = monitor.pose
             zone.place(name="visitor", x=x + 1.0 * math.cos(yaw), y=y + 1.0 * math.sin(yaw), radius=0.2, height=1.7,
@@ -647,6 +656,7 @@ def main():
     columns = args.columns or (512 if args.short else 1024)
     stack = start_stack(args.stack, args.out, args.seed, columns)
     failed = []
+    written = set()
     try:
         import rospy
 
@@ -668,9 +678,17 @@ def main():
             result["seconds"] = time.monotonic() - t0
             with open(os.path.join(args.out, name + ".json"), "w") as fh:
                 json.dump(result, fh, indent=2, sort_keys=True)
+            written.add(name)
             log("%s done in %.1f s" % (name, result["seconds"]))
             if "error" not in result:  # the result next to the thesis value
                 print(thesis.render_table(thesis.rows({name: result})), flush=True)
+    except Exception as exc:  # the stack itself failed: every experiment not run says why
+        log("%s stack FAILED: %s\n%s" % (args.stack, exc, stack.tails(40)))
+        for name in names:
+            if name not in written:
+                with open(os.path.join(args.out, name + ".json"), "w") as fh:
+                    json.dump({"error": "%s stack: %s" % (args.stack, exc), "short": args.short}, fh)
+                failed.append(name)
     finally:
         stack.close(timeout=25.0)  # roslaunch itself escalates SIGINT -> SIGTERM after 15 s
     return 1 if failed else 0

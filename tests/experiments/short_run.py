@@ -37,7 +37,11 @@ def run_all(args, timeout, keep=None):
         os.killpg(proc.pid, signal.SIGINT)
         stdout, _ = proc.communicate(timeout=60)
     try:
-        with open(os.path.join(out, "results.json")) as fh:
+        path = os.path.join(out, "results.json")
+        if not os.path.exists(path):
+            raise AssertionError("run_all %s wrote no results.json (exit %s); its output:\n%s"
+                                 % (" ".join(args), proc.returncode, stdout[-6000:]))
+        with open(path) as fh:
             data = json.load(fh)
         data["stdout"] = stdout
         data["out"] = out

@@ -122,6 +122,16 @@ def test_rows_pass_and_fail_on_the_thesis_bounds():
     assert any(f.startswith("20") for f in failed)
 
 
+def test_rows_of_an_experiment_that_raised_are_one_failed_row():
+    # A CI run lost every result when `reaction` raised: rows() read its missing keys and crashed,
+    # so run_all wrote no results.json and the experiment's own error was never shown.
+    names = ("step", "rotation", "path", "zone", "boundary", "reaction", "detect", "stopping", "box", "wall",
+             "visitor")
+    table = thesis.rows({name: {"error": "%s broke" % name} for name in names})
+    assert [r["figure"] for r in table] == sorted(names)
+    assert all(r["ok"] is False and r["ours"] == "%s broke" % r["figure"] for r in table)
+
+
 def test_readme_markers_are_replaced_not_duplicated():
     text = "intro\n%s\nold table\n%s\nrest\n" % (thesis.MARK_BEGIN, thesis.MARK_END)
     once = thesis.update_readme(text, "| new |\n")

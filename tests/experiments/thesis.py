@@ -72,8 +72,11 @@ def rows(results: Dict, margin_s: float = 0.0) -> List[Dict]:
         margin_s: extra allowance added to every timing bound (LOAD_MARGIN_S in `make test`).
 
     Returns:
-        One dict per compared quantity; ok is None when the value is missing.
+        One dict per compared quantity; ok is None when the value is missing. An experiment that
+        raised gets one failed row with its error instead of its quantities.
     """
+    failed = {name: r["error"] for name, r in results.items() if "error" in r}
+    results = {name: r for name, r in results.items() if "error" not in r}
     out = []
     step = results.get("step")
     if step:
@@ -156,6 +159,8 @@ def rows(results: Dict, margin_s: float = 0.0) -> List[Dict]:
                             "max <= %.2f s" % THESIS_REACTION_MAX_S,
                             _le(reaction.get("truth_stop_max_s"), THESIS_REACTION_MAX_S)))
     out.extend(avoidance_rows(results))
+    for name in sorted(failed):
+        out.append(_row(name, "experiment raised", "-", str(failed[name])[:200], "runs to the end", False))
     return out
 
 

@@ -19,6 +19,7 @@ import sys
 import threading
 import time
 import types
+import xmlrpc.client
 
 import cbor2
 import pytest
@@ -274,14 +275,27 @@ def test_param_manipulation(roslibpy_client):
     assert param.get() is None
 
 
-def test_actionlib_fibonacci(roslibpy_client):
+def server_outbound(env, node):
+    """Topics on which ``node`` has a connected subscriber (the node's own getBusInfo)."""
+    code, _, info = xmlrpc.client.ServerProxy(master_of(env).lookupNode(node)).getBusInfo("/rbd_bridge_test")
+    # rospy's rows: [id, destination, direction, transport, topic, connected, ...]
+    return {row[4] for row in info if code == 1 and row[2] == "o" and (len(row) < 6 or row[5])}
+
+
+def test_actionlib_fibonacci(roslibpy_client, open_bridge):
     """roslibpy's actionlib client against the tutorial's Fibonacci server (actionlib, rospy)."""
     ros = roslibpy_client()
     client = actionlib.ActionClient(ros, "/fibonacci", "actionlib_tutorials/FibonacciAction")
     feedback = []
     goal = actionlib.Goal(client, roslibpy.Message({"order": 7}))
     goal.on("feedback", lambda f: feedback.append(f["sequence"]))
-    goal.send()  # at once: the goal topic was advertised a moment ago
+    # Every feedback is asserted, and actionlib's feedback is not latched: the server must be
+    # connected to the bridge's feedback and result subscriptions first (a CI run at load 18 lost
+    # the first feedback). The goal topic is still used at once (published before ROS peers
+    # connect: test_publish_right_after_advertise_is_delivered and roslibjs' fibonacci cover it).
+    wanted = {"/fibonacci/feedback", "/fibonacci/result"}
+    assert wait_until(lambda: wanted <= server_outbound(open_bridge.env, "/fibonacci_server"), 20)
+    goal.send()
     goal.wait(15)
     result = goal.result
     expected = [0, 1, 1, 2, 3, 5, 8, 13, 21]
