@@ -7,6 +7,7 @@
 
 #include "rbd_localization/geometry.h"
 #include "rbd_localization/node_main.h"
+#include "rbd_localization/run_node.h"
 
 namespace rbd_localization {
 
@@ -593,17 +594,7 @@ void EkfNode::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& stat) 
 }
 
 int ekfLocalizationNodeMain(int argc, char** argv) {
-  ros::init(argc, argv, "ekf_localization_node");
-  ros::NodeHandle nh;
-  ros::NodeHandle pnh("~");
-  EkfNode node(nh, pnh);
-  std::string error;
-  if (!node.init(&error)) {
-    ROS_FATAL("ekf_localization_node: bad configuration: %s", error.c_str());
-    return 1;
-  }
-  ros::spin();
-  return 0;
+  return runNode<EkfNode>(argc, argv, "ekf_localization_node");
 }
 
 }  // namespace rbd_localization

@@ -12,6 +12,7 @@
 
 #include "rbd_localization/geometry.h"
 #include "rbd_localization/node_main.h"
+#include "rbd_localization/run_node.h"
 #include "rbd_localization/scan_slice.h"
 
 namespace rbd_localization {
@@ -378,17 +379,7 @@ void MapCorrectionNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
 }
 
 int mapCorrectionNodeMain(int argc, char** argv) {
-  ros::init(argc, argv, "map_correction_node");
-  ros::NodeHandle nh;
-  ros::NodeHandle pnh("~");
-  MapCorrectionNode node(nh, pnh);
-  std::string error;
-  if (!node.init(&error)) {
-    ROS_FATAL("map_correction_node: bad configuration: %s", error.c_str());
-    return 1;
-  }
-  ros::spin();
-  return 0;
+  return runNode<MapCorrectionNode>(argc, argv, "map_correction_node");
 }
 
 }  // namespace rbd_localization
