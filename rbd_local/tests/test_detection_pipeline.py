@@ -9,8 +9,9 @@ import cv2
 import numpy as np
 import pytest
 
+from rbd_local.gestures import realclips
 from rbd_local.gestures.config import load_config
-from rbd_local.gestures.detector import HandDetector
+from rbd_local.gestures.detector import HandDetector, enhance_dark
 from rbd_local.gestures.hand import FINGER_TIPS, MIDDLE_MCP, WRIST
 from rbd_local.gestures.photo_clip import moving_photo_frames, write_clip
 from rbd_local.gestures.pipeline import GesturePipeline
@@ -65,6 +66,48 @@ def test_detector_rejects_bad_images_and_finds_no_hand_in_a_blank_one():
         with pytest.raises(ValueError):
             det.detect(np.zeros((48, 64, 3), np.float32))
         assert det.detect(np.full((480, 640, 3), 200, np.uint8)) is None
+
+
+def test_dark_frame_lift_brightens_keeps_grey_order_and_never_darkens():
+    ramp = np.repeat(np.linspace(2, 30, 640)[None, :, None], 480, axis=0).repeat(3, axis=2).astype(np.uint8)
+    out = enhance_dark(ramp)
+    assert out.shape == ramp.shape and out.dtype == np.uint8
+    assert 70.0 < out.mean() < 130.0, out.mean()  # lifted from a mean grey of 16
+    row = out[240, 10:-10, 0].astype(int)  # away from the smoothing's borders
+    assert np.all(np.diff(row) >= 0) and row[-1] - row[0] > 2 * (30 - 2)  # contrast stretched too
+    bright = np.full((480, 640, 3), 160, np.uint8)
+    assert np.abs(enhance_dark(bright).astype(int) - 160).max() <= 1
+    with pytest.raises(ValueError):
+        enhance_dark(ramp, target_grey=0.0)
+
+
+def _very_dark(frame_bgr, rng):
+    """The robustness table's darkest light (gamma 3, contrast 0.2, sensor noise 5), applied here."""
+    v = 255.0 * 0.2 * (frame_bgr / 255.0) ** 3 + rng.normal(0.0, 5.0, frame_bgr.shape)
+    return np.clip(np.rint(v), 0, 255).astype(np.uint8)
+
+
+def test_very_dark_clips_hand_found_from_the_first_frame_and_no_hand_in_an_empty_dark_scene(hand_sprites, photos):
+    # Two very dark clips in which the former enhancement (CLAHE on the Lab lightness) found
+    # no hand in the still start (and none at all in the first): the renderer puts the hand
+    # in every frame.
+    very_dark = next(c for c in realclips.CONDITIONS if c.name.startswith("very dark"))
+    rng = np.random.default_rng(1)
+    with HandDetector(model_complexity=0) as det:
+        for seed in (6, 10):
+            _times, frames = realclips.make_clip(hand_sprites, "push_down", very_dark, np.random.default_rng(seed))
+            assert np.mean([f.mean() for f in frames]) < det.dark_level
+            found = np.isfinite(realclips.track_clip(det, frames)[:, 0, 0])
+            assert found[:15].all() and found.mean() >= 0.95, "".join("#" if x else "." for x in found)
+        # the same light on the scene without the hand: enhanced (the input took the dark
+        # path), and no hand is made up
+        empty = hand_sprites[0].plain_background(realclips.FRAME_SIZE)
+        before = det.enhanced_frames
+        assert [det.detect(_very_dark(empty, rng)) for _ in range(20)] == [None] * 20
+        assert det.enhanced_frames == before + 20
+        # a frame in normal light is not enhanced
+        assert det.detect(photos["handSrc.jpg"]) is not None
+        assert det.enhanced_frames == before + 20
 
 
 def _run_clip(model, photo, motion):

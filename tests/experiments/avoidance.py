@@ -66,6 +66,12 @@ class Watch:
             rospy.Subscriber("/rbd_controller/path_queue", PathQueue, self._on_queue, queue_size=5),
             rospy.Subscriber("/rbd_controller/arena", PolygonStamped, self._on_arena, queue_size=1),
         ]
+        # A new subscriber connects after a while under load; every experiment reads pose() and
+        # state at once (a CI run at load 18 crashed on a pose() of None).
+        if not wait_for(lambda: self.truth and self.state, 30.0):
+            self.close()
+            raise RuntimeError("no ground truth or controller state within 30 s (truth %d samples, state %r)"
+                               % (len(self.truth), self.state))
 
     def _on_truth(self, msg):
         p, q, tw = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist.linear

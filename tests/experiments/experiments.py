@@ -517,6 +517,9 @@ def exp_reaction(ctx):
     try:
         if not monitor.wait_state(("EMERGENCY_STOP",), 60.0):
             raise RuntimeError("controller did not come up " + where())
+        # The monitor's own ground-truth subscription (every trial reads monitor.pose at once).
+        if not wait_for(lambda: monitor.pose is not None, 30.0):
+            raise RuntimeError("no ground truth at the monitor within 30 s " + where())
         rospy.wait_for_service("/rbd_controller/em_stop", 30.0)
         rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)(False)
         if not monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0):

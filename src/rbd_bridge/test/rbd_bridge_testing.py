@@ -12,6 +12,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import xmlrpc.client
 import zlib
 
 import rosgraph
@@ -34,6 +35,13 @@ def master_of(env):
 
 # A predicate that raises (a rosapi call while the bridge comes up) counts as "not yet".
 wait_until = functools.partial(wait_for, ignore=(Exception,))
+
+
+def server_outbound(env, node):
+    """Topics on which ``node`` has a connected subscriber (the node's own getBusInfo)."""
+    code, _, info = xmlrpc.client.ServerProxy(master_of(env).lookupNode(node)).getBusInfo("/rbd_bridge_test")
+    # rospy's rows: [id, destination, direction, transport, topic, connected, ...]
+    return {row[4] for row in info if code == 1 and row[2] == "o" and (len(row) < 6 or row[5])}
 
 
 def wait_for_service(env, name, timeout=20.0):

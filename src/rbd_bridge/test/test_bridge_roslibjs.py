@@ -14,7 +14,7 @@ import subprocess
 import sys
 
 import pytest
-from rbd_bridge_testing import FIBONACCI, wait_for_service
+from rbd_bridge_testing import FIBONACCI, server_outbound, wait_for_service, wait_until
 
 JS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "js")
 
@@ -76,8 +76,22 @@ def test_roslibjs_publish_subscribe_services_rosapi(node_ready, open_bridge):
     assert result["time"]["secs"] > 1e9
 
 
-def test_roslibjs_examples(node_ready, ros_side):
+def test_roslibjs_examples(node_ready, ros_side, roslibpy_client):
     """roslibjs's example behaviours (issue 18 items 1 and 6: publishes right after advertise, unadvertise)."""
+    # Every feedback is asserted, and actionlib's feedback is not latched: as in
+    # test_rosbridge_compat's fibonacci, the server must already be connected to the bridge's
+    # feedback and result subscriptions (shared by all clients) when the goal arrives; a run
+    # after test_bridge_raw lost the first feedback. A roslibpy client holds them; the
+    # roslibjs goal topic is still advertised and used 100 ms later (what the example proves).
+    import roslibpy
+
+    ros = roslibpy_client()
+    for name in ("feedback", "result"):
+        roslibpy.Topic(ros, "/fibonacci/" + name, "actionlib_tutorials/FibonacciAction" + name.title()).subscribe(
+            lambda _m: None
+        )
+    wanted = {"/fibonacci/feedback", "/fibonacci/result"}
+    assert wait_until(lambda: wanted <= server_outbound(ros_side.env, "/fibonacci_server"), 20)
     result = run_js(node_ready, "roslibjs_examples.js", ros_side.url, "examples")
     # pubsub.example: the first publish of one Topic reaches the other's subscription
     assert result["pubsub_first"][:1] == ["Hello Example2!"]

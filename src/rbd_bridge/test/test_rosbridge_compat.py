@@ -29,6 +29,7 @@ from rbd_bridge_testing import (
     WsClient,
     master_of,
     probe_call,
+    server_outbound,
     start_bridge,
     start_echo,
     start_probe,
@@ -274,14 +275,20 @@ def test_param_manipulation(roslibpy_client):
     assert param.get() is None
 
 
-def test_actionlib_fibonacci(roslibpy_client):
+def test_actionlib_fibonacci(roslibpy_client, open_bridge):
     """roslibpy's actionlib client against the tutorial's Fibonacci server (actionlib, rospy)."""
     ros = roslibpy_client()
     client = actionlib.ActionClient(ros, "/fibonacci", "actionlib_tutorials/FibonacciAction")
     feedback = []
     goal = actionlib.Goal(client, roslibpy.Message({"order": 7}))
     goal.on("feedback", lambda f: feedback.append(f["sequence"]))
-    goal.send()  # at once: the goal topic was advertised a moment ago
+    # Every feedback is asserted, and actionlib's feedback is not latched: the server must be
+    # connected to the bridge's feedback and result subscriptions first (a CI run at load 18 lost
+    # the first feedback). The goal topic is still used at once (published before ROS peers
+    # connect: test_publish_right_after_advertise_is_delivered and roslibjs' fibonacci cover it).
+    wanted = {"/fibonacci/feedback", "/fibonacci/result"}
+    assert wait_until(lambda: wanted <= server_outbound(open_bridge.env, "/fibonacci_server"), 20)
+    goal.send()
     goal.wait(15)
     result = goal.result
     expected = [0, 1, 1, 2, 3, 5, 8, 13, 21]

@@ -6,6 +6,8 @@
 #include <cmath>
 
 #include "rbd_localization/geometry.h"
+#include "rbd_localization/node_main.h"
+#include "rbd_localization/run_node.h"
 
 namespace rbd_localization {
 
@@ -589,6 +591,10 @@ void EkfNode::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& stat) 
   } else {
     stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "publishing");
   }
+}
+
+int ekfLocalizationNodeMain(int argc, char** argv) {
+  return runNode<EkfNode>(argc, argv, "ekf_localization_node");
 }
 
 }  // namespace rbd_localization

@@ -1,5 +1,6 @@
 #include "rbd_localization/filter_params.h"
 
+#include <ros/node_handle.h>
 #include <ros/param.h>
 
 #include <cmath>

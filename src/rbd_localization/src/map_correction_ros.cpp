@@ -11,6 +11,8 @@
 #include <vector>
 
 #include "rbd_localization/geometry.h"
+#include "rbd_localization/node_main.h"
+#include "rbd_localization/run_node.h"
 #include "rbd_localization/scan_slice.h"
 
 namespace rbd_localization {
@@ -374,6 +376,10 @@ void MapCorrectionNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   } else {
     stat.summary(diagnostic_msgs::DiagnosticStatus::OK, last_status_);
   }
+}
+
+int mapCorrectionNodeMain(int argc, char** argv) {
+  return runNode<MapCorrectionNode>(argc, argv, "map_correction_node");
 }
 
 }  // namespace rbd_localization

@@ -23,6 +23,7 @@ from test_faults import Faults, wait_for
 from websockets.sync.client import connect
 
 from rbd_bringup import a1_monitor
+from rbd_testkit.ports import wait_for_port
 from rbd_testkit.ros import run_rostest
 
 FLOOD_CLIENTS = 3
@@ -144,9 +145,12 @@ class BridgeFlood(Faults):
     def fault_bridge_flood(self, i):
         m = self.m
         m.heartbeat = True  # the operator's own 2 Hz heartbeat keeps going (no OPERATOR_LOST)
-        url = "ws://127.0.0.1:%d" % int(rospy.get_param("~bridge_port"))
+        port = int(rospy.get_param("~bridge_port"))
+        url = "ws://127.0.0.1:%d" % port
         gestures = []
         rospy.Subscriber("/rbd_gestrec/gesture", String, lambda msg: gestures.append(time.monotonic()), queue_size=100)
+        # In random order this fault may run first, before the bridge listens (seen in CI: refused).
+        wait_for_port(port, timeout=60.0)
         operator = connect(url, compression=None, max_size=None, open_timeout=30)
         rospy.wait_for_service("/rbd_controller/em_stop", 30.0)
         self.em_stop_proxy = rospy.ServiceProxy("/rbd_controller/em_stop", SetBool, persistent=False)

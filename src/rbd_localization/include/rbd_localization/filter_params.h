@@ -6,13 +6,18 @@
 #define RBD_LOCALIZATION_FILTER_PARAMS_H
 
 #include <XmlRpcValue.h>
-#include <ros/node_handle.h>
 
 #include <array>
 #include <string>
 #include <vector>
 
 #include "rbd_localization/filter_common.h"
+
+// Declared only: ros/node_handle.h pulls in most of roscpp, and this header is included by the
+// measurement conversions and the parser's tests, which never need it (build time, issue 19).
+namespace ros {
+class NodeHandle;
+}  // namespace ros
 
 namespace rbd_localization {
 

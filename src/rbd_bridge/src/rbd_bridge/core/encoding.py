@@ -155,7 +155,6 @@ class Reassembler:
     """Joins incoming ``fragment`` ops (any order; at most max_sets open sets, ttl s each, total <= max_fragments)."""
 
     def __init__(self, max_sets: int = 32, ttl: float = 30.0, max_fragments: int = 100000) -> None:
-        """Start with no sets."""
         self.max_sets = max_sets
         self.ttl = ttl
         self.max_fragments = max_fragments

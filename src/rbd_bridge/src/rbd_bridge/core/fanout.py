@@ -26,7 +26,6 @@ class TopicMessage:
     def __init__(
         self, topic: str, to_dict: Callable[..., Any], raw: Callable[..., Any] = None, latched: Any = False
     ) -> None:
-        """Wrap one message."""
         self.topic = topic
         self._to_dict = to_dict
         self._raw = raw
@@ -122,7 +121,6 @@ class ReplayWindow:
     """
 
     def __init__(self, seconds: float, limit: int, latch: bool, clock: Callable[[], float] = time.monotonic) -> None:
-        """Open the window now."""
         self.clock = clock
         self.seconds = seconds
         self.messages = collections.deque(maxlen=max(1, limit))

@@ -49,7 +49,8 @@ class OutQueue:
                 while len(per) > topic_limit:
                     self._kill(per.popleft())
         while self.frames > self.max_frames or (self.bytes > self.max_bytes and self.frames > 1):
-            self._drop_oldest()
+            self.pop()  # the oldest goes first
+            self.dropped += 1
         if was_empty and self.notify is not None and not self.held:
             self.notify()
 
@@ -64,41 +65,24 @@ class OutQueue:
             self.notify()
 
     def _kill(self, entry: Any) -> None:
-        if entry[2]:
-            entry[2] = False
-            self.frames -= 1
-            self.bytes -= len(entry[0])
-            self.dropped += 1
-            entry[0] = None
-
-    def _drop_oldest(self) -> None:
-        while self._queue:
-            entry = self._queue.popleft()
-            if entry[2]:
-                self._forget(entry)
-                self._kill(entry)
-                return
-
-    def _forget(self, entry: Any) -> None:
-        topic = entry[1]
-        if topic is not None:
-            per = self._per_topic.get(topic)
-            if per:
-                while per and not per[0][2]:
-                    per.popleft()
-                if per and per[0] is entry:
-                    per.popleft()
-                if not per:
-                    del self._per_topic[topic]
+        entry[2] = False
+        self.frames -= 1
+        self.bytes -= len(entry[0])
+        self.dropped += 1
+        entry[0] = None
 
     def pop(self) -> Any:
         """Return the oldest live frame, or None when empty."""
         while self._queue:
-            entry = self._queue.popleft()
-            if entry[2]:
-                self._forget(entry)
+            frame, topic, live = entry = self._queue.popleft()
+            if live:  # the oldest live frame of its topic too: the per-topic limit drops from the front
+                if topic is not None:
+                    per = self._per_topic[topic]
+                    per.popleft()
+                    if not per:
+                        del self._per_topic[topic]
                 entry[2] = False
                 self.frames -= 1
-                self.bytes -= len(entry[0])
-                return entry[0]
+                self.bytes -= len(frame)
+                return frame
         return None

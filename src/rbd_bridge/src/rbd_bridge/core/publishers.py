@@ -12,7 +12,6 @@ class Publication:
     """One topic's publisher: type, latching, the clients using it, its deadline while unused."""
 
     def __init__(self, type_name: str, latch: bool) -> None:
-        """Nobody uses it yet."""
         self.type = type_name
         self.latch = latch
         self.clients = set()
@@ -26,7 +25,6 @@ class Publications:
     """The publications by topic (``held``), lingering ``linger`` seconds when unused."""
 
     def __init__(self, linger: float, clock: Callable[[], float] = time.monotonic) -> None:
-        """No publication yet."""
         self.linger = linger
         self.clock = clock
         self.held = {}

@@ -58,10 +58,6 @@ def _str_arg(args: Dict[str, Any], key: str) -> str:
     return value
 
 
-def _nodes_of(state_part: Any, name: str) -> Any:
-    return next((sorted(nodes) for n, nodes in state_part if n == name), [])
-
-
 class RosApi:
     """Dispatch ``/rosapi/*`` calls.
 
@@ -77,7 +73,6 @@ class RosApi:
     def __init__(
         self, policy: Any, graph: Any, params: Any, now: Callable[..., Any], service_type: Any, types: Any = None
     ) -> None:
-        """Keep the adapters."""
         self.policy = policy
         self.graph = graph
         self.params = params
@@ -159,7 +154,8 @@ class RosApi:
     def _on(self, args: Any, key: str, part: int, allowed: Callable[[str], bool]) -> Any:
         """The nodes of the system state's part (publishers, subscribers, providers) of an allowed name."""
         name = _str_arg(args, key)
-        return _nodes_of(self.graph.getSystemState()[part], name) if allowed(name) else []
+        state = self.graph.getSystemState()[part] if allowed(name) else []
+        return next((sorted(nodes) for n, nodes in state if n == name), [])
 
     def _topics(self, args: Any) -> Any:
         pairs = self._topic_types()

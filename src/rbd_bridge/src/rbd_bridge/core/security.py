@@ -86,7 +86,6 @@ class Policy:
         params_writable: bool = False,
         secret: str = None,
     ) -> None:
-        """Build a policy."""
         self.publish_globs, self.may_publish = publish_globs, _Globs(publish_globs)
         self.subscribe_globs, self.may_subscribe = subscribe_globs, _Globs(subscribe_globs)
         self.service_globs, self.may_call = service_globs, _Globs(service_globs)

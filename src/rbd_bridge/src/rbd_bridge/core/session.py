@@ -15,7 +15,7 @@ from typing import Any, Callable, Dict, NoReturn, Optional
 
 from rbd_bridge.core import encoding
 from rbd_bridge.core.security import AuthError, check_mac
-from rbd_bridge.core.types import BridgeError, ConversionError, same_type
+from rbd_bridge.core.types import BridgeError, ConversionError, normalize_type
 
 __all__ = ["Session", "LEVELS", "COMPRESSIONS"]
 
@@ -77,10 +77,6 @@ def _nonneg(frame: Dict[str, Any], key: str) -> Any:
     return value
 
 
-def _identity(payload: Any) -> Any:
-    return payload
-
-
 class Session:
     """One WebSocket client speaking rosbridge v2.
 
@@ -108,7 +104,7 @@ class Session:
         peer: str = "?",
         clock: Callable[..., Any] = time.monotonic,
         wall: Callable[..., Any] = time.time,
-        wire: Callable[[Any], Any] = _identity,
+        wire: Callable[[Any], Any] = lambda payload: payload,
     ) -> None:
         """Create a session; nothing is sent until the client asks."""
         self.client_id = client_id
@@ -216,10 +212,6 @@ class Session:
         if frame_id is not None:
             frame["id"] = frame_id
         self._push(encoding.json_dumps(frame))
-
-    def send(self, frame_dict: Any, fragment_size: Optional[int] = None, compression: str = "none") -> None:
-        """Queue a control/service frame with optional fragmentation or PNG compression."""
-        self._push_text(encoding.json_dumps(frame_dict), fragment_size, compression, None, 0)
 
     def _push(self, payload: Any, topic: str = None, limit: int = 0) -> None:
         self.out.push(self.wire(payload), topic, limit)
@@ -366,9 +358,7 @@ class Session:
     def _op_subscribe(self, frame: Dict[str, Any]) -> None:
         topic = _name(frame, "topic")
         type_name = _get(frame, "type", (str,)) or None
-        sub_id = frame.get("id")
-        if sub_id is not None and (not isinstance(sub_id, (str, int)) or isinstance(sub_id, bool)):
-            raise BridgeError("subscribe: 'id' must be a string or an integer")
+        sub_id = _get(frame, "id", (str, int))
         compression = _get(frame, "compression", (str,), default="none")
         if compression not in COMPRESSIONS:
             raise BridgeError("subscribe: unknown compression %r (none, png, cbor, cbor-raw)" % compression[:20])
@@ -386,7 +376,7 @@ class Session:
         sub = self.subs.get(topic)
         if sub is None:
             sub = self.subs[topic] = _TopicSub(topic, self.backend.subscribe(self, topic, type_name))
-        elif type_name and sub.type and not same_type(type_name, sub.type):
+        elif type_name and sub.type and normalize_type(type_name) != normalize_type(sub.type):
             raise BridgeError("subscribe: %s has type %s, not %s" % (topic, sub.type, type_name))
         key = sub_id if sub_id is not None else "subscribe:%s:%d" % (topic, next(self._ids))
         sub.by_id.pop(key, None)
@@ -416,9 +406,7 @@ class Session:
 
     def _op_call_service(self, frame: Dict[str, Any]) -> None:
         service = _name(frame, "service")
-        args = frame.get("args")
-        if args is not None and not isinstance(args, (list, dict)):
-            raise BridgeError("call_service: 'args' must be a list or an object")
+        args = _get(frame, "args", (list, dict))
         timeout = _get(frame, "timeout", (int, float))
         fragment_size = _get(frame, "fragment_size", (int,))
         compression = "png" if frame.get("compression") == "png" else "none"
@@ -429,7 +417,7 @@ class Session:
                 reply = {"op": "service_response", "service": service, "values": values, "result": bool(ok)}
                 if call_id is not None:
                     reply["id"] = call_id
-                self.send(reply, fragment_size, compression)
+                self._push_text(encoding.json_dumps(reply), fragment_size, compression, None, 0)
 
         try:
             if not self.policy.may_call(service):

@@ -22,7 +22,6 @@ class FramingError(ValueError):
     """The stream is not a TCPROS message stream (absurd length); ``payloads``: the messages before it."""
 
     def __init__(self, text: str, payloads: List[bytes]) -> None:
-        """Record the message and the good payloads."""
         super().__init__(text)
         self.payloads = payloads
 
@@ -31,7 +30,6 @@ class TcprosFramer:
     """Incremental splitter of a TCPROS message stream into payloads (at most max_message bytes each)."""
 
     def __init__(self, max_message: int = _MAX_MESSAGE) -> None:
-        """Start with an empty buffer."""
         self.max_message = max_message
         self._buf = bytearray()
 

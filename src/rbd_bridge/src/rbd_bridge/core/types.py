@@ -2,14 +2,13 @@
 
 from typing import Any
 
-__all__ = ["BridgeError", "ConversionError", "TypedArray", "normalize_type", "same_type"]
+__all__ = ["BridgeError", "ConversionError", "TypedArray", "normalize_type"]
 
 
 class BridgeError(Exception):
     """An op that cannot be done; sent to the client as a status (when it opted in)."""
 
     def __init__(self, text: str, level: str = "error") -> None:
-        """Keep the status level with the text."""
         super().__init__(text)
         self.level = level
 
@@ -39,11 +38,3 @@ def normalize_type(type_name: Any) -> str:
     if len(parts) != 2 or not all(p.replace("_", "a").isalnum() for p in parts):
         raise ConversionError("invalid type name %r" % (type_name,))
     return "/".join(parts)
-
-
-def same_type(a: str, b: str) -> bool:
-    """True if the two type names name the same type (False if either is not a type name)."""
-    try:
-        return normalize_type(a) == normalize_type(b)
-    except ConversionError:
-        return False

@@ -1,18 +1,12 @@
 """WebSocket transport on asyncio and wsproto, one :class:`rbd_bridge.core.session.Session` per client.
 
-wsproto does the handshake and any frame the fast parser (:meth:`_Connection._fast`) does
-not take: complete, final, masked text, binary, ping and pong frames are parsed here
-(wsproto's frame layer costs ~25 us a frame, the issue 18 gate); the first other frame
-hands the stream to wsproto for good. Each read is parsed once and handled in the same
-``data_received`` call; server frames are :func:`wire` (framed once per topic message),
-written straight to the socket or, while it is full, queued in the client's bounded
-:class:`rbd_bridge.core.outqueue.OutQueue`. No extension is negotiated.
+wsproto does the handshake and the frames :meth:`_Connection._fast` does not take (README,
+Design: why); no extension is negotiated.
 """
 
 import asyncio
 import itertools
 import logging
-import socket
 import struct
 import threading
 from typing import Any, Callable, List, Optional
@@ -31,16 +25,11 @@ _log = logging.getLogger("rbd_bridge")
 _RECV_SIZE = 65536  # asyncio reads this much per call (its 256 KiB default costs an mmap per read)
 _JOIN_BYTES = 65536  # queued small frames leave joined in writes of up to this size
 _MAX_HANDSHAKE = 16384
-_TEXT, _BINARY = Opcode.TEXT, Opcode.BINARY
 _FAST_OPCODES = (1, 2, 9, 10)  # text, binary, ping, pong
 try:  # websockets' C helper when installed (the venv); else Python's big-int XOR
     from websockets.speedups import apply_mask as _apply_mask
 except ImportError:
     _apply_mask = None
-
-
-def _utf8(text: Any) -> Any:
-    return text.encode("utf-8") if isinstance(text, str) else text
 
 
 def _unmask(payload: bytes, mask: bytes) -> bytes:
@@ -93,12 +82,6 @@ class _Connection(asyncio.Protocol):
 
     def connection_made(self, transport: Any) -> None:
         self.transport = transport
-        sock = transport.get_extra_info("socket")
-        if sock is not None:
-            try:
-                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            except OSError:
-                pass
         peer = transport.get_extra_info("peername")
         self.peer = "%s:%s" % tuple(peer[:2]) if peer else "?"
         transport.set_write_buffer_limits(high=1 << 18)
@@ -123,7 +106,7 @@ class _Connection(asyncio.Protocol):
             for frame in self.proto.received_frames():
                 self.alive = True
                 opcode = frame.opcode
-                if opcode is _TEXT or opcode is _BINARY:
+                if opcode in (Opcode.TEXT, Opcode.BINARY):
                     self._message(frame.payload, frame.message_finished)
                 elif opcode is Opcode.PING:
                     self._write(self.proto.pong(frame.payload))
@@ -194,8 +177,9 @@ class _Connection(asyncio.Protocol):
             if finished:
                 data = ("" if isinstance(data, str) else b"").join(self.parts)
                 self.parts, self.parts_size = [], 0
-        # characters for text: a complete big text is measured in bytes below
-        if limit and (size > limit or (finished and 4 * size > limit and len(_utf8(data)) > limit)):
+        if limit and finished and isinstance(data, str) and 4 * size > limit:
+            size = len(data.encode())  # size counted characters: a big text is measured in bytes
+        if limit and size > limit:
             self.close(1009, "message larger than max_message_size")
         elif finished:
             self.session.receive(data)
@@ -275,25 +259,19 @@ class _Connection(asyncio.Protocol):
 
     def flush(self) -> None:
         """Write queued frames (small ones joined, big ones alone) until the transport asks to pause."""
-        out, write = self.out, self.transport.write
-        with self.lock:
-            if self.closing:
-                return
-            if self.head is not None:
-                head, self.head = self.head, None
-                write(head)
+        with self.lock:  # (the unsent rest of a direct write goes first, in _write)
             parts, size = [], 0
             while not self.paused and not self.closing:
-                frame = out.pop()
+                frame = self.out.pop()
                 if frame is None:
                     break
                 if parts and (len(frame) >= 16384 or size >= _JOIN_BYTES):
-                    write(b"".join(parts))
+                    self._write(b"".join(parts))
                     parts, size = [], 0
                 parts.append(frame)
                 size += len(frame)
-            if parts and not self.closing:
-                write(b"".join(parts))  # (one frame: written as it is, no copy)
+            if not self.closing:
+                self._write(b"".join(parts))  # (one frame: written as it is, no copy; none: only the rest)
 
     def try_direct(self, message: Any, compression: str) -> bool:
         """Any thread: send a topic frame at once if nothing is queued and the socket takes it; True if taken.
@@ -394,7 +372,6 @@ class BridgeServer:
         on_clients: Optional[Callable[[int], None]] = None,
         direct_writes: bool = True,
     ) -> None:
-        """Configure; nothing listens until start()."""
         self.loop, self.backend, self.policy, self.host, self.port = loop, backend, policy, host, port
         self.max_message_size = max_message_size
         self.max_queue_frames, self.max_queue_bytes = max_queue_frames, max_queue_bytes

@@ -21,10 +21,6 @@ def _now() -> Any:
     return t.secs, t.nsecs
 
 
-def _nothing() -> None:
-    pass
-
-
 class RosBackend:
     """rospy implementation of the session backend (see :mod:`rbd_bridge.core.session`).
 
@@ -63,8 +59,8 @@ class RosBackend:
             setattr(self, name, getattr(self.topics, name))
         for name in ("call_service", "advertise_service", "unadvertise_service", "service_response"):
             setattr(self, name, getattr(self.services, name))
-        self.begin_batch = self.fast.begin_batch if self.fast else _nothing
-        self.end_batch = self.fast.end_batch if self.fast else _nothing
+        self.begin_batch = self.fast.begin_batch if self.fast else lambda: None
+        self.end_batch = self.fast.end_batch if self.fast else lambda: None
 
     def _subscription(self, topic: str) -> Any:
         return self.topics.subs.get(topic)
@@ -76,9 +72,7 @@ class RosBackend:
 
     def stats(self) -> dict:
         """Counters of the receive paths (for the node's ``~stats``)."""
-        stats = self.fast.stats() if self.fast else {}
-        for key in ("direct_read_connections", "direct_read_messages", "direct_read_fallbacks", "direct_read_open"):
-            stats.setdefault(key, 0)
+        stats = self.fast.stats() if self.fast else dict.fromkeys(FastPath.COUNTERS + ("direct_read_open",), 0)
         stats["direct_reads"] = bool(self.fast and self.fast.direct_reads)
         stats["rospy_fast_path"] = self.fast is not None
         stats["rospy_read_messages"] = self.topics.rospy_read_messages

@@ -1,11 +1,8 @@
 """Opt-in patches of rospy internals that make the bridge faster (``~rospy_fast_path``, default on).
 
 Everything the bridge does to rospy's private parts is here, behind one switch (README,
-Design). Into ROS: publisher connections are :class:`_DirectConnection` s (non-blocking
-sends from the loop, a bounded backlog per connection, publishes of one WebSocket read
-corked into one write). Out of ROS (``~direct_reads``): after rospy's handshake the event
-loop reads the socket (:class:`rbd_bridge.core.tcpros.LoopReader`); if that fails, rospy's
-own receive loop serves the connection.
+Design): publisher connections that never block (:class:`_DirectConnection`), subscribed
+connections read by the event loop after rospy's handshake (``~direct_reads``).
 """
 
 import collections
@@ -207,6 +204,8 @@ class FastPath:
         fail_direct_reads: Test hook: every take-over fails (rospy's threads read).
     """
 
+    COUNTERS = ("direct_read_connections", "direct_read_messages", "direct_read_fallbacks")
+
     def __init__(self, loop: Any, lookup: Callable[[str], Any], direct_reads: bool = True, fail: bool = False) -> None:
         """Nothing patched until publishers and subscribers are made through it."""
         self.loop = loop
@@ -214,9 +213,8 @@ class FastPath:
         self.direct_reads = direct_reads
         self.fail_direct_reads = fail
         self._cork = _Cork()
-        self._cork_depth = 0
         self._readers = {}  # rospy connection -> LoopReader (loop thread only)
-        self.counters = collections.Counter(direct_read_connections=0, direct_read_messages=0, direct_read_fallbacks=0)
+        self.counters = collections.Counter(dict.fromkeys(self.COUNTERS, 0))
 
     def publisher(self, topic: str, cls: Any, queue_size: int, latch: bool, listener: Any, window: Any) -> Any:
         """A rospy.Publisher whose connections are :class:`_DirectConnection` s.
@@ -241,15 +239,10 @@ class FastPath:
 
     def begin_batch(self) -> None:
         """Loop thread: hold publishes until :meth:`end_batch` (one send per ROS peer)."""
-        self._cork_depth += 1
         self._cork.thread = threading.get_ident()
 
     def end_batch(self) -> None:
         """Loop thread: send the publishes held since :meth:`begin_batch`."""
-        self._cork_depth -= 1
-        if self._cork_depth > 0:
-            return
-        self._cork_depth = 0
         self._cork.thread = None
         pending, self._cork.pending = self._cork.pending, []
         for conn in pending:

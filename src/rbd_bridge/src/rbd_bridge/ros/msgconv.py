@@ -7,8 +7,8 @@ import base64
 import binascii
 import functools
 import math
-import threading
 import time
+import types
 from typing import Any, Callable, Optional
 
 import genpy
@@ -26,23 +26,15 @@ _FLOATS = ("float32", "float64")
 _BINARY = ("uint8", "char")
 
 
-_class_lock = threading.Lock()
-_classes = {}
-
-
-def _load(kind: str, type_name: str) -> Any:
+def _load(kind: str, type_name: str) -> Any:  # roslib caches the classes it found
     name = normalize_type(type_name)
-    cls = _classes.get((kind, name))
+    load = roslib.message.get_message_class if kind == "message" else roslib.message.get_service_class
+    try:
+        cls = load(name)
+    except Exception as exc:  # roslib raises many kinds on bad packages
+        raise ConversionError("cannot load %s type %s: %s" % (kind, name, exc)) from None
     if cls is None:
-        load = roslib.message.get_message_class if kind == "message" else roslib.message.get_service_class
-        with _class_lock:
-            try:
-                cls = load(name)
-            except Exception as exc:  # roslib raises many kinds on bad packages
-                raise ConversionError("cannot load %s type %s: %s" % (kind, name, exc)) from None
-            if cls is None:
-                raise ConversionError("unknown %s type %s" % (kind, name))
-            _classes[(kind, name)] = cls
+        raise ConversionError("unknown %s type %s" % (kind, name))
     return cls
 
 
@@ -161,14 +153,6 @@ def msg_to_dict(msg: Any, binary: bool = False) -> Any:
 # --------------------------------------------------------------------------- incoming
 
 
-class _Context:
-    __slots__ = ("now", "missing")
-
-    def __init__(self, now: Callable[..., Any]) -> None:
-        self.now = now
-        self.missing = []
-
-
 def _is_int(value: Any) -> Any:
     return isinstance(value, int) and not isinstance(value, bool)
 
@@ -177,14 +161,11 @@ def _int_in(base: str) -> Any:
     low, high = _INT_RANGES[base]
 
     def conv(value: Any, path: str, ctx: Any) -> Any:
-        if not _is_int(value):
-            if isinstance(value, bool):
-                value = int(value)
-            elif isinstance(value, float) and math.isfinite(value) and value == int(value):
-                value = int(value)
-            else:
-                raise ConversionError("%s: expected %s, got %s" % (path, base, _describe(value)))
-        if value < low or value > high:
+        if isinstance(value, bool) or (isinstance(value, float) and math.isfinite(value) and value == int(value)):
+            value = int(value)
+        elif not isinstance(value, int):
+            raise ConversionError("%s: expected %s, got %s" % (path, base, _describe(value)))
+        if not low <= value <= high:
             raise ConversionError("%s: %d out of range for %s" % (path, value, base))
         return value
 
@@ -340,7 +321,7 @@ def dict_to_msg(cls: Any, data: Any, now: Callable[..., Any] = None) -> Any:
     Raises:
         ConversionError: On wrong types, unknown fields, out-of-range values.
     """
-    ctx = _Context(now or (lambda: genpy.Time.from_sec(time.time())))
+    ctx = types.SimpleNamespace(now=now or (lambda: genpy.Time.from_sec(time.time())), missing=[])
     return _fill(cls, {} if data is None else data, "", ctx), ctx.missing
 
 

@@ -62,9 +62,7 @@ class _Hosted:
             raise rospy.ServiceException(text) from None
         if not ok and not isinstance(values, dict):
             raise rospy.ServiceException("service %s failed: %s" % (self.name, values))
-        if not ok and not self.false_logged:
-            # rosbridge ignores the flag and returns the values (roslibpy handlers that
-            # return False rely on it); say so once per service
+        if not ok and not self.false_logged:  # (Session._op_service_response says why)
             self.false_logged = True
             _log.warning(
                 "service %s: its WebSocket provider answered result=false; the values go to the caller"
@@ -112,7 +110,6 @@ class Services:
         call_timeout: float = 30.0,
         workers: int = 8,
     ) -> None:
-        """Create the pool; nothing is registered yet."""
         self.loop = loop
         self.master = master
         self.rosapi = rosapi
@@ -223,11 +220,8 @@ class Services:
 
     def advertise_service(self, session: Any, service: str, type_name: str) -> None:
         """Serve service in ROS on behalf of session."""
-        try:
-            type_name = normalize_type(type_name)
-            cls = get_service_class(type_name)
-        except ConversionError as exc:
-            raise BridgeError(str(exc)) from None
+        type_name = normalize_type(type_name)  # (ConversionError: Session names the op)
+        cls = get_service_class(type_name)
         hosted = self.hosted.get(service)
         if hosted is not None:
             if hosted.session is not session:

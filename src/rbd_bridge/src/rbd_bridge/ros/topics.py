@@ -20,21 +20,13 @@ from rbd_bridge.core.publishers import Publication, Publications
 from rbd_bridge.core.types import BridgeError, ConversionError, normalize_type
 from rbd_bridge.ros.msgconv import dict_to_msg, get_message_class, msg_to_dict
 
-__all__ = ["Topics", "message_class"]
+__all__ = ["Topics"]
 
 _log = logging.getLogger("rbd_bridge")
 # Messages of one topic closer together than this [s] are a burst: they go through the
 # event loop, which writes a whole burst per wake-up; isolated ones are sent directly.
 _BURST_GAP = 0.0002
 _RECV_SIZE = 65536  # rospy's recv() size per read of a subscribed topic [bytes]
-
-
-def message_class(type_name: str) -> Any:
-    """(``pkg/Name``, genpy class) of a type; BridgeError if it cannot be loaded."""
-    try:
-        return normalize_type(type_name), get_message_class(type_name)
-    except ConversionError as exc:
-        raise BridgeError(str(exc)) from None
 
 
 class _Pub(Publication):
@@ -85,7 +77,6 @@ class Topics:
     """
 
     def __init__(self, loop: Any, master: Any, window: float = 1.0, fast: Any = None, linger: float = 5.0) -> None:
-        """No topic yet."""
         self.loop = loop
         self.master = master
         self.window = window
@@ -110,7 +101,7 @@ class Topics:
 
     def advertise(self, session: Any, topic: str, type_name: str, latch: bool, queue_size: int) -> None:
         """Register session as publisher of topic (one rospy.Publisher per topic)."""
-        type_name, cls = message_class(type_name)
+        type_name, cls = normalize_type(type_name), get_message_class(type_name)
         pub, stale = self.pubs.join(topic, type_name, latch, session.client_id)
         if stale is not None:
             stale.publisher.unregister()
@@ -167,19 +158,18 @@ class Topics:
     def subscribe(self, session: Any, topic: str, type_name: Optional[str]) -> str:
         """Share one rospy.Subscriber per topic among all sessions; return the type."""
         sub = self.subs.get(topic)
+        existing = sub.type if sub is not None else self.master_type(topic)
+        if not type_name and not existing:
+            raise BridgeError("subscribe: cannot infer the type of %s (it does not exist yet; give 'type')" % topic)
+        type_name = normalize_type(type_name or existing)
+        if existing and existing != type_name:
+            raise BridgeError("subscribe: %s has type %s, not %s" % (topic, existing, type_name))
         if sub is not None:
-            if type_name and normalize_type(type_name) != sub.type:
-                raise BridgeError("subscribe: %s has type %s, not %s" % (topic, sub.type, type_name))
             sub.sessions.add(session)
             for message in list(sub.latched.values()):
                 self.loop.call_soon(session.deliver, topic, message)
             return sub.type
-        existing = self.master_type(topic)
-        if not type_name and not existing:
-            raise BridgeError("subscribe: cannot infer the type of %s (it does not exist yet; give 'type')" % topic)
-        type_name, cls = message_class(type_name or existing)
-        if existing and existing != type_name:
-            raise BridgeError("subscribe: %s has type %s, not %s" % (topic, existing, type_name))
+        cls = get_message_class(type_name)
         sub = self.subs[topic] = _Sub(topic, type_name, cls)
         sub.sessions.add(session)
         # queue_size=None: everything one read holds is handed over (a slow WebSocket client
