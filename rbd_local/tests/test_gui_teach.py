@@ -221,7 +221,9 @@ def test_teach_a_gesture_in_the_gui_then_it_triggers_its_trick(teach_window, tri
     visitor.pause_at_good = 2  # the third show waits for the README's screenshot (under load the
     visitor.go.clear()  # GUI's pump could miss a show the recogniser runs through in half a second)
     click(panel.teach_button)
-    assert pump(root, lambda: desk.status()["phase"] in ("ready", "show"), 10), desk.status()
+    # "starting" ends with the pipeline's next frame; under load (CI K: the drop-in builds beside
+    # it) the gesture thread's first frames took longer than 10 s. A liveness bound, not a speed claim.
+    assert pump(root, lambda: desk.status()["phase"] in ("ready", "show"), 60), desk.status()
     assert pump(root, lambda: panel.phase_label.cget("text") == "GET READY")
     # the third show: the README's screenshot
     assert pump(root, lambda: desk.status()["good"] == 2 and desk.status()["phase"] == "show", 120), desk.status()
