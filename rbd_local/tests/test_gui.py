@@ -6,6 +6,7 @@ import shutil
 import subprocess
 
 import pytest
+from fake_bridge import LINK_KEEPALIVE_S
 from xvfb import pump
 
 from rbd_local.link import EM_STOP_SERVICE, PATH_QUEUE_TOPIC, STATE_TOPIC, STATUS_TOPIC, RobotLink
@@ -14,9 +15,6 @@ pytestmark = pytest.mark.skipif(shutil.which("Xvfb") is None, reason="Xvfb not i
 
 DOCS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "docs")
 
-# The panels' tests, not the keepalive's (tests/test_link.py): in CI runs J and L the 5 s keepalive
-# dropped a healthy link to the in-process fake bridge for want of a pong (an open defect).
-KEEPALIVE_S = 30.0
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +28,7 @@ def app(display):
     root = ctk.CTk()
     holder = {}
     link = RobotLink(
-        "127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=0.5, keepalive_s=KEEPALIVE_S,
+        "127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=0.5, keepalive_s=LINK_KEEPALIVE_S,
         on_status=lambda s: holder["gui"].post_status(s), on_state=lambda s: holder["gui"].post_state(s),
         on_path_queue=lambda n: holder["gui"].post_path_queue(n),
         on_connection=lambda up: holder["gui"].post_connection(up),

@@ -12,6 +12,7 @@ import subprocess
 
 import preflight_reports as pr
 import pytest
+from fake_bridge import LINK_KEEPALIVE_S
 from xvfb import pump
 
 from rbd_local.link import PREFLIGHT_SERVICE, PREFLIGHT_TOPIC, RobotLink
@@ -23,9 +24,6 @@ RED = "#c62828"
 GREEN = "#2e7d32"
 GREY = "#757575"
 
-# The panels' tests, not the keepalive's (tests/test_link.py): in CI runs J and L the 5 s keepalive
-# dropped a healthy link to the in-process fake bridge for want of a pong (an open defect).
-KEEPALIVE_S = 30.0
 
 
 @pytest.fixture
@@ -46,7 +44,7 @@ def window(display):
     bridge.start()
     root = ctk.CTk()
     holder = {}
-    link = RobotLink("127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=0.5, keepalive_s=KEEPALIVE_S,
+    link = RobotLink("127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=0.5, keepalive_s=LINK_KEEPALIVE_S,
                      on_connection=lambda up: holder["gui"].post_connection(up),
                      on_preflight=lambda r: holder["gui"].post_preflight(r))
     gui = holder["gui"] = OperatorGui(root, link)

@@ -19,6 +19,7 @@ import threading
 import numpy as np
 import pytest
 import yaml
+from fake_bridge import LINK_KEEPALIVE_S
 from xvfb import pump
 
 from rbd_local.gestures import realclips, synthetic
@@ -32,9 +33,6 @@ FPS = 30.0
 
 pytestmark = pytest.mark.skipif(not os.path.isfile(TRICKS_YAML), reason="rbd_navigation's tricks.yaml not here")
 
-# The panels' tests, not the keepalive's (tests/test_link.py): in CI runs J and L the 5 s keepalive
-# dropped a healthy link to the in-process fake bridge for want of a pong (an open defect).
-KEEPALIVE_S = 30.0
 
 
 class Visitor:
@@ -145,7 +143,7 @@ def teach_window(display, hand_sprites, tricks, tmp_path_factory):
     bridge.start()
     root = ctk.CTk()
     holder = {}
-    link = RobotLink("127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=0.5, keepalive_s=KEEPALIVE_S,
+    link = RobotLink("127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=0.5, keepalive_s=LINK_KEEPALIVE_S,
                      on_status=lambda s: holder["gui"].post_status(s), on_state=lambda s: holder["gui"].post_state(s),
                      on_path_queue=lambda n: holder["gui"].post_path_queue(n),
                      on_connection=lambda up: holder["gui"].post_connection(up))

@@ -3,6 +3,7 @@
 import time
 
 import pytest
+from fake_bridge import LINK_KEEPALIVE_S
 from rbd_testkit import wait_for
 
 from rbd_local.link import (
@@ -27,9 +28,8 @@ def _link(bridge, **kw):
 
 
 def test_gesture_heartbeat_and_subscriptions(fake_bridge):
-    # keepalive 30 s: the keepalive has its own tests below; in one CI run (load 9, random order)
-    # it dropped this link after 5.0 s without a pong and the pushes below went to the old one.
-    link, got = _link(fake_bridge, keepalive_s=30.0)
+    # the keepalive has its own tests below (a dropped link sent the pushes below to the old one)
+    link, got = _link(fake_bridge, keepalive_s=LINK_KEEPALIVE_S)
     try:
         assert link.wait_connected(30)
         assert fake_bridge.wait_for(lambda: (GESTURE_TOPIC, "std_msgs/String") in fake_bridge.advertised)
