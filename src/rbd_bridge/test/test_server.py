@@ -11,6 +11,7 @@ from websockets.exceptions import ConnectionClosed
 from websockets.frames import Frame, Opcode
 from websockets.sync.client import connect
 
+from rbd_bridge.core import websocket
 from rbd_bridge.core.fanout import TopicMessage
 from rbd_bridge.core.security import Policy
 from rbd_bridge.core.websocket import BridgeServer
@@ -78,6 +79,21 @@ def test_fragmented_client_messages_and_big_server_frames(server):
     assert got == {"op": "publish", "topic": "/loop", "msg": {"data": big}}
     ws.send(frame.encode())  # binary frame holding UTF-8 JSON is accepted too
     assert json.loads(ws.recv(timeout=5))["msg"]["data"] == big
+    ws.close()
+
+
+def test_unmasking_without_websockets_speedups(server, monkeypatch):
+    """Without websockets' C helper (as on the robot) wsproto's masker unmasks the fast path's frames."""
+    monkeypatch.setattr(websocket, "_apply_mask", None)
+    _, _, port = server
+    ws = connect("ws://127.0.0.1:%d" % port, compression=None, max_size=None)
+    ws.send(json.dumps({"op": "subscribe", "topic": "/loop"}))
+    for data in ("x", "é", "z" * 131, "\u20ac" * 23335):  # frames of 4n+1, +2, +3 (16-bit length), +1 (64-bit)
+        frame = json.dumps({"op": "publish", "topic": "/loop", "msg": {"data": data}}, ensure_ascii=False)
+        ws.send(frame)
+        assert json.loads(ws.recv(timeout=5))["msg"]["data"] == data
+        ws.send(frame.encode())
+        assert json.loads(ws.recv(timeout=5))["msg"]["data"] == data
     ws.close()
 
 

@@ -13,7 +13,7 @@ from typing import Any, Callable, List, Optional
 
 from wsproto import ConnectionType, WSConnection
 from wsproto.events import AcceptConnection, RejectConnection, RejectData, Request
-from wsproto.frame_protocol import FrameProtocol, Opcode, ParseFailed
+from wsproto.frame_protocol import FrameProtocol, Opcode, ParseFailed, XorMaskerSimple
 from wsproto.utilities import RemoteProtocolError
 
 from rbd_bridge.core.outqueue import OutQueue
@@ -26,18 +26,10 @@ _RECV_SIZE = 65536  # asyncio reads this much per call (its 256 KiB default cost
 _JOIN_BYTES = 65536  # queued small frames leave joined in writes of up to this size
 _MAX_HANDSHAKE = 16384
 _FAST_OPCODES = (1, 2, 9, 10)  # text, binary, ping, pong
-try:  # websockets' C helper when installed (the venv); else Python's big-int XOR
+try:  # websockets' C helper when installed (the venv); else wsproto's masker
     from websockets.speedups import apply_mask as _apply_mask
 except ImportError:
     _apply_mask = None
-
-
-def _unmask(payload: bytes, mask: bytes) -> bytes:
-    if _apply_mask is not None:
-        return _apply_mask(payload, mask)
-    n = len(payload)
-    key = (mask * (n // 4 + 1))[:n]
-    return (int.from_bytes(payload, "little") ^ int.from_bytes(key, "little")).to_bytes(n, "little")
 
 
 def wire(payload: Any) -> bytes:
@@ -149,7 +141,8 @@ class _Connection(asyncio.Protocol):
                 return b""
             if end < head + 4 + length:
                 break
-            payload = _unmask(bytes(buf[head + 4 : head + 4 + length]), bytes(buf[head : head + 4]))
+            payload, mask = bytes(buf[head + 4 : head + 4 + length]), bytes(buf[head : head + 4])
+            payload = _apply_mask(payload, mask) if _apply_mask else XorMaskerSimple(mask).process(payload)
             pos = head + 4 + length
             self.alive = True
             if opcode == 9:
