@@ -19,10 +19,9 @@ import time
 import rospy
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
-from test_faults import Faults, wait_for
+from test_faults import Faults, fault_names, wait_for
 from websockets.sync.client import connect
 
-from rbd_bringup import a1_monitor
 from rbd_testkit.ports import wait_for_port
 from rbd_testkit.ros import run_rostest
 
@@ -35,21 +34,12 @@ BOUNDS = {"ros": (1.0, 1.5, 1.0), "bridge": (1.5, 2.0, 2.5)}
 
 
 class BridgeFlood(Faults):
-    """The flood fault and the operator watchdog's ``finish`` policy in one sim launch.
+    """The fault catalogue with the flood fault and the operator watchdog's ``finish`` policy.
 
-    ``~fault`` is a space-separated list, run in order; the catalogue's helpers (walk,
-    assert_stops, record) come from Faults.
+    ``~fault`` / ``~repeat`` as for Faults (``test_fault``, the rounds, the helpers walk,
+    assert_stops and record come from there): faults_inputs.test runs the sensor-input faults,
+    the frozen driver link and these two on one stack.
     """
-
-    def test_fault(self):
-        self.wait_ready()
-        for fault in rospy.get_param("~fault").split():
-            self.current = fault
-            getattr(self, "fault_" + fault)(0)
-
-    def record(self, **result):
-        result["fault"] = self.current
-        rospy.loginfo("FAULT_RESULT %s", a1_monitor.report_fault_result(result))
 
     def start_trick(self, gesture, timeout=45.0):
         """Release the e-stop if needed and show ``gesture`` until the robot moves in EXECUTING."""
@@ -73,7 +63,12 @@ class BridgeFlood(Faults):
         self.assertEqual(rospy.get_param("/rbd_controller/operator_policy"), "finish")
         timeout = float(rospy.get_param("/rbd_controller/operator_timeout"))
         m.heartbeat = True
-        time.sleep(1.0)
+        t_armed = time.monotonic()
+        # From its own known state: idle, so that "spin" below starts afresh (after another fault
+        # the robot may be anywhere in a trick, whose end could come before the timeout).
+        self.assertTrue(wait_for(lambda: m.state in ("WAITING_FOR_GESTURE", "EMERGENCY_STOP"), 60.0),
+                        "the trick of the fault before did not end: %s" % m.state)
+        time.sleep(max(0.0, t_armed + 1.0 - time.monotonic()))
         self.start_trick("spin")  # the shortest trick that moves (two 180 deg turns)
         with m.lock:
             n_states = len(m.states)
@@ -207,4 +202,4 @@ class BridgeFlood(Faults):
 
 if __name__ == "__main__":
     rospy.init_node("test_faults")
-    run_rostest("rbd_bringup", "faults_" + rospy.get_param("~fault"), BridgeFlood)
+    run_rostest("rbd_bringup", rospy.get_param("~suite", "faults_" + fault_names()[0]), BridgeFlood)
