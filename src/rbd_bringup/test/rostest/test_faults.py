@@ -464,17 +464,12 @@ class Faults(unittest.TestCase):
         )
 
     def fault_estop_states(self, i):
+        """The e-stop in every state, each case from its known state, ordered so that the robot's
+        trick has to end only once (at the start): the cases that need an idle robot (waiting,
+        escaping, dodging, avoiding) first, then a fresh "walk" (caught in GENERATING_PATH) on
+        which the cases that e-stop a walking robot run; it is left walking, as it came."""
         m = self.m
-        # EXECUTING
-        self.walk()
-        t0 = time.monotonic()
-        self.em_stop(True)
-        cmd, truth = self.assert_stops(t0, 0.5, 1.0)
-        self.assertEqual(m.state, "EMERGENCY_STOP")
-        self.em_stop(False)
-        self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume after release")
-        self.record(run=i, state="EXECUTING", cmd_stop_s=cmd, truth_stop_s=truth)
-        # WAITING_FOR_GESTURE
+        # WAITING_FOR_GESTURE (the trick the robot came with ends first)
         self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0), "trick did not finish")
         t0 = time.monotonic()
         self.em_stop(True)
@@ -483,7 +478,12 @@ class Faults(unittest.TestCase):
         self.em_stop(False)
         self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 10.0))
         self.record(run=i, state="WAITING_FOR_GESTURE", cmd_stop_s=cmd, truth_stop_s=truth)
-        # GENERATING_PATH (short-lived: try to catch it a few times)
+        self.estop_while_escaping(i)
+        self.estop_while_dodging(i)
+        if AVOIDANCE_EXPERIMENTS:
+            self.estop_while_avoiding(i)
+        # GENERATING_PATH (short-lived: try to catch it a few times), from idle; the cases below
+        # e-stop the "walk" it starts
         caught = False
         for _ in range(4):
             self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0))
@@ -501,6 +501,15 @@ class Faults(unittest.TestCase):
                 self.record(run=i, state="GENERATING_PATH", cmd_stop_s=cmd, truth_stop_s=truth, caught=caught)
                 break
             wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0)
+        # EXECUTING
+        self.walk()
+        t0 = time.monotonic()
+        self.em_stop(True)
+        cmd, truth = self.assert_stops(t0, 0.5, 1.0)
+        self.assertEqual(m.state, "EMERGENCY_STOP")
+        self.em_stop(False)
+        self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume after release")
+        self.record(run=i, state="EXECUTING", cmd_stop_s=cmd, truth_stop_s=truth)
         # COLLISION_DETECTED, then e-stop: e-stop wins, the collision clearing does not release it
         self.walk()
         self.collision(True)
@@ -538,10 +547,6 @@ class Faults(unittest.TestCase):
         self.collision(False)
         self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume")
         self.record(run=i, state="COLLISION+ESTOP", cmd_stop_s=cmd, truth_stop_s=truth)
-        self.estop_while_escaping(i)
-        self.estop_while_dodging(i)
-        if AVOIDANCE_EXPERIMENTS:
-            self.estop_while_avoiding(i)
 
     def estop_while_escaping(self, i):
         """Issue 17: the e-stop preempts an avoidance motion as it preempts a trick.
