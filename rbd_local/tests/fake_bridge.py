@@ -12,11 +12,6 @@ import threading
 import websockets
 from rbd_testkit import wait_for
 
-#: The keepalive of the links that tests not about the keepalive open to this bridge (its own
-#: tests in test_link.py keep 5 s): in CI runs J and L the 5 s keepalive dropped a healthy link to
-#: this bridge for want of a pong (an open defect, see rbd_local's link).
-LINK_KEEPALIVE_S = 30.0
-
 
 class FakeBridge:
     def __init__(self, port=0):
@@ -89,9 +84,9 @@ class FakeBridge:
                 if topic in subs:
                     await ws.send(json.dumps({"op": "publish", "topic": topic, "msg": msg}))
 
-        asyncio.run_coroutine_threadsafe(send(), self._loop).result(5)
+        asyncio.run_coroutine_threadsafe(send(), self._loop).result(30)
 
-    def wait_for(self, predicate, timeout=10.0):
+    def wait_for(self, predicate, timeout=60.0):
         """The test kit's wait_for, with predicate evaluated under this bridge's lock."""
 
         def locked():

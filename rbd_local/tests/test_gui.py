@@ -6,8 +6,7 @@ import shutil
 import subprocess
 
 import pytest
-from fake_bridge import LINK_KEEPALIVE_S
-from xvfb import pump
+from xvfb import pump, pump_for
 
 from rbd_local.link import EM_STOP_SERVICE, PATH_QUEUE_TOPIC, STATE_TOPIC, STATUS_TOPIC, RobotLink
 
@@ -28,15 +27,15 @@ def app(display):
     root = ctk.CTk()
     holder = {}
     link = RobotLink(
-        "127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=0.5, keepalive_s=LINK_KEEPALIVE_S,
+        "127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=3.0,
         on_status=lambda s: holder["gui"].post_status(s), on_state=lambda s: holder["gui"].post_state(s),
         on_path_queue=lambda n: holder["gui"].post_path_queue(n),
         on_connection=lambda up: holder["gui"].post_connection(up),
     )
-    gui = holder["gui"] = OperatorGui(root, link, em_stop_timeout=1.5)
+    gui = holder["gui"] = OperatorGui(root, link, em_stop_timeout=5.0)
     link.start()
     state = {"root": root, "gui": gui, "link": link, "bridge": bridge}
-    pump(root, lambda: link.connected, 10)
+    pump(root, lambda: link.connected)
     assert bridge.wait_for(lambda: {STATUS_TOPIC, PATH_QUEUE_TOPIC, STATE_TOPIC} <= set(bridge.subscribed))
     yield state
     link.stop()
@@ -123,7 +122,7 @@ def test_release_needs_a_second_deliberate_click(app):
     bridge, gui, root = app["bridge"], app["gui"], app["root"]
     n = len(em_stops(bridge))
     gui.release_button.invoke()
-    pump(root, lambda: False, 0.6)
+    pump_for(root, 0.6)
     assert len(em_stops(bridge)) == n, "one click must not release the e-stop"
     assert "Confirm" in gui.release_button.cget("text")
     gui.release_button.invoke()
@@ -157,7 +156,7 @@ def test_window_screenshot(app):
     gui.post_gesture("swipe_right", "walk", 0.93)
     assert pump(root, lambda: gui.state_colour() == "#2e7d32" and gui.shown_moves()[4].startswith("5."))
     assert gui.gesture_label.cget("text") == "last gesture: swipe_right → walk (93 %)"
-    pump(root, lambda: False, 0.3)
+    pump_for(root, 0.3)
     # The README's screenshot (docs/gui.png, with teach mode) is made by test_gui_teach.py.
     cache = os.path.join(os.path.dirname(DOCS), ".cache")
     os.makedirs(cache, exist_ok=True)
@@ -173,18 +172,18 @@ def test_window_screenshot(app):
 def test_disconnected_is_obvious_and_estop_says_it_could_not(app):
     bridge, gui, root = app["bridge"], app["gui"], app["root"]
     bridge.stop()
-    assert pump(root, lambda: "DISCONNECTED" in gui.connection_label.cget("text"), 10)
+    assert pump(root, lambda: "DISCONNECTED" in gui.connection_label.cget("text"))
     assert gui.connection_label.cget("fg_color") == "#c62828"
     gui.estop_button.invoke()
-    assert pump(root, lambda: gui.message_label.cget("text").startswith("E-STOP FAILED"), 10)
+    assert pump(root, lambda: gui.message_label.cget("text").startswith("E-STOP FAILED"))
     assert "NOT delivered" in gui.message_label.cget("text")
     # the bridge comes back: the indicator recovers and the e-stop works again
     from fake_bridge import FakeBridge
 
     app["bridge"] = FakeBridge(port=bridge.port).start()
-    assert pump(root, lambda: "CONNECTED ws" in gui.connection_label.cget("text"), 10)
+    assert pump(root, lambda: "CONNECTED ws" in gui.connection_label.cget("text"))
     gui.estop_button.invoke()
-    assert pump(root, lambda: gui.message_label.cget("text") == "E-STOP ENGAGED", 10)
+    assert pump(root, lambda: gui.message_label.cget("text") == "E-STOP ENGAGED")
     assert em_stops(app["bridge"]) == [(EM_STOP_SERVICE, {"data": True})]
 
 

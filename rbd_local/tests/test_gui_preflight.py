@@ -12,8 +12,7 @@ import subprocess
 
 import preflight_reports as pr
 import pytest
-from fake_bridge import LINK_KEEPALIVE_S
-from xvfb import pump
+from xvfb import pump, pump_for
 
 from rbd_local.link import PREFLIGHT_SERVICE, PREFLIGHT_TOPIC, RobotLink
 
@@ -44,7 +43,7 @@ def window(display):
     bridge.start()
     root = ctk.CTk()
     holder = {}
-    link = RobotLink("127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=0.5, keepalive_s=LINK_KEEPALIVE_S,
+    link = RobotLink("127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=3.0,
                      on_connection=lambda up: holder["gui"].post_connection(up),
                      on_preflight=lambda r: holder["gui"].post_preflight(r))
     gui = holder["gui"] = OperatorGui(root, link)
@@ -85,13 +84,13 @@ def test_preflight_panel_latched_report_run_click_and_link_loss(window):
     assert panel.run_button.cget("state") == "disabled" and panel.summary() == "no report yet"
     gui.tabs.set("Preflight")
     link.start()
-    assert pump(root, lambda: link.connected and panel.run_button.cget("state") == "normal", 10)
+    assert pump(root, lambda: link.connected and panel.run_button.cget("state") == "normal")
     assert "not connected" not in panel.message_label.cget("text")
 
     # the robot's last report (latched) is shown on connect: all PASS, READY
     assert bridge.wait_for(lambda: PREFLIGHT_TOPIC in bridge.subscribed)
     bridge.push(PREFLIGHT_TOPIC, pr.all_pass())
-    assert pump(root, lambda: panel.summary() == "READY", 10)
+    assert pump(root, lambda: panel.summary() == "READY")
     assert panel.ready_label.cget("fg_color") == GREEN
     assert [r[0] for r in panel.row_texts()] == ["PASS", "PASS"]
     assert panel.message_label.cget("text") == ""
@@ -99,7 +98,7 @@ def test_preflight_panel_latched_report_run_click_and_link_loss(window):
 
     # a real click on Run: the robot's answer has one FAIL, shown red with what to do
     click(panel.run_button)
-    assert pump(root, lambda: panel.summary().startswith("NOT READY"), 10), panel.message_label.cget("text")
+    assert pump(root, lambda: panel.summary().startswith("NOT READY")), panel.message_label.cget("text")
     with bridge._lock:
         runs = [c for c in bridge.service_calls if c[0] == PREFLIGHT_SERVICE]
     assert runs == [(PREFLIGHT_SERVICE, {"duration": 0.0})]
@@ -116,7 +115,7 @@ def test_preflight_panel_latched_report_run_click_and_link_loss(window):
     from rbd_local.gui.preflight_panel import report_time
 
     assert panel.time_label.cget("text") == "report of %s, 3.0 s observed" % report_time(1764084662.25)
-    pump(root, lambda: False, 0.3)
+    pump_for(root, 0.3)
     # what the X server shows: the FAIL badge and the NOT READY line are red
     for widget in (panel.rows[1][0], panel.ready_label):
         shown = screen_pixel(widget)
@@ -125,7 +124,7 @@ def test_preflight_panel_latched_report_run_click_and_link_loss(window):
 
     # the link goes down: the panel says so, keeps the last report and Run is off
     bridge.stop()
-    assert pump(root, lambda: "not connected" in panel.message_label.cget("text"), 10)
+    assert pump(root, lambda: "not connected" in panel.message_label.cget("text"))
     assert "last report" in panel.message_label.cget("text")
     assert panel.run_button.cget("state") == "disabled"
     assert panel.summary() == "NOT READY (1 FAIL)"
@@ -136,9 +135,9 @@ def test_a_failed_run_says_why_and_keeps_the_window_alive(window):
     bridge.service_handler = lambda service, args: (False, "service %s does not exist" % service)
     gui.tabs.set("Preflight")
     link.start()
-    assert pump(root, lambda: panel.run_button.cget("state") == "normal", 10)
+    assert pump(root, lambda: panel.run_button.cget("state") == "normal")
     panel.run_button.invoke()
-    assert pump(root, lambda: panel.message_label.cget("text").startswith("preflight failed"), 10)
+    assert pump(root, lambda: panel.message_label.cget("text").startswith("preflight failed"))
     assert "does not exist" in panel.message_label.cget("text")
     assert panel.run_button.cget("state") == "normal" and panel.summary() == "no report yet"
 

@@ -19,7 +19,6 @@ import threading
 import numpy as np
 import pytest
 import yaml
-from fake_bridge import LINK_KEEPALIVE_S
 from xvfb import pump
 
 from rbd_local.gestures import realclips, synthetic
@@ -143,7 +142,7 @@ def teach_window(display, hand_sprites, tricks, tmp_path_factory):
     bridge.start()
     root = ctk.CTk()
     holder = {}
-    link = RobotLink("127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=0.5, keepalive_s=LINK_KEEPALIVE_S,
+    link = RobotLink("127.0.0.1", bridge.port, retry_s=0.2, connect_timeout_s=3.0,
                      on_status=lambda s: holder["gui"].post_status(s), on_state=lambda s: holder["gui"].post_state(s),
                      on_path_queue=lambda n: holder["gui"].post_path_queue(n),
                      on_connection=lambda up: holder["gui"].post_connection(up))
@@ -156,7 +155,7 @@ def teach_window(display, hand_sprites, tricks, tmp_path_factory):
     link.start()
     worker = threading.Thread(target=gui_app._run_gestures, args=(visitor, cfg, link, gui, stop, desk), daemon=True)
     worker.start()
-    assert pump(root, lambda: link.connected, 10)
+    assert pump(root, lambda: link.connected)
     yield {"root": root, "gui": gui, "panel": gui.teach_panel, "bridge": bridge, "desk": desk, "visitor": visitor,
            "path": path, "link": link}
     stop.set()
@@ -183,15 +182,15 @@ def click(widget):
 
 def test_the_robots_tricks_are_offered_with_a_preview_of_their_moves(teach_window, tricks):
     panel, root = teach_window["panel"], teach_window["root"]
-    assert pump(root, lambda: panel.tricks, 15), panel.preview_label.cget("text")
+    assert pump(root, lambda: panel.tricks), panel.preview_label.cget("text")
     assert list(panel.tricks) == list(tricks)
     assert panel.trick_menu.cget("values") == list(tricks)
     # a trick no built-in gesture triggers is preselected: the first such one of rbd_navigation
     # (after a robot without tricks, so whatever another test chose in this window is gone)
     panel.post_tricks({})
-    assert pump(root, lambda: not panel.tricks, 15)
+    assert pump(root, lambda: not panel.tricks)
     panel.reload_tricks()
-    assert pump(root, lambda: panel.tricks, 15), panel.preview_label.cget("text")
+    assert pump(root, lambda: panel.tricks), panel.preview_label.cget("text")
     from rbd_local.gestures.config import load_config
 
     mapped = set(load_config()["gestures"].values())
@@ -206,13 +205,13 @@ def test_the_robots_tricks_are_offered_with_a_preview_of_their_moves(teach_windo
     panel._on_trick("bow")
     # the model file's taught gesture is listed once the gesture thread has loaded the model
     # (first: the teach test, in whatever order it runs, only adds after it)
-    assert pump(root, lambda: panel.taught_names()[:1] == ["swipe_up"], 30), panel.taught_names()
+    assert pump(root, lambda: panel.taught_names()[:1] == ["swipe_up"]), panel.taught_names()
 
 
 def test_teach_a_gesture_in_the_gui_then_it_triggers_its_trick(teach_window, tricks):
     w = teach_window
     panel, root, bridge, desk, visitor = w["panel"], w["root"], w["bridge"], w["desk"], w["visitor"]
-    assert pump(root, lambda: panel.tricks, 15), panel.preview_label.cget("text")
+    assert pump(root, lambda: panel.tricks), panel.preview_label.cget("text")
     panel.trick_menu.set("bow")
     panel._on_trick("bow")  # what choosing it in the menu calls
     assert panel.selected_trick() == "bow"
@@ -256,16 +255,16 @@ def test_forget_and_undo_from_the_panel(teach_window):
     w = teach_window
     panel, root, desk = w["panel"], w["root"], w["desk"]
     # swipe_up is in the model file from the start (independent of the teach test's order)
-    assert pump(root, lambda: "swipe_up" in panel.taught_names(), 30), panel.taught_names()
+    assert pump(root, lambda: "swipe_up" in panel.taught_names()), panel.taught_names()
     before = panel.taught_names()
     revision = GestureModel.load(w["path"]).revision
     panel.taught_rows["swipe_up"][2].invoke()  # its ✕ button
     rest = [n for n in before if n != "swipe_up"]
-    assert pump(root, lambda: panel.taught_names() == rest, 10), (panel.taught_names(), desk.status())
+    assert pump(root, lambda: panel.taught_names() == rest), (panel.taught_names(), desk.status())
     assert GestureModel.load(w["path"]).taught.names == rest
     assert GestureModel.load(w["path"]).revision == revision + 1
     click(panel.undo_button)
-    assert pump(root, lambda: panel.taught_names() == before, 10), desk.status()
+    assert pump(root, lambda: panel.taught_names() == before), desk.status()
     assert GestureModel.load(w["path"]).taught.names == before
     assert GestureModel.load(w["path"]).revision == revision
 

@@ -47,7 +47,7 @@ class Lines:
         for line in proc.stdout:
             self.lines.append(line.strip())
 
-    def wait(self, pred, timeout=15):
+    def wait(self, pred, timeout=60):
         return bool(wait_for(lambda: any(pred(x) for x in list(self.lines)), timeout))
 
 
@@ -120,7 +120,7 @@ def test_link_through_the_real_bridge(ros_bridge):
         link.stop()
 
 
-def _wait_value(values, wanted, timeout=15):
+def _wait_value(values, wanted, timeout=60):
     return bool(wait_for(lambda: values[-1:] == [wanted], timeout))
 
 

@@ -163,11 +163,12 @@ class RobotLink:
             connect_timeout_s: time allowed for one connection attempt [s].
             gesture_max_age_s: queued gestures older than this are dropped, not sent [s].
             keepalive_s: a link silent about this long is dropped and re-established [s]
-                (0 disables): the link thread sends a WebSocket ping every keepalive_s / 3
-                and drops the connection when nothing (pong or message) has come back for
-                keepalive_s. Over a WLAN that goes silent the TCP connection stays "open";
-                without this, requests written into it (an e-stop) would be delivered
-                whenever it came back.
+                (0 disables): a WebSocket ping goes out every keepalive_s / 5 and the
+                connection is dropped when nothing (pong or message) has come back for
+                keepalive_s after a ping was sent (counted from the ping's actual sending, so
+                a stall of this process is not taken for the robot's silence). Over a WLAN
+                that goes silent the TCP connection stays "open"; without this, requests
+                written into it (an e-stop) would be delivered whenever it came back.
             on_status: called with each ``/rbd_pos_controller/status`` string.
             on_state: called with each ``/rbd_controller/state`` string.
             on_path_queue: called with the ``names`` list of each path-queue message.
@@ -229,7 +230,7 @@ class RobotLink:
         self.dropped_gestures = 0
         self.connect_count = 0
         self._alive = None  # the connection's protocol while the keepalive watches it
-        self._alive_at = 0.0  # last pong or message received on it (monotonic)
+        self._unanswered = None  # when the first ping not yet answered went out (monotonic; reactor thread)
         self._next_ping = 0.0
 
     # ----------------------------------------------------------------- public API
@@ -461,7 +462,7 @@ class RobotLink:
             ros.run(timeout=self.connect_timeout_s)
         except Exception as exc:
             LOG.debug("cannot connect to %s: %s", self.address, exc)
-            self._close_quietly(ros)
+            self._abandon(ros)
             return False
         with self._lock:
             self._ros = ros
@@ -498,50 +499,74 @@ class RobotLink:
         LOG.info("connected to %s", self.address)
         return True
 
-    # The keepalive is the link thread's own: it sends a WebSocket ping every keepalive_s / 3 and
-    # drops a connection that has answered nothing (no pong, no message) for keepalive_s.
-    # autobahn's built-in auto-ping was used before; in about one test-suite run in two its
-    # first ping was never scheduled and a silent link stayed "connected".
+    # The keepalive: every keepalive_s / 5 the link thread has the reactor send a WebSocket ping;
+    # a connection that answers nothing (no pong, no message) for keepalive_s after a ping went out
+    # is dropped. autobahn's built-in auto-ping was used before; in about one test-suite run in two
+    # its first ping was never scheduled and a silent link stayed "connected". The time is counted
+    # from the ping the reactor actually sent, and the verdict is the reactor's, after it has read
+    # its socket: a laptop too busy to run this process for a while (the reactor starved) must not
+    # take its own stall for the robot's silence.
     def _watch(self, ros: "roslibpy.Ros") -> None:
         proto = getattr(ros.factory, "_proto", None)
         self._alive = None
+        self._unanswered = None
         if self.keepalive_s <= 0 or proto is None or not hasattr(proto, "sendPing"):
             return
 
-        def seen() -> None:
-            self._alive_at = time.monotonic()
+        def heard() -> None:  # reactor thread
+            self._unanswered = None
 
         on_pong, on_message = proto.onPong, proto.onMessage
 
         def pong(payload: bytes) -> None:
-            seen()
+            heard()
             on_pong(payload)
 
         def message(payload: bytes, is_binary: bool) -> None:
-            seen()
+            heard()
             on_message(payload, is_binary)
 
         proto.onPong = pong
         proto.onMessage = message
-        seen()
         self._next_ping = 0.0
         self._alive = proto
 
     def _keepalive(self, now: float) -> None:
         proto = self._alive
-        if proto is None:
+        if proto is None or now < self._next_ping:
             return
         from twisted.internet import reactor  # roslibpy's transport on CPython
 
-        if now - self._alive_at > self.keepalive_s:
-            LOG.warning("link to %s silent for %.1f s; dropping it", self.address, now - self._alive_at)
-            self._alive = None
-            self._connected_evt.clear()  # seen as down at once; the loop tears it down
-            reactor.callFromThread(proto.dropConnection, True)
+        self._next_ping = now + max(0.2, self.keepalive_s / 5.0)
+        reactor.callFromThread(self._ping, proto)
+
+    def _ping(self, proto: object) -> None:
+        """Reactor thread: send a ping; the first unanswered one starts the silence clock."""
+        if proto is not self._alive:
             return
-        if now >= self._next_ping:
-            self._next_ping = now + max(0.2, self.keepalive_s / 3.0)
-            reactor.callFromThread(proto.sendPing)
+        proto.sendPing()
+        if self._unanswered is None:
+            from twisted.internet import reactor
+
+            sent = self._unanswered = time.monotonic()
+            reactor.callLater(self.keepalive_s, self._judge, proto, sent, sent + self.keepalive_s)
+
+    def _judge(self, proto: object, sent: float, due: float) -> None:
+        """Reactor thread: drop the connection if the ping sent at ``sent`` is still unanswered."""
+        if proto is not self._alive or self._unanswered != sent:
+            return  # answered, or another connection by now
+        from twisted.internet import reactor
+
+        now = time.monotonic()
+        if now - due > 0.25:
+            # This verdict comes late: the reactor itself was stalled, and whatever arrived meanwhile
+            # is still unread. Read it first and give the robot one more second of our own time.
+            reactor.callLater(1.0, self._judge, proto, sent, now + 1.0)
+            return
+        LOG.warning("link to %s silent: no answer to a ping for %.1f s; dropping it", self.address, now - sent)
+        self._alive = None
+        self._connected_evt.clear()  # seen as down at once; the link thread tears it down
+        proto.dropConnection(True)
 
     def _make_handler(self, name: str) -> Callable[[dict], None]:
         callback = self._callbacks[name]
@@ -618,6 +643,23 @@ class RobotLink:
             self._pubs, self._subs = {}, []
         if ros is not None:
             self._close_quietly(ros)
+
+    @staticmethod
+    def _abandon(ros: "roslibpy.Ros") -> None:
+        """An attempt that timed out: stop it in the reactor, so that it never opens later.
+
+        A slow handshake would otherwise complete after the next attempt started, and every
+        retry on a slow network would leave one more open connection behind.
+        """
+        from twisted.internet import reactor
+
+        factory = ros.factory
+
+        def stop() -> None:
+            if factory.connector is not None:
+                factory.connector.disconnect()  # connecting: stop; connected: close the transport
+
+        reactor.callFromThread(stop)
 
     @staticmethod
     def _close_quietly(ros: "roslibpy.Ros") -> None:
