@@ -19,7 +19,7 @@ import time
 import rospy
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
-from test_faults import Faults, fault_names, wait_for
+from test_faults import Faults, fault_names, one_test_per_fault, wait_for
 from websockets.sync.client import connect
 
 from rbd_testkit.ports import wait_for_port
@@ -36,9 +36,10 @@ BOUNDS = {"ros": (1.0, 1.5, 1.0), "bridge": (1.5, 2.0, 2.5)}
 class BridgeFlood(Faults):
     """The fault catalogue with the flood fault and the operator watchdog's ``finish`` policy.
 
-    ``~fault`` / ``~repeat`` as for Faults (``test_fault``, the rounds, the helpers walk,
-    assert_stops and record come from there): faults_inputs.test runs the sensor-input faults,
-    the frozen driver link and these two on one stack.
+    ``~fault`` / ``~repeat`` as for Faults (the rounds and the helpers walk, assert_stops and
+    record come from there), one test per fault (``one_test_per_fault``, shuffled with
+    RBD_TEST_SEED): faults_inputs.test runs the sensor-input faults, the frozen driver link and
+    these two on one stack.
     """
 
     def start_trick(self, gesture, timeout=45.0):
@@ -202,4 +203,6 @@ class BridgeFlood(Faults):
 
 if __name__ == "__main__":
     rospy.init_node("test_faults")
-    run_rostest("rbd_bringup", rospy.get_param("~suite", "faults_" + fault_names()[0]), BridgeFlood)
+    # One test per fault, in the order of RBD_TEST_SEED (each starts from its own known state)
+    case = one_test_per_fault(BridgeFlood, rospy.get_param("~fault"), int(rospy.get_param("~repeat", 1)))
+    run_rostest("rbd_bringup", rospy.get_param("~suite", "faults_" + fault_names()[0]), case)

@@ -71,6 +71,29 @@ def fault_plan(spec, repeat):
     return rounds
 
 
+def one_test_per_fault(case, spec, repeat):
+    """A subclass of ``case`` with one test method per fault of ``spec`` instead of ``test_fault``.
+
+    ``test_NAME`` runs fault NAME in each of its rounds of ``fault_plan(spec, repeat)`` (same
+    round numbers in FAULT_RESULT); run_rostest shuffles the methods with RBD_TEST_SEED, so each
+    fault must start from its own known state (every one starts by getting the robot walking, or
+    waits for it to be idle), whichever ran before.
+    """
+    plan = fault_plan(spec, repeat)
+    attrs = {"test_fault": None}  # not callable: not a test
+    for item in spec.split():
+        name = item.partition(":")[0]
+        rounds = [i for i, faults in enumerate(plan) if name in faults]
+
+        def test(self, name=name, rounds=rounds):
+            self.wait_ready()
+            for i in rounds:
+                self.run_fault(name, i, repeat)
+
+        attrs["test_" + name] = test
+    return type(case.__name__, (case,), attrs)
+
+
 def fault_names():
     """The names of the faults of ``~fault`` (without their round counts)."""
     return [item.partition(":")[0] for item in rospy.get_param("~fault").split()]
@@ -320,12 +343,16 @@ class Faults(unittest.TestCase):
         repeat = int(rospy.get_param("~repeat", 1))
         for i, faults in enumerate(fault_plan(rospy.get_param("~fault"), repeat)):
             for fault in faults:
-                self.fault = fault
-                rospy.loginfo("fault %s, round %d of %d", fault, i + 1, repeat)
-                try:
-                    getattr(self, "fault_" + fault)(i)
-                except AssertionError as exc:  # several faults share a stack: say which one failed
-                    raise AssertionError("%s (round %d of %d): %s" % (fault, i + 1, repeat, exc)) from exc
+                self.run_fault(fault, i, repeat)
+
+    def run_fault(self, fault, i, repeat):
+        """Fault ``fault`` in round ``i`` (of ``repeat``); an assertion names the fault and round."""
+        self.fault = fault
+        rospy.loginfo("fault %s, round %d of %d", fault, i + 1, repeat)
+        try:
+            getattr(self, "fault_" + fault)(i)
+        except AssertionError as exc:  # several faults share a stack: say which one failed
+            raise AssertionError("%s (round %d of %d): %s" % (fault, i + 1, repeat, exc)) from exc
 
     def fault_lidar_silent(self, i):
         m = self.m
