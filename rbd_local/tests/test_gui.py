@@ -205,7 +205,7 @@ def test_rbd_gui_entry_point_with_in_process_gesture_recognition(display, tmp_pa
                    PYTHONPATH=os.path.join(os.path.dirname(DOCS), "src"))
         proc = subprocess.run([sys.executable, "-m", "rbd_local.gui_app", "--port", str(bridge.port), "--video", clip,
                                "--screenshot", str(shot), "--screenshot-delay", "8"],
-                              env=env, capture_output=True, text=True, timeout=120)
+                              env=env, capture_output=True, text=True, timeout=300)
         assert proc.returncode == 0, proc.stderr[-2000:]
         assert shot.stat().st_size > 1000
         assert bridge.wait_for(lambda: STATUS_TOPIC in bridge.subscribed)

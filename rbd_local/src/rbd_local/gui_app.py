@@ -31,11 +31,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--camera-max-fps", type=float, default=30.0,
                    help="with --robot-camera: most frames per second the bridge sends (0: all)")
     p.add_argument("--screenshot", help="save a screenshot of the window to this PNG, then quit")
-    p.add_argument("--screenshot-delay", type=float, default=3.0, help="seconds before the screenshot")
+    p.add_argument("--screenshot-delay", type=float, default=3.0,
+                   help="seconds before the screenshot (with --video/--images: at least until the clip "
+                        "has been played, at most %d s more)" % CLIP_WAIT_S)
     return p
 
 
 SCORES_PERIOD_S = 0.1  # the Teach panel's confidence bars: at most 10 updates per second
+CLIP_WAIT_S = 120  # --screenshot with a recorded clip: longest wait for its end after the delay
 
 
 def _run_gestures(source: object, cfg: dict, link: object, gui: object, stop: threading.Event,
@@ -43,8 +46,9 @@ def _run_gestures(source: object, cfg: dict, link: object, gui: object, stop: th
     from rbd_local.gestures.model import GestureModel
     from rbd_local.gestures.pipeline import GesturePipeline
 
-    if not source.live:
-        link.wait_connected(5.0)  # a recorded clip is replayed for the robot, not before it listens
+    if not source.live:  # a recorded clip is replayed for the robot, not before it listens
+        while not stop.is_set() and not link.wait_connected(1.0):
+            pass
     pipeline = GesturePipeline(GestureModel.load(cfg["model"]), cfg["gestures"], send=link.send_gesture,
                                threshold=cfg["threshold"], min_consecutive=cfg["min_consecutive"],
                                cooldown_s=cfg["cooldown_s"], model_complexity=cfg["model_complexity"])
@@ -131,10 +135,18 @@ def main(argv: list[str] = None) -> int:
                        "to teach gestures")
     link.start()
     stop = threading.Event()
+    worker = None
     if source is not None:
-        threading.Thread(target=_run_gestures, args=(source, cfg, link, gui, stop, desk), daemon=True).start()
+        worker = threading.Thread(target=_run_gestures, args=(source, cfg, link, gui, stop, desk), daemon=True)
+        worker.start()
     if args.screenshot:
+        clip = worker is not None and not source.live
+        give_up = time.monotonic() + args.screenshot_delay + CLIP_WAIT_S
+
         def shot() -> None:
+            if clip and worker.is_alive() and time.monotonic() < give_up:
+                root.after(200, shot)  # the window as it is after the clip (its gestures sent)
+                return
             from rbd_local.gui.screenshot import save_window
 
             save_window(root, args.screenshot)

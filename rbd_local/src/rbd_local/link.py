@@ -420,6 +420,7 @@ class RobotLink:
                     self._heartbeat()
             self._wake.wait(0.05)
             self._wake.clear()
+        self._drain(send=self.connected)  # a gesture queued before stop() is sent, not lost
         self._connected_evt.clear()
         self._teardown()
 
