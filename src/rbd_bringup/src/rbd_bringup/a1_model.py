@@ -2,7 +2,8 @@
 
 ROS-free. Debian ships no xacro, so the URDF is generated here from the robot's dimensions and
 the calibration file ``config/mounts.yaml`` (every sensor mount, one place) and loaded into
-``robot_description`` by the launch files (``rosrun rbd_bringup a1_urdf MOUNTS``);
+``robot_description`` by the launch files (``python3 -m rbd_bringup.a1_model MOUNTS``, the
+``a1_urdf`` command's ``main``: no rosrun package search at every launch);
 robot_state_publisher then publishes the legs from ``/joint_states`` and the mounts as static
 TFs. The simulator reads the same file, so a changed mount moves the simulated sensor too.
 
@@ -12,6 +13,7 @@ calf about y); joint limits are the SDK's (``a1_const.h``, see ../shared/INTERFA
 """
 
 import math
+import sys
 import xml.etree.ElementTree as ET
 from collections import OrderedDict, namedtuple
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
@@ -321,3 +323,28 @@ def _indent(elem: ET.Element, level: int = 0) -> None:
             child.tail = pad
     if level and not (elem.tail or "").strip():
         elem.tail = pad
+
+
+def main(argv: Sequence[str]) -> int:
+    """The ``a1_urdf`` command: write the URDF for the mounts file ``argv[1]`` to stdout.
+
+    Args:
+        argv: the command line (program name, mounts file).
+
+    Returns:
+        0; 1 with a message naming the file, entry and key on a bad mounts file; 2 on bad usage.
+    """
+    if len(argv) != 2 or argv[1].startswith("-"):
+        sys.stderr.write("usage: a1_urdf MOUNTS_YAML\n")
+        return 2
+    try:
+        mounts = load_mounts(argv[1])
+    except (OSError, MountError) as e:
+        sys.stderr.write("a1_urdf: %s\n" % e)
+        return 1
+    sys.stdout.write(robot_urdf(mounts, argv[1]))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

@@ -19,10 +19,10 @@ import time
 import rospy
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
-from test_faults import Faults, wait_for
+from test_faults import Faults, fault_names, one_test_per_fault, wait_for
 from websockets.sync.client import connect
 
-from rbd_bringup import a1_monitor
+from rbd_msgs.msg import PathQueue
 from rbd_testkit.ports import wait_for_port
 from rbd_testkit.ros import run_rostest
 
@@ -35,21 +35,13 @@ BOUNDS = {"ros": (1.0, 1.5, 1.0), "bridge": (1.5, 2.0, 2.5)}
 
 
 class BridgeFlood(Faults):
-    """The flood fault and the operator watchdog's ``finish`` policy in one sim launch.
+    """The fault catalogue with the flood fault and the operator watchdog's ``finish`` policy.
 
-    ``~fault`` is a space-separated list, run in order; the catalogue's helpers (walk,
-    assert_stops, record) come from Faults.
+    ``~fault`` / ``~repeat`` as for Faults (the rounds and the helpers walk, assert_stops and
+    record come from there), one test per fault (``one_test_per_fault``, shuffled with
+    RBD_TEST_SEED): faults_inputs.test runs the sensor-input faults, the frozen driver link and
+    these two on one stack.
     """
-
-    def test_fault(self):
-        self.wait_ready()
-        for fault in rospy.get_param("~fault").split():
-            self.current = fault
-            getattr(self, "fault_" + fault)(0)
-
-    def record(self, **result):
-        result["fault"] = self.current
-        rospy.loginfo("FAULT_RESULT %s", a1_monitor.report_fault_result(result))
 
     def start_trick(self, gesture, timeout=45.0):
         """Release the e-stop if needed and show ``gesture`` until the robot moves in EXECUTING."""
@@ -72,9 +64,24 @@ class BridgeFlood(Faults):
         m = self.m
         self.assertEqual(rospy.get_param("/rbd_controller/operator_policy"), "finish")
         timeout = float(rospy.get_param("/rbd_controller/operator_timeout"))
+        queue = []  # the controller's remaining poses of the current trick (latched), newest last
+        sub = rospy.Subscriber("/rbd_controller/path_queue", PathQueue, lambda msg: queue.append(list(msg.names)))
         m.heartbeat = True
-        time.sleep(1.0)
-        self.start_trick("spin")  # the shortest trick that moves (two 180 deg turns)
+        t_armed = time.monotonic()
+
+        def long_trick():  # walking, with at least one whole pose after the current one still to go
+            return m.state == "EXECUTING" and m.speed() > 0.08 and bool(queue) and len(queue[-1]) >= 2
+
+        # From its own known state: a trick that goes on past the timeout. After another fault the
+        # robot may be anywhere in one: if its last pose is under way (its end could come before
+        # the timeout), it is let end first; idle, it is shown "spin" (the shortest trick that moves,
+        # two 180 deg turns), as on a fresh stack.
+        time.sleep(max(0.0, t_armed + 1.0 - time.monotonic()))  # the heartbeat arms the watchdog
+        if not long_trick():
+            self.assertTrue(wait_for(lambda: m.state in ("WAITING_FOR_GESTURE", "EMERGENCY_STOP"), 60.0),
+                            "the trick of the fault before did not end: %s" % m.state)
+            self.start_trick("spin")
+        sub.unregister()
         with m.lock:
             n_states = len(m.states)
         m.heartbeat = False
@@ -207,4 +214,6 @@ class BridgeFlood(Faults):
 
 if __name__ == "__main__":
     rospy.init_node("test_faults")
-    run_rostest("rbd_bringup", "faults_" + rospy.get_param("~fault"), BridgeFlood)
+    # One test per fault, in the order of RBD_TEST_SEED (each starts from its own known state)
+    case = one_test_per_fault(BridgeFlood, rospy.get_param("~fault"), int(rospy.get_param("~repeat", 1)))
+    run_rostest("rbd_bringup", rospy.get_param("~suite", "faults_" + fault_names()[0]), case)

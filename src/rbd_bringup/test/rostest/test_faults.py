@@ -71,6 +71,29 @@ def fault_plan(spec, repeat):
     return rounds
 
 
+def one_test_per_fault(case, spec, repeat):
+    """A subclass of ``case`` with one test method per fault of ``spec`` instead of ``test_fault``.
+
+    ``test_NAME`` runs fault NAME in each of its rounds of ``fault_plan(spec, repeat)`` (same
+    round numbers in FAULT_RESULT); run_rostest shuffles the methods with RBD_TEST_SEED, so each
+    fault must start from its own known state (every one starts by getting the robot walking, or
+    waits for it to be idle), whichever ran before.
+    """
+    plan = fault_plan(spec, repeat)
+    attrs = {"test_fault": None}  # not callable: not a test
+    for item in spec.split():
+        name = item.partition(":")[0]
+        rounds = [i for i, faults in enumerate(plan) if name in faults]
+
+        def test(self, name=name, rounds=rounds):
+            self.wait_ready()
+            for i in rounds:
+                self.run_fault(name, i, repeat)
+
+        attrs["test_" + name] = test
+    return type(case.__name__, (case,), attrs)
+
+
 def fault_names():
     """The names of the faults of ``~fault`` (without their round counts)."""
     return [item.partition(":")[0] for item in rospy.get_param("~fault").split()]
@@ -320,12 +343,16 @@ class Faults(unittest.TestCase):
         repeat = int(rospy.get_param("~repeat", 1))
         for i, faults in enumerate(fault_plan(rospy.get_param("~fault"), repeat)):
             for fault in faults:
-                self.fault = fault
-                rospy.loginfo("fault %s, round %d of %d", fault, i + 1, repeat)
-                try:
-                    getattr(self, "fault_" + fault)(i)
-                except AssertionError as exc:  # several faults share a stack: say which one failed
-                    raise AssertionError("%s (round %d of %d): %s" % (fault, i + 1, repeat, exc)) from exc
+                self.run_fault(fault, i, repeat)
+
+    def run_fault(self, fault, i, repeat):
+        """Fault ``fault`` in round ``i`` (of ``repeat``); an assertion names the fault and round."""
+        self.fault = fault
+        rospy.loginfo("fault %s, round %d of %d", fault, i + 1, repeat)
+        try:
+            getattr(self, "fault_" + fault)(i)
+        except AssertionError as exc:  # several faults share a stack: say which one failed
+            raise AssertionError("%s (round %d of %d): %s" % (fault, i + 1, repeat, exc)) from exc
 
     def fault_lidar_silent(self, i):
         m = self.m
@@ -464,17 +491,12 @@ class Faults(unittest.TestCase):
         )
 
     def fault_estop_states(self, i):
+        """The e-stop in every state, each case from its known state, ordered so that the robot's
+        trick has to end only once (at the start): the cases that need an idle robot (waiting,
+        escaping, dodging, avoiding) first, then a fresh "walk" (caught in GENERATING_PATH) on
+        which the cases that e-stop a walking robot run; it is left walking, as it came."""
         m = self.m
-        # EXECUTING
-        self.walk()
-        t0 = time.monotonic()
-        self.em_stop(True)
-        cmd, truth = self.assert_stops(t0, 0.5, 1.0)
-        self.assertEqual(m.state, "EMERGENCY_STOP")
-        self.em_stop(False)
-        self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume after release")
-        self.record(run=i, state="EXECUTING", cmd_stop_s=cmd, truth_stop_s=truth)
-        # WAITING_FOR_GESTURE
+        # WAITING_FOR_GESTURE (the trick the robot came with ends first)
         self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0), "trick did not finish")
         t0 = time.monotonic()
         self.em_stop(True)
@@ -483,7 +505,12 @@ class Faults(unittest.TestCase):
         self.em_stop(False)
         self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 10.0))
         self.record(run=i, state="WAITING_FOR_GESTURE", cmd_stop_s=cmd, truth_stop_s=truth)
-        # GENERATING_PATH (short-lived: try to catch it a few times)
+        self.estop_while_escaping(i)
+        self.estop_while_dodging(i)
+        if AVOIDANCE_EXPERIMENTS:
+            self.estop_while_avoiding(i)
+        # GENERATING_PATH (short-lived: try to catch it a few times), from idle; the cases below
+        # e-stop the "walk" it starts
         caught = False
         for _ in range(4):
             self.assertTrue(wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0))
@@ -501,6 +528,15 @@ class Faults(unittest.TestCase):
                 self.record(run=i, state="GENERATING_PATH", cmd_stop_s=cmd, truth_stop_s=truth, caught=caught)
                 break
             wait_for(lambda: m.state == "WAITING_FOR_GESTURE", 60.0)
+        # EXECUTING
+        self.walk()
+        t0 = time.monotonic()
+        self.em_stop(True)
+        cmd, truth = self.assert_stops(t0, 0.5, 1.0)
+        self.assertEqual(m.state, "EMERGENCY_STOP")
+        self.em_stop(False)
+        self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume after release")
+        self.record(run=i, state="EXECUTING", cmd_stop_s=cmd, truth_stop_s=truth)
         # COLLISION_DETECTED, then e-stop: e-stop wins, the collision clearing does not release it
         self.walk()
         self.collision(True)
@@ -538,10 +574,6 @@ class Faults(unittest.TestCase):
         self.collision(False)
         self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume")
         self.record(run=i, state="COLLISION+ESTOP", cmd_stop_s=cmd, truth_stop_s=truth)
-        self.estop_while_escaping(i)
-        self.estop_while_dodging(i)
-        if AVOIDANCE_EXPERIMENTS:
-            self.estop_while_avoiding(i)
 
     def estop_while_escaping(self, i):
         """Issue 17: the e-stop preempts an avoidance motion as it preempts a trick.

@@ -1,7 +1,12 @@
 #!/usr/bin/env python3
 """rostest: run_experiment on the mock A1 (drift on); thesis path, 180 deg with/without position control.
 
-Thresholds are the issue's goals. Set RBD_EXPERIMENT_OUT to keep the JSON/PNG output.
+Thresholds are the issue's goals. Set RBD_EXPERIMENT_OUT to keep the JSON/PNG output (the
+README's results); only then does the 180 deg case run here: in make test the same
+``run_experiment rotation180`` without and with the position hold, on the same stack (mock A1
+with its drift, this node's sim_tuned profile, pose = ground truth), is checked with tighter
+bounds by tests/experiments' test_fig19_20_rotation_drift_and_its_correction (drift without
+0.4 m +-25 %, >= 2x less with), in the same serial lane: running it twice cost ~20 s.
 """
 
 import json
@@ -54,6 +59,8 @@ class TestExperiment(unittest.TestCase):
         for suffix in ("_path.png", "_velocities.png"):
             self.assertTrue(os.path.getsize(os.path.join(self.out, "default", "thesis_path" + suffix)) > 5000)
 
+    @unittest.skipUnless(os.environ.get("RBD_EXPERIMENT_OUT"), "make test: tests/experiments' fig19_20 checks "
+                         "the same rotation180 runs with tighter bounds (set RBD_EXPERIMENT_OUT to run it here)")
     def test_rotation_with_and_without_position_control(self):
         rospy.set_param(NODE + "rotation_x_control", False)
         rospy.set_param(NODE + "rotation_y_control", False)
