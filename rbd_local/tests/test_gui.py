@@ -15,7 +15,6 @@ pytestmark = pytest.mark.skipif(shutil.which("Xvfb") is None, reason="Xvfb not i
 DOCS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "docs")
 
 
-
 @pytest.fixture(scope="module")
 def app(display):
     import customtkinter as ctk

@@ -24,7 +24,6 @@ GREEN = "#2e7d32"
 GREY = "#757575"
 
 
-
 @pytest.fixture
 def window(display):
     import customtkinter as ctk

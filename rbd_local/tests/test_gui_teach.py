@@ -33,7 +33,6 @@ FPS = 30.0
 pytestmark = pytest.mark.skipif(not os.path.isfile(TRICKS_YAML), reason="rbd_navigation's tricks.yaml not here")
 
 
-
 class Visitor:
     """A frame source: a person who holds the hand still until the panel says "show it now".
 
