@@ -10,10 +10,12 @@ import time
 import lcm
 import pytest
 
-from rbd_a1_driver.keepalive import KeepAlive, record, zero_velocity
+from rbd_a1_driver.keepalive import KeepAlive, at_rest, record, zero_velocity
 from rbd_wire_oracle import unitree as vendor
 
 WALK = vendor.pack(vendor.HIGH_CMD, {"mode": 2, "gaitType": 1, "velocity": (0.3, 0.1), "yawSpeed": 0.2})
+STAND = vendor.pack(vendor.HIGH_CMD, {"mode": 2, "gaitType": 1})
+L2_B = (1 << vendor.BUTTON_BITS["L2"]) | (1 << vendor.BUTTON_BITS["B"])
 
 
 def test_silent_while_the_driver_sends():
@@ -50,6 +52,38 @@ def test_zero_velocity_keeps_the_rest():
     assert v["mode"] == 2 and v["bodyHeight"] == pytest.approx(-0.05) and v["led"][3]["r"] == 9
 
 
+def test_at_rest_reads_velocity_and_yaw_rate():
+    assert at_rest(STAND) and not at_rest(WALK)
+    assert not at_rest(vendor.pack(vendor.HIGH_CMD, {"mode": 2, "yawSpeed": -0.1}))
+    assert not at_rest(vendor.pack(vendor.HIGH_CMD, {"mode": 2, "velocity": (0.0, 0.05)}))
+
+
+def test_a_remote_press_makes_every_fill_zero_velocity_until_the_driver_stops_itself():
+    k = KeepAlive(0.004, 0.010, 0.05, L2_B)
+    k.from_driver(WALK, 1.0)
+    k.from_state(L2_B | 1 << vendor.BUTTON_BITS["up"], 1.002)  # the press (another button held too)
+    fills = [vendor.unpack(vendor.HIGH_CMD, k.due(1.010 + 0.004 * i)) for i in range(10)]  # within hold
+    assert all(f["velocity"] == (0.0, 0.0) and f["yawSpeed"] == 0.0 and f["mode"] == 2 for f in fills)
+    k.from_driver(WALK, 1.001)  # a late record of a command sent before the press: still latched
+    assert at_rest(k.due(1.012))
+    k.from_driver(STAND, 1.05)  # the driver, after the press, sends zero velocity: its gate holds
+    assert k.remote_since is None
+    k.from_driver(WALK, 1.5)  # released by the operator later: the driver walks again
+    assert k.due(1.511) == WALK  # and a stall repeats that walk as before
+
+
+def test_buttons_other_than_the_combination_change_nothing():
+    k = KeepAlive(0.004, 0.010, 0.05, L2_B)
+    k.from_driver(WALK, 1.0)
+    for buttons in (0, 1 << vendor.BUTTON_BITS["L2"], 1 << vendor.BUTTON_BITS["B"], None):
+        k.from_state(buttons, 1.002)
+    assert k.due(1.011) == WALK
+    off = KeepAlive(0.004, 0.010, 0.05, 0)  # the remote e-stop switched off: not watched
+    off.from_driver(WALK, 1.0)
+    off.from_state(L2_B, 1.002)
+    assert off.due(1.011) == WALK
+
+
 @pytest.mark.parametrize("args", [(0.0, 0.01, 0.05), (0.004, 0.02, 0.05), (0.004, 0.01, -1.0)])
 def test_bad_arguments(args):
     with pytest.raises(ValueError):
@@ -78,6 +112,50 @@ def test_process_fills_the_silence_of_its_driver_and_exits_with_the_pipe():
         assert last["velocity"] == (0.0, 0.0) and last["yawSpeed"] == 0.0
         moving = [t for t, data in got if vendor.unpack(vendor.HIGH_CMD, data)["velocity"] != (0.0, 0.0)]
         assert moving[-1] - t0 < 0.05 + 0.01  # repeated for hold after the driver's send time, no longer
+        proc.stdin.close()
+        assert proc.wait(5.0) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+def _high_state(buttons: tuple) -> bytes:
+    return vendor.pack(vendor.HIGH_STATES["3.3.4"], {"mode": 2, "wirelessRemote": vendor.remote(list(buttons))})
+
+
+def test_process_fills_a_stall_after_a_remote_press_with_zero_velocity():
+    """The driver's last command walks; the A1 then reports L2 + B held, and the driver stalls: the
+    commands the keep-alive sends after that HighState stop the robot (read on a separate LCM, in
+    the order the packets reached its socket; one command may be in flight)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        url = "udpm://239.255.76.67:%d?ttl=0" % s.getsockname()[1]
+    got = []
+    lc = lcm.LCM(url)
+    lc.subscribe("LCM_High_Cmd", lambda _c, data: got.append(vendor.unpack(vendor.HIGH_CMD, data)))
+    lc.subscribe("LCM_High_State", lambda _c, data: got.append("state"))
+    proc = subprocess.Popen([sys.executable, "-m", "rbd_a1_driver.keepalive", url, "0.004", "0.01", "0.25",
+                             str(L2_B)], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    try:
+        assert proc.stdout.readline().startswith(b"ready SCHED_")
+        lc.publish("LCM_High_State", _high_state(("L1",)))  # not the combination
+        t0 = time.monotonic()
+        os.write(proc.stdin.fileno(), record(WALK, t0))
+        while time.monotonic() - t0 < 0.08:
+            lc.handle_timeout(5)
+        walked = [c for c in got if c != "state"]
+        assert len(walked) > 5 and all(c["velocity"] == pytest.approx((0.3, 0.1)) for c in walked)
+        del got[:]
+        lc.publish("LCM_High_State", _high_state(("L2", "B")))
+        t_press = time.monotonic()
+        while time.monotonic() - t_press < 0.1:
+            lc.handle_timeout(5)
+        after = got[got.index("state") + 1:]
+        assert len(after) > 10, "the keep-alive stopped filling"
+        moving = [c for c in after if c["velocity"] != (0.0, 0.0) or c["yawSpeed"] != 0.0]
+        assert len(moving) <= 1 and moving == after[:len(moving)], \
+            "the walk was repeated after the press (hold 0.25 s not yet over): %d of %d" % (len(moving), len(after))
         proc.stdin.close()
         assert proc.wait(5.0) == 0
     finally:

@@ -91,6 +91,21 @@ def test_vendor_high_state_decodes_in_auto_mode(layout_name):
     assert s.buttons() == ul.button_mask(("L2", "B")) == 0x0220
 
 
+@pytest.mark.parametrize("layout_name", ["3.3", "3.3.4"])
+@pytest.mark.parametrize("held", [(), ("L2", "B"), ("R1", "left"), ("start", "select", "A")])
+def test_state_buttons_reads_btn_of_a_raw_vendor_high_state(layout_name, held):
+    data = vendor_state(layout_name, wirelessRemote=vendor.remote(list(held), lx=-0.7, ry=0.3), crc=0xFFFFFFFF)
+    expected = 0
+    for name in held:
+        expected |= 1 << vendor.BUTTON_BITS[name]
+    assert ul.state_buttons(data) == expected
+
+
+@pytest.mark.parametrize("size", [0, 113, 264, 266, 1024, 1026])
+def test_state_buttons_of_a_packet_of_unknown_size_is_none(size):
+    assert ul.state_buttons(b"\xff" * size) is None
+
+
 def test_vendor_motor_states_decode_in_sdk_order():
     motors = [{"q": 0.1 * i, "dq": -0.01 * i, "tauEst": 0.5 * i, "ddq": 99.0, "q_raw": 98.0} for i in range(20)]
     s = ul.StateDecoder().decode(vendor_state("3.3.4", motorState=motors))

@@ -39,6 +39,7 @@ from here, and the mock A1 speaks the wire through its own description (``rbd_si
 
 import math
 import struct
+from typing import Optional
 
 # levelFlag of a high-level packet in SDK v3.3 (comm.h: HIGHLEVEL = 0x00).
 HIGHLEVEL = 0x00
@@ -360,6 +361,23 @@ def known_sizes() -> str:
 def remote_buttons(wireless_remote: bytes) -> int:
     """``btn`` (uint16 at byte 2) of the 40 ``wirelessRemote`` bytes."""
     return struct.unpack_from("<H", wireless_remote, 2)[0]
+
+
+#: ``btn`` sits this many bytes before the end of a HighState of either layout: both end with
+#: wirelessRemote[40] | reserve (4) | crc (4), and ``btn`` is at byte 2 of wirelessRemote.
+_BTN_FROM_END = 40 + 4 + 4 - 2
+
+
+def state_buttons(data: bytes) -> Optional[int]:
+    """The remote's button bits of a raw HighState packet, without decoding the rest of it.
+
+    Returns:
+        ``btn`` of ``wirelessRemote`` (see :data:`REMOTE_BUTTONS`), or None if ``data`` has none
+        of the known HighState sizes.
+    """
+    if len(data) not in _LAYOUT_BY_SIZE:
+        return None
+    return struct.unpack_from("<H", data, len(data) - _BTN_FROM_END)[0]
 
 
 def button_mask(names: tuple) -> int:

@@ -76,6 +76,12 @@ def twist(vx=0.0, vy=0.0, wz=0.0):
     return t
 
 
+def press_time(events, since):
+    """Logger time of the first 3.3.4 HighState after ``since`` (wall s) with L2 + B held on the remote."""
+    return next(t for t, ch, data in events if ch == HIGH_STATE and t > since and len(data) == 1025
+                and vendor.buttons_held(vendor.unpack(vendor.HIGH_STATE_V334, data)["wirelessRemote"]) == ["L2", "B"])
+
+
 def still(c):
     return tuple(c["velocity"]) == (0.0, 0.0) and c["yawSpeed"] == 0.0
 
@@ -447,7 +453,7 @@ class DriverWire(unittest.TestCase):
     def test_remote_estop_engages_at_the_driver_and_only_the_operator_releases(self):
         self.walk()
         del self.remote_held[:]
-        t_press = time.monotonic()
+        t_press, t_press_wall = time.monotonic(), time.time()
         self.press(True)
         self.send(twist(0.3), 0.5)
         self.assertTrue(wait_for(lambda: True in self.remote_held, 2.0), "no remote_estop_held true")
@@ -455,8 +461,7 @@ class DriverWire(unittest.TestCase):
         # Measured on the logger's kernel receive times: the HighState carrying the press, then
         # the HighCmds that follow it.
         events = self.events_until(time.time())
-        t_packet = next(t for t, ch, data in events if ch == HIGH_STATE and len(data) == 1025 and vendor.buttons_held(
-            vendor.unpack(vendor.HIGH_STATE_V334, data)["wirelessRemote"]) == ["L2", "B"])
+        t_packet = press_time(events, t_press_wall)
         after = [(t, vendor.unpack(vendor.HIGH_CMD, d)) for t, ch, d in events if ch == HIGH_CMD and t > t_packet]
         first_zero = next(i for i, (t, c) in enumerate(after) if still(c))
         delay = after[first_zero][0] - t_packet
@@ -509,6 +514,39 @@ class DriverWire(unittest.TestCase):
         late = [c for t, c in stalled if t > t0 + KEEPALIVE_HOLD + 0.02]
         self.assertTrue(late and all(still(c) for c in late), "the keep-alive kept the robot walking")
         self.assertEqual(pauses([t for t, _ in window], ref), [])
+
+    def test_a_remote_press_while_the_driver_is_stalled_stops_the_keepalive_fills(self):
+        """SIGSTOP the driver while walking, then the A1 reports L2 + B: the keep-alive process, which
+        would repeat the walk for keepalive_hold after the driver's last send, fills with zero
+        velocity from the HighState with the press on (at most one HighCmd in flight). Without
+        the keep-alive's own reading of the remote, the fills inside the hold would walk."""
+        self.walk()
+        pid = driver_pid()
+        t_stop = time.time()
+        os.kill(pid, signal.SIGSTOP)
+        try:
+            self.press(True)  # the test's HighState sender goes on while the driver is stopped
+            time.sleep(0.3)
+        finally:
+            os.kill(pid, signal.SIGCONT)
+        t_cont = time.time()
+        self.assertTrue(wait_for(lambda: self.diag_value("remote_estop") == "engaged", 3.0))
+        events = self.events_until(t_cont + 0.1)
+        t_packet = press_time(events, t_stop)
+        self.assertLess(t_packet, t_stop + KEEPALIVE_HOLD - 0.015, "the press came too late to be inside the hold")
+        after = [vendor.unpack(vendor.HIGH_CMD, d) for t, ch, d in events if ch == HIGH_CMD and t_packet < t < t_cont]
+        trace = " ".join("%.1f:%s" % ((t - t_stop) * 1e3, "%.1f" % vendor.unpack(vendor.HIGH_CMD, d)["velocity"][0]
+                                      if ch == HIGH_CMD else "state") for t, ch, d in events
+                         if t_stop - 0.01 < t < t_stop + 0.08 and ch != REFERENCE)  # for a failure's message
+        inside_hold = [c for t, ch, d in events if ch == HIGH_CMD and t_packet < t < t_stop + KEEPALIVE_HOLD
+                       for c in [vendor.unpack(vendor.HIGH_CMD, d)]]
+        self.assertGreater(len(after), 40, "the keep-alive did not fill the stall")
+        self.assertGreaterEqual(len(inside_hold), 2, "no fill inside the hold after the press")
+        moving = [c for c in after if not still(c)]
+        self.assertLessEqual(len(moving), 1, "%d fills walked after the press: %s" % (len(moving), trace))
+        self.assertTrue(all(still(c) for c in after[len(moving):]))
+        self.press(False)
+        self.assertTrue(self.release_remote(), "the operator's release did not open the latch")
 
 
     def leds(self):
