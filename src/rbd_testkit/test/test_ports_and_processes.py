@@ -44,6 +44,24 @@ def test_free_port_can_be_bound():
         s.bind(("127.0.0.1", port))
 
 
+def test_free_port_is_below_the_kernels_ephemeral_range():
+    """Every bind to port 0 (ROS nodes' servers) and outgoing connection takes an ephemeral port at
+    any time: one found free there may be gone before the caller's server binds it."""
+    with open("/proc/sys/net/ipv4/ip_local_port_range") as fh:
+        low, high = (int(v) for v in fh.read().split())
+    ports = [free_port() for _ in range(20)]
+    assert [p for p in ports if low <= p <= high] == []
+    assert len(set(ports)) == len(ports), "a port handed out twice"
+
+
+def test_free_port_does_not_follow_the_seeded_random_module():
+    """pytest-randomly seeds ``random`` alike in both test lanes: the lanes' ports must not follow it."""
+    code = "import random; random.seed(7); from rbd_testkit import free_port; print([free_port() for _ in range(3)])"
+    runs = [subprocess.run([sys.executable, "-c", code], stdout=subprocess.PIPE, universal_newlines=True,
+                           check=True).stdout for _ in range(2)]
+    assert runs[0] != runs[1], runs
+
+
 def test_wait_for_port_returns_once_something_listens():
     with socket.socket() as server:
         server.bind(("127.0.0.1", 0))
