@@ -10,12 +10,14 @@ import json
 import threading
 
 import websockets
-from rbd_testkit import wait_for
+from rbd_testkit import free_port, wait_for
 
 
 class FakeBridge:
     def __init__(self, port=0):
-        self.port = port
+        # Not port 0: the kernel's pick is an ephemeral port, which any ROS node started meanwhile
+        # (bind to port 0) can take while the bridge is stopped for a restart on the same port.
+        self.port = port or free_port()
         self.published = []  # (topic, msg)
         self.advertised = []
         self.subscribed = {}  # topic -> type
