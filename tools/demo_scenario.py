@@ -464,16 +464,21 @@ def intrude(monitor):
     from rbd_msgs.srv import PlaceObstacle
 
     place = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
-    # Wait until the robot really walks, then put the person 1.0 m ahead of it.
+    # The person stands 1.0 m ahead of where the walk starts (the trick was just taken: the robot
+    # is still there), on its first leg (0.6 m forward), and steps in once the robot walks. Placed
+    # relative to the robot's pose at that moment instead, a late step-in (a loaded machine: 1.9 s
+    # after the walk began, in one CI run) put the person beyond the end of the leg, and the
+    # robot turned back before its zone reached them.
+    x, y, yaw = monitor.pose
+
     def walking():
         with monitor.lock:
             moving = monitor.commands and monitor.commands[-1][1] > 0.1
         return moving and monitor.state == "EXECUTING"
 
     wait_for(walking, 15.0)
-    x, y, yaw = monitor.pose
     px, py = x + 1.0 * math.cos(yaw), y + 1.0 * math.sin(yaw)
-    say("a visitor steps in 1.0 m ahead of the walking robot at (%.2f, %.2f)" % (px, py))
+    say("a visitor steps in 1.0 m ahead of the walk's start, at (%.2f, %.2f), while the robot walks" % (px, py))
     place("visitor", px, py, 0.2, 1.7, False)
     stopped = monitor.wait_state(("COLLISION_DETECTED",), 10.0)
     say("robot %s" % ("stopped for the visitor" if stopped else "did NOT stop"))
