@@ -768,6 +768,8 @@ class Faults(unittest.TestCase):
         try:
             time.sleep(0.5)
             hold = 4.0
+            with m.lock:
+                n_held = len(m.remote_held)  # an earlier round's press and let-go are before this
             t0 = time.monotonic()
             self.assertTrue(press(["L2", "B"], hold).success)
             cmd, truth = self.assert_stops(t0, 0.5, 1.0, hold=1.0)
@@ -796,9 +798,14 @@ class Faults(unittest.TestCase):
         t1 = time.monotonic()
         time.sleep(0.5)
         self.assertEqual(m.state, "EMERGENCY_STOP")
-        # Let go: still stopped (the input arrived: remote_estop_held went false).
-        self.assertTrue(wait_for(lambda: m.remote_held and m.remote_held[-1][1] is False, hold + 3.0),
-                        "the remote never let go")
+        # Let go: still stopped (the input arrived: remote_estop_held went true, then false, for
+        # this press; the flag is latched and sent on change, so an earlier round's false is no proof).
+        def let_go():
+            with m.lock:
+                held = [h for _t, h in m.remote_held[n_held:]]
+            return True in held and held[-1] is False
+
+        self.assertTrue(wait_for(let_go, hold + 3.0), "the remote never let go")
         time.sleep(1.0)
         self.assertEqual(m.state, "EMERGENCY_STOP")
         self.assertLess(m.max_speed("truth", t1, time.monotonic()), TRUTH_STILL)

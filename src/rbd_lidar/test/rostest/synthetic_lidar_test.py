@@ -256,9 +256,16 @@ class SyntheticLidarTest(unittest.TestCase):
             st = self.state_for(stamp)
             self.assertTrue(st.collision, kind)
             self.assertNotEqual(st.error, "", kind)
+
+        def rejected_logs():
+            with self.lock:
+                return [lg.msg for lg in self.logs[n_logs:] if lg.name == "/rbd_lidar" and "cloud rejected" in lg.msg]
+
+        # /rosout is a connection of its own: the last kind's line may come after its state. Then
+        # 0.5 s more for a second line of any kind to show up (there must be none: once per kind).
+        rbd_testkit.wait_for(lambda: len(rejected_logs()) >= len(kinds), 5.0, 0.02, abort=rospy.is_shutdown)
         time.sleep(0.5)
-        with self.lock:
-            rejected = [lg.msg for lg in self.logs[n_logs:] if lg.name == "/rbd_lidar" and "cloud rejected" in lg.msg]
+        rejected = rejected_logs()
         self.assertEqual(len(rejected), len(kinds), [(lg.name, lg.msg[:40]) for lg in self.logs[-10:]])
         self.assertEqual(len({m.split(": ")[2] for m in rejected}), len(kinds), rejected)
         n_pub, n_states, _ = self.set_mode("clear")

@@ -87,6 +87,13 @@ class MockA1Behaviour(unittest.TestCase):
                 if st.name.startswith("rbd_a1_driver") and kv.key == key]
 
     @classmethod
+    def reason_after(cls, n):
+        """rbd_a1_driver's zero_velocity_reason in the newest of its diagnostics after the first ``n``; None if none."""
+        values = [kv.value for arr in list(cls.diag[n:]) for st in arr.status for kv in st.values
+                  if st.name.startswith("rbd_a1_driver") and kv.key == "zero_velocity_reason"]
+        return values[-1] if values else None
+
+    @classmethod
     def rejected(cls):
         """rbd_a1_driver's count of rejected cmd_vel messages (diagnostics), 0 before the first."""
         values = cls.driver_values("cmd_vel_rejected")
@@ -173,8 +180,12 @@ class MockA1Behaviour(unittest.TestCase):
     def test_estop_gate(self):
         try:
             self.settle()
+            n_diag = len(self.diag)
             self.estop.publish(Bool(True))
-            time.sleep(0.3)
+            # The flag reached the driver before the cmd_vel below (its diagnostics say so; 1 Hz):
+            # with a fixed pause, a flag late on a loaded machine let the robot walk.
+            self.assertTrue(wait_for(lambda: self.reason_after(n_diag) == "e-stop", 5.0),
+                            "the driver never reported the e-stop: %r" % self.reason_after(n_diag))
             start = self.gt.get()
             self.send(twist(0.3), 1.0)
             self.assertLess(dist(self.gt.get(), start), 0.005, "moved while e-stop engaged")
@@ -217,7 +228,13 @@ class MockA1Behaviour(unittest.TestCase):
         before = self.gt.get()
         res = call(0.3, -0.2, 0.0, -0.1)
         self.assertTrue(res.success, res.message)
-        time.sleep(1.5)
+
+        def posed(roll, pitch, dz):
+            p = self.gt.get()
+            return abs(p[3] - roll) < 0.02 and abs(p[4] - pitch) < 0.02 and abs(p[2] - (before[2] + dz)) < 0.01
+
+        # the mock A1 moves the body at a limited rate: wait for it (the asserts below say how far off)
+        wait_for(lambda: posed(0.3, -0.2, -0.1), 5.0)
         x, y, z, roll, pitch, _ = self.gt.get()
         self.assertAlmostEqual(roll, 0.3, delta=0.02)
         self.assertAlmostEqual(pitch, -0.2, delta=0.02)
@@ -228,7 +245,7 @@ class MockA1Behaviour(unittest.TestCase):
         time.sleep(0.5)
         self.assertAlmostEqual(self.gt.get()[3], 0.3, delta=0.02, msg="NaN body pose changed the body")
         self.assertTrue(call(0.0, 0.0, 0.0, 0.0).success)
-        time.sleep(1.0)
+        wait_for(lambda: posed(0.0, 0.0, 0.0), 5.0)
         self.assertAlmostEqual(self.gt.get()[3], 0.0, delta=0.02)
         self.assertAlmostEqual(self.gt.get()[2], before[2], delta=0.01)
 
