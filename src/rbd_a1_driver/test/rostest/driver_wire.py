@@ -218,6 +218,12 @@ class DriverWire(unittest.TestCase):
         self.pub.publish(twist())
         self.assertTrue(wait_for(lambda: self.diag_value("remote_estop") in ("ready", "off"), 5.0)
                         or self.release_remote(), "remote e-stop still engaged from before")
+        # The released flag must have reached the driver, not only be due on the 10 Hz thread's next
+        # turn: a test that engaged it just before (LED colours) left the gate held, and a body pose
+        # called at once was refused. No test sets the status "emergency": red LEDs = an e-stop held.
+        self.set_estop(False)
+        self.assertTrue(wait_for(lambda: self.leds() != [(0xC6, 0x28, 0x28)] * 4, 5.0),
+                        "the driver still holds an e-stop from before: LEDs %s" % self.leds())
 
     def release_remote(self):
         DriverWire.estop_value = True
