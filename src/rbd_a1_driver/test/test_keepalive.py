@@ -1,6 +1,7 @@
 """The keep-alive process's decisions: silent while the driver sends, repeats its last command when it
 stalls, zero velocity after ``hold``; and the process itself over real LCM with the driver's pipe."""
 
+import contextlib
 import os
 import socket
 import subprocess
@@ -90,17 +91,34 @@ def test_bad_arguments(args):
         KeepAlive(*args)
 
 
-def test_process_fills_the_silence_of_its_driver_and_exits_with_the_pipe():
+def _lcm_url() -> str:
+    """An LCM URL of its own for one test (a free UDP port)."""
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", 0))
-        url = "udpm://239.255.76.67:%d?ttl=0" % s.getsockname()[1]
-    got = []
-    lc = lcm.LCM(url)
-    lc.subscribe("LCM_High_Cmd", lambda _c, data: got.append((time.monotonic(), data)))
-    proc = subprocess.Popen([sys.executable, "-m", "rbd_a1_driver.keepalive", url, "0.004", "0.01", "0.05"],
+        return "udpm://239.255.76.67:%d?ttl=0" % s.getsockname()[1]
+
+
+@contextlib.contextmanager
+def _keepalive_process(url: str, *args: str):
+    """The keep-alive process on ``url`` with PERIOD GAP HOLD [REMOTE_MASK] ``args``, once it is ready;
+    killed at the end if the test did not end it."""
+    proc = subprocess.Popen([sys.executable, "-m", "rbd_a1_driver.keepalive", url] + list(args),
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE)
     try:
         assert proc.stdout.readline().startswith(b"ready SCHED_")
+        yield proc
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+def test_process_fills_the_silence_of_its_driver_and_exits_with_the_pipe():
+    url = _lcm_url()
+    got = []
+    lc = lcm.LCM(url)
+    lc.subscribe("LCM_High_Cmd", lambda _c, data: got.append((time.monotonic(), data)))
+    with _keepalive_process(url, "0.004", "0.01", "0.05") as proc:
         t0 = time.monotonic()
         os.write(proc.stdin.fileno(), record(WALK, t0))  # the driver's packet; then it "stalls"
         while time.monotonic() - t0 < 0.3:
@@ -114,10 +132,6 @@ def test_process_fills_the_silence_of_its_driver_and_exits_with_the_pipe():
         assert moving[-1] - t0 < 0.05 + 0.01  # repeated for hold after the driver's send time, no longer
         proc.stdin.close()
         assert proc.wait(5.0) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
 
 
 def _high_state(buttons: tuple) -> bytes:
@@ -128,17 +142,12 @@ def test_process_fills_a_stall_after_a_remote_press_with_zero_velocity():
     """The driver's last command walks; the A1 then reports L2 + B held, and the driver stalls: the
     commands the keep-alive sends after that HighState stop the robot (read on a separate LCM, in
     the order the packets reached its socket; one command may be in flight)."""
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        url = "udpm://239.255.76.67:%d?ttl=0" % s.getsockname()[1]
+    url = _lcm_url()
     got = []
     lc = lcm.LCM(url)
     lc.subscribe("LCM_High_Cmd", lambda _c, data: got.append(vendor.unpack(vendor.HIGH_CMD, data)))
     lc.subscribe("LCM_High_State", lambda _c, data: got.append("state"))
-    proc = subprocess.Popen([sys.executable, "-m", "rbd_a1_driver.keepalive", url, "0.004", "0.01", "0.25",
-                             str(L2_B)], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
-    try:
-        assert proc.stdout.readline().startswith(b"ready SCHED_")
+    with _keepalive_process(url, "0.004", "0.01", "0.25", str(L2_B)) as proc:
         lc.publish("LCM_High_State", _high_state(("L1",)))  # not the combination
         t0 = time.monotonic()
         os.write(proc.stdin.fileno(), record(WALK, t0))
@@ -158,7 +167,3 @@ def test_process_fills_a_stall_after_a_remote_press_with_zero_velocity():
             "the walk was repeated after the press (hold 0.25 s not yet over): %d of %d" % (len(moving), len(after))
         proc.stdin.close()
         assert proc.wait(5.0) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
