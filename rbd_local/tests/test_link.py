@@ -1,5 +1,6 @@
 """RobotLink against an in-process fake rosbridge server."""
 
+import threading
 import time
 
 import pytest
@@ -162,7 +163,6 @@ class SilentRelay:
 
     def __init__(self, target_port):
         import socket
-        import threading
 
         self.target_port = target_port
         self.silent = threading.Event()
@@ -258,6 +258,44 @@ def test_a_stall_of_the_laptop_is_not_taken_for_a_silent_robot(fake_bridge):
         t0 = time.monotonic()
         while time.monotonic() - t0 < 8.0:
             assert link.connected, "a healthy link was dropped %.1f s into a stall of the laptop" % (
+                time.monotonic() - t0)
+            time.sleep(0.05)
+        assert got["conn"] == [True] and link.connect_count == 1
+    finally:
+        link.stop()
+
+
+def test_a_stall_of_the_whole_process_ending_just_before_the_verdict_keeps_the_link(fake_bridge):
+    # CI: the niced test process (link, reactor and the in-process bridge alike) stalled for most
+    # of a keepalive; the reactor woke just before its verdict was due, the bridge's pong just
+    # after, and a healthy link was dropped. Here: the bridge stops answering, the first unanswered
+    # ping goes out, the reactor stalls until 0.2 s before the verdict and the bridge answers 0.5 s
+    # after it. The silence must span KEEPALIVE_PINGS pings this process sent, so the link stays.
+    from twisted.internet import reactor
+
+    keepalive = 2.0
+    got = {"conn": []}
+    link = RobotLink("127.0.0.1", fake_bridge.port, retry_s=0.2, connect_timeout_s=1.0, keepalive_s=keepalive,
+                     on_connection=got["conn"].append).start()
+    try:
+        assert link.wait_connected(30)
+        time.sleep(1.0)  # pings answered
+        assert link._unanswered is None
+        bridge_stalled = threading.Event()
+
+        def stall_bridge():
+            bridge_stalled.set()
+            while link._unanswered is None:  # a ping goes out and stays unanswered
+                time.sleep(0.005)
+            sent = link._unanswered
+            reactor.callFromThread(time.sleep, max(0.0, sent + keepalive - 0.2 - time.monotonic()))
+            time.sleep(max(0.0, sent + keepalive + 0.5 - time.monotonic()))
+
+        fake_bridge._loop.call_soon_threadsafe(stall_bridge)
+        assert bridge_stalled.wait(10)
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < keepalive + 3.0:
+            assert link.connected, "a healthy link was dropped %.1f s into a stall of the whole process" % (
                 time.monotonic() - t0)
             time.sleep(0.05)
         assert got["conn"] == [True] and link.connect_count == 1
