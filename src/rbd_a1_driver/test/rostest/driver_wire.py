@@ -229,7 +229,7 @@ class DriverWire(unittest.TestCase):
         DriverWire.estop_value = True
         time.sleep(0.3)
         DriverWire.estop_value = False
-        return wait_for(lambda: self.diag_value("remote_estop") == "ready", 3.0)
+        return wait_for(lambda: self.diag_value("remote_estop") == "ready", 30.0)
 
     def last(self):
         with self.lock:
@@ -473,7 +473,7 @@ class DriverWire(unittest.TestCase):
         t_press, t_press_wall = time.monotonic(), time.time()
         self.press(True)
         self.send(twist(0.3), 0.5)
-        self.assertTrue(wait_for(lambda: True in self.remote_held, 2.0), "no remote_estop_held true")
+        self.assertTrue(wait_for(lambda: True in self.remote_held, 30.0), "no remote_estop_held true")
         self.assert_still_since(t_press + 0.05)
         # Measured on the logger's kernel receive times: the HighState carrying the press, then
         # the HighCmds that follow it.
@@ -496,7 +496,7 @@ class DriverWire(unittest.TestCase):
         self.send(twist(0.3), 0.5)
         self.assert_still_since(t0, "released while the buttons are held")
         self.press(False)
-        self.assertTrue(wait_for(lambda: self.remote_held[-1] is False, 2.0))
+        self.assertTrue(wait_for(lambda: self.remote_held[-1] is False, 30.0))
         t0 = time.monotonic()
         self.send(twist(0.3), 0.5)
         self.assert_still_since(t0, "released without the operator")
@@ -505,7 +505,7 @@ class DriverWire(unittest.TestCase):
         DriverWire.estop_value = True
         time.sleep(0.3)
         DriverWire.estop_value = False
-        self.assertTrue(wait_for(lambda: self.diag_value("remote_estop") == "ready", 3.0))
+        self.assertTrue(wait_for(lambda: self.diag_value("remote_estop") == "ready", 30.0))
         self.walk("no motion after the operator's release")
 
     # ---- LED, diagnostics, keep-alive -------------------------------------------------------------
@@ -547,7 +547,7 @@ class DriverWire(unittest.TestCase):
         finally:
             os.kill(pid, signal.SIGCONT)
         t_cont = time.time()
-        self.assertTrue(wait_for(lambda: self.diag_value("remote_estop") == "engaged", 3.0))
+        self.assertTrue(wait_for(lambda: self.diag_value("remote_estop") == "engaged", 30.0))
         events = self.events_until(t_cont + 0.1)
         t_packet = press_time(events, t_stop)
         self.assertLess(t_packet, t_stop + KEEPALIVE_HOLD - 0.015, "the press came too late to be inside the hold")
@@ -573,9 +573,9 @@ class DriverWire(unittest.TestCase):
         for status, rgb in (("running", (0x2E, 0x7D, 0x32)), ("collision", (0xEF, 0x6C, 0x00)),
                             ("idle", (0x15, 0x65, 0xC0))):
             self.status.publish(String(status))
-            self.assertTrue(wait_for(lambda rgb=rgb: self.leds() == [rgb] * 4, 2.0), "%s: %s" % (status, self.leds()))
+            self.assertTrue(wait_for(lambda rgb=rgb: self.leds() == [rgb] * 4, 30.0), "%s: %s" % (status, self.leds()))
         DriverWire.estop_value = True
-        self.assertTrue(wait_for(lambda: self.leds() == [(0xC6, 0x28, 0x28)] * 4, 2.0), "e-stop is not red")
+        self.assertTrue(wait_for(lambda: self.leds() == [(0xC6, 0x28, 0x28)] * 4, 30.0), "e-stop is not red")
 
     def test_diagnostics_contract(self):
         # The second diagnostics from now: the first may have been made before setUp put back the

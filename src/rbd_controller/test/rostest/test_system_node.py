@@ -137,8 +137,8 @@ class TestControlSystem(unittest.TestCase):
 
     def engage_estop(self):
         self.em_stop(data=True)
-        self.wait_state("EMERGENCY_STOP", 1.0)
-        self.assertTrue(wait_for(lambda: self.w.estop is True, 2.0), "latched /rbd_controller/estop")
+        self.wait_state("EMERGENCY_STOP", 30.0)
+        self.assertTrue(wait_for(lambda: self.w.estop is True, 30.0), "latched /rbd_controller/estop")
 
     def check_gesture_ignored_in_estop(self, topic=GESTURE_TOPIC, proof_timeout=10.0):
         """In EMERGENCY_STOP, a gesture that reached rbd_gestrec changes nothing; released, it is dropped.
@@ -202,12 +202,12 @@ class TestControlSystem(unittest.TestCase):
     def wait_moving_in(self, pos_state):
         """Wait for pos_state and for the robot to actually move in it."""
         self.wait_pos_state(pos_state)
-        self.assertTrue(wait_for(lambda: self.w.moving_since(time.monotonic() - 0.05), 3.0), pos_state)
+        self.assertTrue(wait_for(lambda: self.w.moving_since(time.monotonic() - 0.05), 30.0), pos_state)
         self.assertEqual(self.w.pos_state, pos_state)
 
     def assert_stops(self, t0, label):
         """Zero velocity reaches the robot promptly and the robot stays still."""
-        self.assertTrue(wait_for(lambda: self.w.first_zero_after(t0) is not None, 2.0), label)
+        self.assertTrue(wait_for(lambda: self.w.first_zero_after(t0) is not None, 30.0), label)
         delay = self.w.first_zero_after(t0)
         rospy.loginfo("%s: zero velocity at the robot %.3f s after the request", label, delay)
         self.assertLess(delay, CONTROL_PERIOD + MARGIN + self.w.stop_time, label)
@@ -239,7 +239,7 @@ class TestControlSystem(unittest.TestCase):
         )
         self.assertEqual(out.returncode, 0, out.stdout)
         self.wait_state("WAITING_FOR_GESTURE")
-        self.assertTrue(wait_for(lambda: self.w.estop is False, 2.0))
+        self.assertTrue(wait_for(lambda: self.w.estop is False, 30.0))
         self.assertTrue(wait_for(lambda: self.w.body is not None and self.w.body.y < -0.1, 5.0), "attentive pitch")
         time.sleep(0.5)  # past the first (flushing) gesture poll
         self.assertEqual(self.w.state, "WAITING_FOR_GESTURE")
@@ -248,20 +248,22 @@ class TestControlSystem(unittest.TestCase):
         # only this trick's queue, path and controller state count (not an earlier test's last ones)
         self.w.queue = self.w.path = self.w.cstate = None
         self.send_gesture("walk")
-        self.wait_state("EXECUTING", 5.0)
-        self.assertTrue(wait_for(lambda: self.w.queue is not None and len(self.w.queue.names) == 2, 3.0))
+        self.wait_state("EXECUTING", 30.0)
+        self.assertTrue(wait_for(lambda: self.w.queue is not None and len(self.w.queue.names) == 2, 30.0))
         self.assertEqual(self.w.queue.command, "walk")
         self.assertEqual(self.w.queue.names[0], "out 0.45 m, turn left")
-        self.assertTrue(wait_for(lambda: self.w.path is not None and len(self.w.path.poses) == 2, 2.0), "nav_msgs/Path")
+        self.assertTrue(
+            wait_for(lambda: self.w.path is not None and len(self.w.path.poses) == 2, 30.0), "nav_msgs/Path"
+        )
         # its own latched topic (published with the state): it may arrive after /state and /path_queue
-        self.assertTrue(wait_for(lambda: self.w.cstate is not None and self.w.cstate.state_name == "EXECUTING", 2.0),
+        self.assertTrue(wait_for(lambda: self.w.cstate is not None and self.w.cstate.state_name == "EXECUTING", 30.0),
                         "controller_state: %s" % (self.w.cstate and self.w.cstate.state_name))
-        self.assertTrue(wait_for(lambda: abs(self.w.body.y) < 0.02, 3.0), "neutral body before moving")
+        self.assertTrue(wait_for(lambda: abs(self.w.body.y) < 0.02, 30.0), "neutral body before moving")
         self.wait_state("WAITING_FOR_GESTURE", 40.0)
         self.assertEqual(self.w.states[n:], ["GENERATING_PATH", "EXECUTING", "WAITING_FOR_GESTURE"])
         self.assert_back_at_start(start)
         # the queue is its own topic: its empty message may arrive just after the state's
-        self.assertTrue(wait_for(lambda: len(self.w.queue.names) == 0, 2.0), self.w.queue.names)
+        self.assertTrue(wait_for(lambda: len(self.w.queue.names) == 0, 30.0), self.w.queue.names)
 
     def test_unknown_gesture_no_motion(self):
         self.check_unknown_gesture_ignored()
@@ -283,11 +285,11 @@ class TestControlSystem(unittest.TestCase):
             self.assertEqual(self.w.state, "EXECUTING")
             t0 = time.monotonic()
             self.em_stop(data=True)
-            self.assertTrue(wait_for(lambda: self.w.estop is True, 1.0), "latched /rbd_controller/estop")
-            self.wait_state("EMERGENCY_STOP", 1.0)
+            self.assertTrue(wait_for(lambda: self.w.estop is True, 30.0), "latched /rbd_controller/estop")
+            self.wait_state("EMERGENCY_STOP", 30.0)
             self.assert_stops(t0, "e-stop in " + pos_state)
             self.em_stop(data=False)
-            self.wait_state("EXECUTING", 2.0)
+            self.wait_state("EXECUTING", 30.0)
         self.wait_state("WAITING_FOR_GESTURE", 40.0)
         self.assert_back_at_start(start)
 
@@ -303,17 +305,17 @@ class TestControlSystem(unittest.TestCase):
         self.wait_moving_in("LINEAR")
         t0 = time.monotonic()
         self.collision(data=True)
-        self.wait_state("COLLISION_DETECTED", 1.0)
+        self.wait_state("COLLISION_DETECTED", 30.0)
         self.assert_stops(t0, "collision in LINEAR")
         # an e-stop on top of the collision; releasing it keeps the collision stop
         self.em_stop(data=True)
-        self.wait_state("EMERGENCY_STOP", 1.0)
+        self.wait_state("EMERGENCY_STOP", 30.0)
         self.em_stop(data=False)
-        self.wait_state("COLLISION_DETECTED", 1.0)
+        self.wait_state("COLLISION_DETECTED", 30.0)
         time.sleep(0.3)
         self.assertEqual(self.w.moving_since(time.monotonic() - 0.2), [])
         self.collision(data=False)
-        self.wait_state("EXECUTING", 2.0)
+        self.wait_state("EXECUTING", 30.0)
         self.wait_state("WAITING_FOR_GESTURE", 40.0)
         self.assert_back_at_start(start)
 

@@ -234,7 +234,7 @@ class MockA1Behaviour(unittest.TestCase):
             return abs(p[3] - roll) < 0.02 and abs(p[4] - pitch) < 0.02 and abs(p[2] - (before[2] + dz)) < 0.01
 
         # the mock A1 moves the body at a limited rate: wait for it (the asserts below say how far off)
-        wait_for(lambda: posed(0.3, -0.2, -0.1), 5.0)
+        wait_for(lambda: posed(0.3, -0.2, -0.1), 30.0)
         x, y, z, roll, pitch, _ = self.gt.get()
         self.assertAlmostEqual(roll, 0.3, delta=0.02)
         self.assertAlmostEqual(pitch, -0.2, delta=0.02)
@@ -245,7 +245,7 @@ class MockA1Behaviour(unittest.TestCase):
         time.sleep(0.5)
         self.assertAlmostEqual(self.gt.get()[3], 0.3, delta=0.02, msg="NaN body pose changed the body")
         self.assertTrue(call(0.0, 0.0, 0.0, 0.0).success)
-        wait_for(lambda: posed(0.0, 0.0, 0.0), 5.0)
+        wait_for(lambda: posed(0.0, 0.0, 0.0), 30.0)
         self.assertAlmostEqual(self.gt.get()[3], 0.0, delta=0.02)
         self.assertAlmostEqual(self.gt.get()[2], before[2], delta=0.01)
 
