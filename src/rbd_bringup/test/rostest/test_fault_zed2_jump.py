@@ -71,6 +71,7 @@ class Zed2Relay:
         self.offset = (0.0, 0.0)
         self.truth_t, self.truth = [], []  # stamp [s], (x, y, speed)
         self.pose_errors = []  # (stamp, |pose - truth|)
+        self.pending = []  # (stamp, x, y) of poses newer than the last truth received
         self.path = []  # (x, y) of the planned path
         self.state = None
         self.rejected = 0
@@ -96,17 +97,28 @@ class Zed2Relay:
         with self.lock:
             self.truth_t.append(msg.header.stamp.to_sec())
             self.truth.append((p.x, p.y, math.hypot(v.x, v.y)))
+            waiting, self.pending = self.pending, []
+            for pose in waiting:
+                self._match(*pose)
 
     def on_pose(self, msg):
-        t = msg.header.stamp.to_sec()
         with self.lock:
-            i = bisect.bisect_left(self.truth_t, t)
-            if not self.truth_t or i >= len(self.truth_t) or (i == 0 and self.truth_t[0] - t > 0.02):
-                return
-            if i > 0 and t - self.truth_t[i - 1] < self.truth_t[i] - t:
-                i -= 1
-            x, y, _ = self.truth[i]
-            self.pose_errors.append((t, math.hypot(msg.pose.position.x - x, msg.pose.position.y - y)))
+            self._match(msg.header.stamp.to_sec(), msg.pose.position.x, msg.pose.position.y)
+
+    def _match(self, t, x, y):
+        """Record the pose's error against the truth nearest its stamp (lock held). A pose newer
+        than the last truth received waits for the next truth (the EKF stamps "now"; the truth
+        that brackets it may still be on its way)."""
+        i = bisect.bisect_left(self.truth_t, t)
+        if not self.truth_t or (i == 0 and self.truth_t[0] - t > 0.02):
+            return
+        if i >= len(self.truth_t):
+            self.pending.append((t, x, y))
+            return
+        if i > 0 and t - self.truth_t[i - 1] < self.truth_t[i] - t:
+            i -= 1
+        tx, ty, _ = self.truth[i]
+        self.pose_errors.append((t, math.hypot(x - tx, y - ty)))
 
     def on_path(self, msg):
         # The controller may publish the path goal by goal: keep every new point, in order.

@@ -32,7 +32,7 @@ from visualization_msgs.msg import Marker
 
 import rbd_testkit
 from rbd_bringup.a1_monitor import yaw_of
-from rbd_testkit.ros import run_rostest
+from rbd_testkit.ros import RosoutWatcher, run_rostest
 
 EXPECTED_NODES = [
     "/mock_a1", "/rbd_a1_driver", "/os1_sim", "/zed2_sim", "/world", "/robot_state_publisher",
@@ -138,12 +138,22 @@ class SimSmoke(Zed2JumpFault, unittest.TestCase):
         # Status light: red while e-stopped (the GUI's emergency colour).
         self.assertTrue(wait_for(lambda: self.led_is((0xC6, 0x28, 0x28)), 10.0), "LEDs not red: %s" % self.led)
 
-        # A gesture while the e-stop is engaged must not move the robot.
+        # A gesture while the e-stop is engaged must not move the robot. rbd_gestrec's own log line
+        # proves the gesture arrived (a sleep alone would pass on a wrong topic name).
+        rosout = RosoutWatcher()
+        rosout.wait_connected("/rbd_gestrec", 30.0)
+        self.assertTrue(wait_for(lambda: self.gesture.get_num_connections() > 0, 30.0), "nobody takes gestures")
         start = self.truth.pose.pose.position
-        for _ in range(10):
-            self.gesture.publish(String("spin"))
-            time.sleep(0.2)
-        time.sleep(1.0)
+        mark = rosout.mark()
+        rbd_testkit.stays_unchanged(
+            lambda: self.state,
+            lambda: rosout.find("gesture 'spin' -> command", node="/rbd_gestrec", since=mark),
+            2.0,
+            send=lambda: self.gesture.publish(String("spin")),
+            timeout=30.0,
+            what="the controller's state",
+            proof="rbd_gestrec taking the gesture",
+        )
         moved = math.hypot(self.truth.pose.pose.position.x - start.x, self.truth.pose.pose.position.y - start.y)
         self.assertLess(moved, 0.005)
         self.assertLess(self.max_speed_while_estopped, 1e-3)
