@@ -53,6 +53,15 @@ def speed_of_twist(t):
 wait_for = functools.partial(rbd_testkit.wait_for, abort=rospy.is_shutdown)
 
 
+def relay(pub, msg):
+    """Publish from a callback or timer; at shutdown a publisher already closed is no error."""
+    try:
+        pub.publish(msg)
+    except rospy.ROSException:
+        if not rospy.core.is_shutdown_requested():
+            raise
+
+
 def fault_plan(spec, repeat):
     """The faults of ``spec`` ("a b:1 ...") round by round: a list of ``repeat`` lists of names.
 
@@ -184,20 +193,20 @@ class Monitor:
     def on_cloud(self, msg):
         mode = self.cloud_mode
         if mode == "pass":
-            self.cloud_pub.publish(msg)
+            relay(self.cloud_pub, msg)
             self.last_valid_cloud = time.monotonic()
         elif mode == "malformed":
-            self.cloud_pub.publish(malformed(msg, self.malformed_sent))
+            relay(self.cloud_pub, malformed(msg, self.malformed_sent))
             self.malformed_sent += 1
 
     def on_pose(self, msg):
         if self.pose_pass:
-            self.pose_pub.publish(msg)
+            relay(self.pose_pub, msg)
             self.last_pose = time.monotonic()
 
     def on_hb_timer(self, _event):
         if self.heartbeat:
-            self.hb_pub.publish(Header(stamp=rospy.Time.now(), frame_id="test_faults"))
+            relay(self.hb_pub, Header(stamp=rospy.Time.now(), frame_id="test_faults"))
 
     def close(self):
         self.a1.close()
