@@ -242,6 +242,14 @@ def test_silent_link_is_dropped_by_keepalive_and_stale_estop_never_arrives(fake_
         relay.close()
 
 
+def _assert_stays_connected(link, seconds, during):
+    """The link reports connected at every 50 ms for ``seconds`` (``during``: what is going on)."""
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < seconds:
+        assert link.connected, "a healthy link was dropped %.1f s into %s" % (time.monotonic() - t0, during)
+        time.sleep(0.05)
+
+
 def test_a_stall_of_the_laptop_is_not_taken_for_a_silent_robot(fake_bridge):
     # The keepalive counts from pings this process actually sent and judges after reading what
     # came back: a stall of the laptop's own event loop (longer than the keepalive; CI's niced
@@ -255,11 +263,7 @@ def test_a_stall_of_the_laptop_is_not_taken_for_a_silent_robot(fake_bridge):
         assert link.wait_connected(30)
         time.sleep(1.0)  # pings answered
         reactor.callFromThread(time.sleep, 5.0)  # the reactor stalls for 2.5 keepalives
-        t0 = time.monotonic()
-        while time.monotonic() - t0 < 8.0:
-            assert link.connected, "a healthy link was dropped %.1f s into a stall of the laptop" % (
-                time.monotonic() - t0)
-            time.sleep(0.05)
+        _assert_stays_connected(link, 8.0, "a stall of the laptop")
         assert got["conn"] == [True] and link.connect_count == 1
     finally:
         link.stop()
@@ -293,18 +297,14 @@ def test_a_stall_of_the_whole_process_ending_just_before_the_verdict_keeps_the_l
 
         fake_bridge._loop.call_soon_threadsafe(stall_bridge)
         assert bridge_stalled.wait(10)
-        t0 = time.monotonic()
-        while time.monotonic() - t0 < keepalive + 3.0:
-            assert link.connected, "a healthy link was dropped %.1f s into a stall of the whole process" % (
-                time.monotonic() - t0)
-            time.sleep(0.05)
+        _assert_stays_connected(link, keepalive + 3.0, "a stall of the whole process")
         assert got["conn"] == [True] and link.connect_count == 1
     finally:
         link.stop()
 
 
 def test_keepalive_off_keeps_a_silent_link_open(fake_bridge):
-    # The behaviour the keepalive fixes (and the proof that the test above depends on it).
+    # The behaviour the keepalive fixes (and the proof that the silent-link test depends on it).
     relay = SilentRelay(fake_bridge.port)
     link = RobotLink("127.0.0.1", relay.port, retry_s=0.2, connect_timeout_s=1.0, keepalive_s=0.0).start()
     try:

@@ -548,8 +548,7 @@ class RobotLink:
             return
         from twisted.internet import reactor  # roslibpy's transport on CPython
 
-        self._next_ping = now + self._ping_period()
-        self._ping_queued = True
+        self._ping_queued = True  # _ping sets the next ping's time when it has sent this one
         reactor.callFromThread(self._ping, proto)
 
     def _ping_period(self) -> float:
@@ -562,9 +561,8 @@ class RobotLink:
             return
         proto.sendPing()
         self._next_ping = time.monotonic() + self._ping_period()  # the cadence of pings actually sent
-        self._pings += 1
+        self._pings = 1 if self._unanswered is None else self._pings + 1
         if self._unanswered is None:
-            self._pings = 1
             from twisted.internet import reactor
 
             sent = self._unanswered = time.monotonic()
