@@ -8,7 +8,8 @@
 #     sensors.launch, a bag replay, the demo, the soak, the experiments, two hosts), one at a
 #     time, at normal priority: two timing-sensitive simulated stacks never run at once.
 #   side lane: gtests and the rostests that start no simulated stack, then (niced) pytest of
-#     the rest (ROS-free cores, private-master node tests, lint, drop-in builds) and rbd_local.
+#     the rest (ROS-free cores, private-master node tests, lint, drop-in builds) with rbd_local's
+#     pytest beside it.
 # RBD_TEST_LANES=1 runs the side lane after the serial lane instead of beside it.
 set -uo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -30,7 +31,9 @@ RBD_TEST_SEED="${RBD_TEST_SEED:-$(( (RANDOM << 15 | RANDOM) + 1 ))}"
 export RBD_TEST_SEED
 echo "== test order seed $RBD_TEST_SEED (RBD_TEST_SEED=$RBD_TEST_SEED make test repeats it)"
 phases="$results/phases.tsv"
-: > "$phases"
+# setup and build (written by tools/setup.sh and tools/build.sh in this make run) come first
+cat build/phase-setup.tsv build/phase-build.tsv > "$phases" 2>/dev/null || true
+rm -f build/phase-setup.tsv build/phase-build.tsv  # a later tools/run_tests.sh alone has none
 t_all=$(date +%s)
 
 # pytest files that start a simulated stack: the serial lane runs them after the rostests.
@@ -117,18 +120,24 @@ side_lane() {
   fi
   run_targets "$results/rostest_side.log" "${side_targets[@]}"
   phase "side: gtests + rostests without a simulated stack" "$start"
+  # The laptop app is its own pip package: test it from its own root, beside the pytest of the
+  # rest. Both are niced and mostly wait (rosmasters, subprocesses, the serial lane's stacks left
+  # the two cores ≈ 40 % idle with one pytest here); its output follows the other's in the log.
   start=$(date +%s)
+  (
+    cd rbd_local && nice -n 10 pytest -q -c ../pytest.ini --rootdir . -p randomly --randomly-seed="$RBD_TEST_SEED" \
+      --durations=15 --junitxml="$results/pytest-rbd_local.xml" ${RBD_PYTEST_ARGS:-} tests
+    echo "   pytest rbd_local exit $? in $(( $(date +%s) - start )) s"
+    phase "side: pytest rbd_local (beside pytest src tests)" "$start"
+  ) > "$results/rbd_local.log" 2>&1 &
+  local local_pid=$!
   for p in "${serial_pytest[@]}"; do ignores+=(--ignore="$p"); done
   nice -n 10 pytest -q -p randomly --randomly-seed="$RBD_TEST_SEED" --durations=15 --junitxml="$results/pytest.xml" \
     ${RBD_PYTEST_ARGS:-} "${ignores[@]}" src tests
   echo "   pytest src tests (without the system tests) exit $? in $(( $(date +%s) - start )) s"
   phase "side: pytest src tests (lint, cores, node tests, drop-in)" "$start"
-  # The laptop app is its own pip package: test it from its own root.
-  start=$(date +%s)
-  (cd rbd_local && nice -n 10 pytest -q -c ../pytest.ini --rootdir . -p randomly --randomly-seed="$RBD_TEST_SEED" \
-    --durations=15 --junitxml="$results/pytest-rbd_local.xml" ${RBD_PYTEST_ARGS:-} tests)
-  echo "   pytest rbd_local exit $? in $(( $(date +%s) - start )) s"
-  phase "side: pytest rbd_local" "$start"
+  wait "$local_pid"
+  cat "$results/rbd_local.log"
 }
 
 collect_targets
@@ -147,7 +156,11 @@ else
 fi
 echo "== side lane output"
 grep -E "^(FAILED|ERROR) |passed|failed| exit " "$results/side_lane.log" | tail -n 40
-phase total "$t_all"
+phase "total of the test phases" "$t_all"
+# the lanes overlap: the whole is setup + build + the test phases' total
+awk -F'\t' '/^(setup|build|total)/ { s += $2 } END { printf "make test: setup + build + tests\t%d\n", s }' \
+  "$phases" > "$phases.sum"
+cat "$phases.sum" >> "$phases" && rm -f "$phases.sum"
 
 # The closing `N passed, M failed` line, then the wall time per phase, the 15 slowest tests
 # (pytest and rostest, from the JUnit files) and the seed.

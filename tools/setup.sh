@@ -7,6 +7,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
+t_setup=$(date +%s)
 
 mapfile -t pkgs < <(grep -v '^\s*#' tools/apt-packages.txt | grep -v '^\s*$')
 missing=()
@@ -51,3 +52,7 @@ if [ ! -d src/rbd_bridge/test/js/node_modules ]; then
   echo "setup: npm ci (roslibjs for the bridge tests)"
   (cd src/rbd_bridge/test/js && npm ci --no-audit --no-fund --loglevel=error)
 fi
+
+# Its wall time, for make test's per-phase report (tools/run_tests.sh).
+mkdir -p build
+printf 'setup: Debian packages, .venv, npm (make setup)\t%s\n' "$(( $(date +%s) - t_setup ))" > build/phase-setup.tsv

@@ -15,6 +15,7 @@ from rbd_bridge.core import websocket
 from rbd_bridge.core.fanout import TopicMessage
 from rbd_bridge.core.security import Policy
 from rbd_bridge.core.websocket import BridgeServer
+from rbd_testkit import wait_for
 
 
 class EchoBackend:
@@ -124,7 +125,7 @@ def test_invalid_utf8_in_a_text_frame_closes_with_1007(server):
     _, backend, port = server
     ws = connect("ws://127.0.0.1:%d" % port, compression=None)
     ws.send(json.dumps({"op": "subscribe", "topic": "/loop"}))  # a valid frame first: the session is up
-    assert wait_for(lambda: backend.sessions)
+    assert wait_for(lambda: backend.sessions, 5.0, 0.02)
     ws.socket.sendall(Frame(Opcode.TEXT, b'{"op": "\xff\xfe"}').serialize(mask=True))  # made by websockets
     with pytest.raises(ConnectionClosed) as info:
         ws.recv(timeout=5)
@@ -138,7 +139,7 @@ def test_common_frames_then_the_stream_handed_to_wsproto(server):
     _, backend, port = server
     ws = connect("ws://127.0.0.1:%d" % port, compression=None, max_size=None)
     ws.send(json.dumps({"op": "subscribe", "topic": "/loop"}))
-    assert wait_for(lambda: backend.sessions)
+    assert wait_for(lambda: backend.sessions, 5.0, 0.02)
     assert ws.ping(b"before").wait(5)
 
     def pub(data):
@@ -160,13 +161,6 @@ def test_common_frames_then_the_stream_handed_to_wsproto(server):
     with pytest.raises(ConnectionClosed) as info:
         ws.recv(timeout=5)
     assert info.value.rcvd is not None and info.value.rcvd.code == 1007
-
-
-def wait_for(predicate, timeout=5.0):
-    deadline = time.monotonic() + timeout
-    while not predicate() and time.monotonic() < deadline:
-        time.sleep(0.02)
-    return predicate()
 
 
 def test_oversized_message_closes_with_1009(server):
@@ -209,7 +203,7 @@ def test_stalled_reader_keeps_bounded_queue(server):
     def stalled():  # (sent is not handled: the server may still be working through the socket's backlog)
         return [sess for sess in list(srv.sessions.values()) if sess.out.dropped]
 
-    assert wait_for(stalled, 10.0), "no session dropped frames"
+    assert wait_for(stalled, 10.0, 0.02), "no session dropped frames"
     assert len(stalled()[0].out) <= 50
     s.close()
     ws.close()
