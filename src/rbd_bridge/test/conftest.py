@@ -16,6 +16,19 @@ from rbd_bridge_testing import OPEN, make_tutorial_types, start_bridge, start_ec
 
 from rbd_testkit import RosEnv  # noqa: E402
 
+# roslibpy's rosapi helpers (get_topics, get_time, set_param, ...) give up after 3 s by default;
+# under make test's load a niced test process can stall longer than that. The client's own
+# setting, for every test here (what a test asserts of an answer does not change).
+ROSAPI_TIMEOUT = 30.0
+
+
+def pytest_configure(config):
+    try:
+        import roslibpy
+    except ImportError:  # the tests that need it say so themselves
+        return
+    roslibpy.set_rosapi_timeout(ROSAPI_TIMEOUT)
+
 
 @pytest.fixture(scope="session")
 def tutorial_types(tmp_path_factory):
