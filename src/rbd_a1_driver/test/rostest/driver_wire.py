@@ -422,16 +422,27 @@ class DriverWire(unittest.TestCase):
             self.assertAlmostEqual(js.effort[i], 0.5 * i, places=5)
 
     def test_v33_packets_give_odometry_and_no_joint_states(self):
+        """v3.3 HighStates (no motorState) give odometry and no /joint_states.
+
+        Joint states of earlier 3.3.4 packets may still be on their way (under load for any time),
+        so the boundary is a packet's own stamp: the driver handles packets in order and stamps a
+        packet's odometry and joint states alike. The first odometry of a v3.3 packet that no 3.3.4
+        packet ever carried (x = 2.5) marks it; no joint state may be stamped at or after it.
+        """
         self.check_odom("3.3")
         odoms = []
         sub = rospy.Subscriber("/rbd_a1_driver/odom", Odometry, odoms.append)
-        time.sleep(0.3)  # joint states of earlier 3.3.4 packets still in flight
-        del self.joints[:]
         try:
-            self.assertTrue(wait_for(lambda: len(odoms) > 50, 5.0), "odometry stopped")
+            DriverWire.packet = state_packet("3.3", position=(2.5, -0.5, 0.0))
+            marked = wait_for(lambda: [o for o in odoms if abs(o.pose.pose.position.x - 2.5) < 1e-5], 10.0)
+            self.assertTrue(marked, "odometry never showed the marked v3.3 packet")
+            first = marked[0].header.stamp
+            n = len(odoms)
+            self.assertTrue(wait_for(lambda: len(odoms) > n + 50, 10.0), "odometry stopped")
         finally:
             sub.unregister()
-        self.assertEqual(self.joints, [], "a v3.3 HighState has no motor states")
+        late = [j.header.stamp.to_sec() for j in list(self.joints) if j.header.stamp >= first]
+        self.assertEqual(late, [], "a v3.3 HighState has no motor states (first v3.3 stamp %.3f)" % first.to_sec())
 
     def test_unknown_sizes_are_dropped_with_a_clear_error_and_no_motion(self):
         self.walk()
