@@ -333,6 +333,7 @@ class TwoHosts:
         self.app.send("estop %d %.1f" % (int(engage), timeout))
         ev = self.app.wait("E", t0, timeout=timeout + 3.0)
         assert ev is not None, "em_stop over the bridge did not return within %.1f + 3 s" % timeout
+        self.estop_message = " ".join(ev[1][3:])  # the link's answer (for a failure's message)
         return t0, ev[0], ev[1][2] == "1"
 
     def walk(self, timeout=30.0):
@@ -464,7 +465,7 @@ def test_estop_over_impaired_link(hosts, scenario, loss, delay, run):
     if delay:
         # with only delay the app still works: a new trick over the slow link
         first, _returned, ok = h.estop(True, 10.0)
-        assert ok, "e-stop over %s not delivered within 10 s" % scenario
+        assert ok, "e-stop over %s not delivered within 10 s: %s" % (scenario, h.estop_message)
         assert h.probe.wait("S", first, timeout=5.0, pred=lambda p: p[0] == "EMERGENCY_STOP")
         t_walk = time.monotonic()
         h.walk(timeout=30.0)
@@ -477,7 +478,7 @@ def test_estop_over_impaired_link(hosts, scenario, loss, delay, run):
     assert h.probe.wait("T", time.monotonic(), timeout=3.0, pred=lambda p: float(p[0]) > MOVING), "not walking"
     assert h.state() == "EXECUTING", h.state()
     sent, returned, ok = h.estop(True, 10.0)
-    assert ok, "e-stop over %s not delivered within 10 s" % scenario
+    assert ok, "e-stop over %s not delivered within 10 s: %s" % (scenario, h.estop_message)
     engaged = h.probe.wait("S", sent, timeout=5.0, pred=lambda p: p[0] == "EMERGENCY_STOP")
     assert engaged, "robot never reached EMERGENCY_STOP"
     time.sleep(max(0.0, sent + 6.0 - time.monotonic()))

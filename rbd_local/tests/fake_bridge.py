@@ -1,8 +1,9 @@
 """In-process fake rosbridge v2 server (websockets) for the link and GUI tests.
 
 It records advertise/publish/subscribe/call_service ops, answers service calls with a
-configurable handler and pushes messages to subscribed clients. ``kick_all`` drops every
-connection (link loss); ``stop``/``start`` on the same port simulate a bridge restart.
+configurable handler (None from it: the connection is dropped without an answer) and pushes
+messages to subscribed clients. ``kick_all`` drops every connection (link loss);
+``stop``/``start`` on the same port simulate a bridge restart.
 """
 
 import asyncio
@@ -128,7 +129,11 @@ class FakeBridge:
                     elif op == "call_service":
                         self.service_calls.append((msg["service"], msg.get("args")))
                 if op == "call_service":
-                    result, values = self.service_handler(msg["service"], msg.get("args"))
+                    answer = self.service_handler(msg["service"], msg.get("args"))
+                    if answer is None:  # the link dies with the call in flight: no answer, dropped
+                        await ws.close()
+                        break
+                    result, values = answer
                     reply = {"op": "service_response", "service": msg["service"], "result": result, "values": values}
                     if "id" in msg:
                         reply["id"] = msg["id"]

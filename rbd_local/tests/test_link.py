@@ -75,6 +75,29 @@ def test_em_stop_calls_the_service_and_reports_the_answer(fake_bridge):
         link.stop()
 
 
+def test_em_stop_is_called_again_when_the_connection_drops_before_the_answer(fake_bridge):
+    # A lossy WLAN: the connection is given up with the e-stop call in flight. The call is made
+    # again on the next connection within the caller's timeout (before, it waited out the whole
+    # timeout on the dead connection and reported the e-stop as not delivered).
+    calls = []
+
+    def handler(service, args):
+        calls.append((service, args))
+        return None if len(calls) == 1 else (True, {"success": True, "message": "engaged"})
+
+    fake_bridge.service_handler = handler
+    link, got = _link(fake_bridge)
+    try:
+        assert link.wait_connected(30)
+        t0 = time.monotonic()
+        assert link.em_stop(True, timeout=20) == (True, "engaged")
+        assert time.monotonic() - t0 < 15.0, "the call waited out its timeout on the dead connection"
+        assert calls == [(EM_STOP_SERVICE, {"data": True})] * 2
+        assert False in got["conn"] and fake_bridge.connections >= 2
+    finally:
+        link.stop()
+
+
 def test_reconnects_after_link_loss_and_bridge_restart(fake_bridge):
     link, got = _link(fake_bridge)
     try:

@@ -306,7 +306,10 @@ class RobotLink:
         """Call ``/rbd_controller/em_stop`` (SetBool); blocks the caller up to ``timeout``.
 
         When the link is down it first asks for an immediate reconnection and waits for it
-        (still within ``timeout``). The request is never queued for later delivery.
+        (still within ``timeout``). When the connection drops before the answer came (a lossy
+        WLAN: the keepalive gave it up), the call is made again on the next connection, still
+        within ``timeout``: a SetBool is the same request twice. Nothing is sent once the call
+        has returned: the request is never queued for later delivery.
 
         Args:
             engage: True engages the emergency stop, False releases it.
@@ -315,21 +318,47 @@ class RobotLink:
         Returns:
             (success, message) — success is True only if the controller answered success.
         """
+        from twisted.internet import reactor  # roslibpy's transport on CPython
+
         deadline = time.monotonic() + timeout
-        if not self.connected:
-            self.request_reconnect()
-            if not self.wait_connected(max(0.0, deadline - time.monotonic())):
-                return False, "no connection to %s: e-stop NOT delivered" % self.address
-        ros = self._ros
-        try:
+        dropped = 0  # connections lost with the call in flight
+        while True:
+            if not self.connected:
+                self.request_reconnect()
+                if not self.wait_connected(max(0.0, deadline - time.monotonic())):
+                    lost = " (%d connection(s) lost during the call)" % dropped if dropped else ""
+                    return False, "no connection to %s: e-stop NOT delivered%s" % (self.address, lost)
+            ros = self._ros
+            if ros is None:
+                continue
+            answer = {}
+            done = threading.Event()
+
+            def on_answer(values: dict, answer: dict = answer, done: threading.Event = done) -> None:
+                answer["values"] = values
+                done.set()
+
+            def on_error(error: object, answer: dict = answer, done: threading.Event = done) -> None:
+                answer["error"] = error
+                done.set()
+
             service = roslibpy.Service(ros, EM_STOP_SERVICE, "std_srvs/SetBool")
-            response = service.call(
-                roslibpy.ServiceRequest({"data": bool(engage)}), timeout=max(0.1, deadline - time.monotonic())
-            )
-        except Exception as exc:  # roslibpy raises plain Exception for failed calls
-            return False, "em_stop call failed: %s" % (exc,)
-        success = bool(response.get("success", False))
-        return success, str(response.get("message", ""))
+            request = roslibpy.ServiceRequest({"data": bool(engage)})
+            # sent from the reactor thread, where roslibpy keeps its table of pending calls
+            reactor.callFromThread(service.call, request, on_answer, on_error)
+            while not done.wait(0.02):
+                if time.monotonic() >= deadline:
+                    return False, "em_stop call failed: no answer within %.1f s: e-stop NOT confirmed" % timeout
+                if self._ros is not ros or not ros.is_connected:
+                    break  # the connection is gone with the call: again on the next one
+            if not done.is_set():
+                dropped += 1
+                LOG.warning("link lost with an e-stop call in flight: calling again on the next connection")
+                continue
+            if "error" in answer:
+                return False, "em_stop call failed: %s" % (answer["error"],)
+            values = answer["values"]
+            return bool(values.get("success", False)), str(values.get("message", ""))
 
     def get_tricks(self, timeout: float = 3.0) -> dict:
         """The robot's tricks, read from ``/rbd_navigation/tricks`` through the bridge's rosapi.
