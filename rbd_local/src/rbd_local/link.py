@@ -22,6 +22,7 @@ dropped and counted instead. A link that goes silent without closing (WLAN out o
 found by WebSocket pings (``keepalive_s``) and dropped.
 """
 
+import concurrent.futures
 import logging
 import queue
 import threading
@@ -331,34 +332,27 @@ class RobotLink:
             ros = self._ros
             if ros is None:
                 continue
-            answer = {}
-            done = threading.Event()
-
-            def on_answer(values: dict, answer: dict = answer, done: threading.Event = done) -> None:
-                answer["values"] = values
-                done.set()
-
-            def on_error(error: object, answer: dict = answer, done: threading.Event = done) -> None:
-                answer["error"] = error
-                done.set()
-
+            answer = concurrent.futures.Future()  # the response's values, or the bridge's error
             service = roslibpy.Service(ros, EM_STOP_SERVICE, "std_srvs/SetBool")
             request = roslibpy.ServiceRequest({"data": bool(engage)})
+
+            def failed(error: object, answer: concurrent.futures.Future = answer) -> None:
+                answer.set_exception(RuntimeError(error))
+
             # sent from the reactor thread, where roslibpy keeps its table of pending calls
-            reactor.callFromThread(service.call, request, on_answer, on_error)
-            while not done.wait(0.02):
-                if time.monotonic() >= deadline:
-                    return False, "em_stop call failed: no answer within %.1f s: e-stop NOT confirmed" % timeout
-                if self._ros is not ros or not ros.is_connected:
-                    break  # the connection is gone with the call: again on the next one
-            if not done.is_set():
-                dropped += 1
-                LOG.warning("link lost with an e-stop call in flight: calling again on the next connection")
-                continue
-            if "error" in answer:
-                return False, "em_stop call failed: %s" % (answer["error"],)
-            values = answer["values"]
-            return bool(values.get("success", False)), str(values.get("message", ""))
+            reactor.callFromThread(service.call, request, answer.set_result, failed)
+            while not answer.done() and time.monotonic() < deadline and self._ros is ros and ros.is_connected:
+                concurrent.futures.wait([answer], timeout=0.02)
+            if answer.done():
+                try:
+                    values = answer.result()
+                except RuntimeError as exc:
+                    return False, "em_stop call failed: %s" % (exc,)
+                return bool(values.get("success", False)), str(values.get("message", ""))
+            if time.monotonic() >= deadline:
+                return False, "em_stop call failed: no answer within %.1f s: e-stop NOT confirmed" % timeout
+            dropped += 1  # the connection is gone with the call: again on the next one
+            LOG.warning("link lost with an e-stop call in flight: calling again on the next connection")
 
     def get_tricks(self, timeout: float = 3.0) -> dict:
         """The robot's tricks, read from ``/rbd_navigation/tricks`` through the bridge's rosapi.
