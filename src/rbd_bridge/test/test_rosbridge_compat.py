@@ -138,14 +138,33 @@ def test_publish_right_after_advertise_is_delivered(roslibpy_client, open_bridge
     assert [m["data"] for m in got["messages"]] == ["m%d" % i for i in range(10)]
 
 
+def _count_settles(open_bridge, topic):
+    """A predicate: true once the probe's count of topic is the same at two calls in a row."""
+    counts = [-1]
+
+    def settled():
+        counts.append(report(open_bridge)[topic]["count"])
+        return counts[-1] == counts[-2]
+
+    return settled
+
+
 def test_burst_reaches_a_rospy_subscriber_with_queue_1000(open_bridge):
     """Issue 18 item 2: 5000 publishes sent back to back all reach a rospy subscriber (queue_size 1000).
 
     rospy keeps only the newest queue_size messages of each socket read, so the bridge must
     not hand one subscriber more than that in one write. The client is as fast as a client
     gets: the 5000 frames (made by the websockets library) leave in one ``sendall``.
+
+    A subscriber that gets no CPU for a while drops by its own policy whatever the
+    publisher does (TCPROS has no flow control: what piles up unread comes in one read),
+    so a machine under load may cost one burst some messages. The test sends up to three
+    bursts and needs one of them delivered whole and in order; a bridge that writes too
+    much at once loses messages in every burst, even on an idle machine (the old one lost
+    245 of 5000 each time).
     """
     client = WsClient(open_bridge.url)
+    delivered = []
     try:
         client.send({"op": "advertise", "topic": BURST, "type": "std_msgs/String"})
         publish = '{"op":"publish","topic":"%s","msg":{"data":"%%s"}}' % BURST
@@ -155,23 +174,24 @@ def test_burst_reaches_a_rospy_subscriber_with_queue_1000(open_bridge):
             return wait_until(lambda: report(open_bridge)[BURST]["count"], 0.3)
 
         assert wait_until(warm, 10), "the subscriber never connected"
-        base = report(open_bridge)[BURST]["count"]
-        frames = [Frame(Opcode.TEXT, (publish % ("b%d" % i)).encode()).serialize(mask=True) for i in range(5000)]
-        client.ws.socket.sendall(b"".join(frames))
-        client.send({"op": "call_service", "id": "sync", "service": "/rosapi/get_time"})
-        assert client.recv_until(lambda f: f.get("id") == "sync", 20)  # the bridge has read them all
-        counts = [-1]
-
-        def settled():
-            counts.append(report(open_bridge)[BURST]["count"])
-            return counts[-1] == counts[-2]
-
-        assert wait_until(settled, 20, step=0.5)
-        got = report(open_bridge)[BURST]
-        delivered = got["count"] - base
-        assert delivered == 5000, "%d of 5000 delivered" % delivered
-        data = [d for d in got["messages"] if d.startswith("b")]
-        assert data == ["b%d" % i for i in range(5000)]
+        for burst in range(3):
+            base = report(open_bridge)[BURST]["count"]
+            sent = ["b%d_%d" % (burst, i) for i in range(5000)]
+            frames = [Frame(Opcode.TEXT, (publish % data).encode()).serialize(mask=True) for data in sent]
+            client.ws.socket.sendall(b"".join(frames))
+            client.send({"op": "call_service", "id": "sync%d" % burst, "service": "/rosapi/get_time"})
+            assert client.recv_until(lambda f, b=burst: f.get("id") == "sync%d" % b, 20)  # the bridge read them all
+            assert wait_until(_count_settles(open_bridge, BURST), 20, step=0.5)
+            got = report(open_bridge)[BURST]
+            delivered.append(got["count"] - base)
+            if got["messages"][base:] == sent:
+                return
+            # whatever arrived came in order, with no duplicate
+            order = {data: i for i, data in enumerate(sent)}
+            tail = [order.get(d, -1) for d in got["messages"][base:]]
+            in_order = min(tail, default=0) >= 0 and all(a < b for a, b in zip(tail, tail[1:]))
+            assert in_order, "burst %d: unknown, repeated or out of order" % burst
+        raise AssertionError("no burst of 5000 delivered whole: %s of 5000 in the three bursts" % delivered)
     finally:
         client.close()
 
