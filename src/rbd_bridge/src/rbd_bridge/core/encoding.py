@@ -13,15 +13,7 @@ import cbor2
 
 from rbd_bridge.core.types import TypedArray
 
-__all__ = [
-    "DecodeError",
-    "Reassembler",
-    "json_dumps",
-    "cbor_dumps",
-    "cbor_loads",
-    "png_encode",
-    "fragment",
-]
+__all__ = ["DecodeError", "Reassembler", "json_dumps", "cbor_dumps", "cbor_loads", "png_encode", "fragment"]
 
 
 class DecodeError(ValueError):
@@ -63,8 +55,7 @@ def _typed_array(encoder: Any, value: Any) -> None:
     values = value.values
     if not isinstance(values, (bytes, bytearray)):
         values = struct.pack("<%d%s" % (len(values), fmt), *values)
-    raw = bytes(values)
-    encoder.encode(cbor2.CBORTag(tag, raw))
+    encoder.encode(cbor2.CBORTag(tag, bytes(values)))
 
 
 def cbor_dumps(obj: Any) -> bytes:
@@ -100,28 +91,19 @@ def cbor_loads(data: Any) -> Any:
     """
     stream = io.BytesIO(bytes(data))
     try:
-        value = cbor2.CBORDecoder(stream).decode()
+        value = _untag(cbor2.CBORDecoder(stream).decode())
     except (cbor2.CBORDecodeError, ValueError, TypeError, OverflowError, RecursionError, MemoryError) as exc:
         raise DecodeError("invalid CBOR: %s" % str(exc)[:100]) from None
     if stream.tell() != len(stream.getbuffer()):
         raise DecodeError("trailing bytes after CBOR item")
-    try:
-        return _untag(value)
-    except RecursionError:
-        raise DecodeError("CBOR nested too deeply") from None
-
-
-def _png_chunk(kind: bytes, payload: bytes) -> bytes:
-    body = kind + payload
-    return struct.pack(">I", len(payload)) + body + struct.pack(">I", zlib.crc32(body) & 0xFFFFFFFF)
+    return value
 
 
 def png_encode(text: str) -> str:
-    """Pack the UTF-8 bytes of text into an 8-bit RGB PNG (padded with newlines) and base64 it.
+    """The ``data`` of a ``png`` op: the UTF-8 bytes of text as an 8-bit RGB PNG, base64.
 
-    The padding is newlines, as rosbridge's: clients parse the pixels as JSON text, where
-    trailing newlines are whitespace (NUL bytes make ``JSON.parse`` throw). Returns the
-    ``data`` of a ``png`` op.
+    Padded with newlines, as rosbridge's: clients parse the pixels as JSON text, where trailing
+    newlines are whitespace (NUL bytes make ``JSON.parse`` throw).
     """
     raw = text.encode("utf-8")
     pixels = max(1, (len(raw) + 2) // 3)
@@ -130,25 +112,18 @@ def png_encode(text: str) -> str:
     raw = raw + b"\n" * (width * height * 3 - len(raw))
     stride = width * 3
     rows = b"".join(b"\x00" + raw[y * stride : (y + 1) * stride] for y in range(height))
-    png = b"".join(
-        [
-            b"\x89PNG\r\n\x1a\n",
-            _png_chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)),
-            _png_chunk(b"IDAT", zlib.compress(rows, 6)),
-            _png_chunk(b"IEND", b""),
-        ]
-    )
-    return base64.b64encode(png).decode("ascii")
+    header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    png = [b"\x89PNG\r\n\x1a\n"]
+    for chunk in (b"IHDR" + header, b"IDAT" + zlib.compress(rows, 6), b"IEND"):  # each: length, type+data, CRC
+        png += [struct.pack(">I", len(chunk) - 4), chunk, struct.pack(">I", zlib.crc32(chunk))]
+    return base64.b64encode(b"".join(png)).decode("ascii")
 
 
 def fragment(text: str, size: int, frag_id: Any, op: str = "fragment") -> List[str]:
     """Split text into ``fragment`` (or ``png``) op frames (JSON texts) of at most size characters of data."""
     size = max(1, int(size))
-    total = (len(text) + size - 1) // size
-    return [
-        json_dumps({"op": op, "id": frag_id, "data": text[i * size : (i + 1) * size], "num": i, "total": total})
-        for i in range(total)
-    ]
+    data = [text[i : i + size] for i in range(0, len(text), size)]
+    return [json_dumps({"op": op, "id": frag_id, "data": d, "num": i, "total": len(data)}) for i, d in enumerate(data)]
 
 
 class Reassembler:
@@ -180,8 +155,7 @@ class Reassembler:
             if len(self._sets) >= self.max_sets:
                 self._sets.popitem(last=False)
             entry = self._sets[frag_id] = {"total": total, "parts": {}, "size": 0, "t": now}
-        if num not in entry["parts"]:
-            entry["size"] += len(data)
+        entry["size"] += len(data) - len(entry["parts"].get(num, ""))  # a repeated part replaces the earlier one
         entry["parts"][num] = data
         if max_size and entry["size"] > max_size:
             del self._sets[frag_id]

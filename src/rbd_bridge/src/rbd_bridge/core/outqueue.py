@@ -9,10 +9,8 @@ __all__ = ["OutQueue"]
 class OutQueue:
     """Bounded FIFO of frames for one client.
 
-    Over ``max_frames`` or ``max_bytes`` the oldest frames are dropped (a stalled client
-    costs bounded memory and never delays others). A topic frame may also carry a
-    per-topic limit (the subscription's ``queue_length``): then only the newest frames of
-    that topic are kept.
+    Over ``max_frames`` or ``max_bytes`` the oldest frames are dropped. A topic frame may also carry a
+    per-topic limit (the subscription's ``queue_length``): then only that topic's newest frames are kept.
     """
 
     def __init__(
@@ -22,8 +20,8 @@ class OutQueue:
         self.max_frames = max_frames
         self.max_bytes = max_bytes
         self.notify = notify
-        self._queue = collections.deque()
-        self._per_topic = {}
+        self._queue = collections.deque()  # [frame, topic] entries; frame None once dropped
+        self._per_topic = collections.defaultdict(collections.deque)  # the live entries of each topic
         self.bytes = 0
         self.frames = 0
         self.dropped = 0
@@ -35,19 +33,20 @@ class OutQueue:
 
     def push(self, frame: Any, topic: str = None, topic_limit: int = 0) -> None:
         """Append frame; drop old frames to respect the bounds."""
-        entry = [frame, topic, True]
+        entry = [frame, topic]
         was_empty = self.frames == 0
         self._queue.append(entry)
         self.frames += 1
         self.bytes += len(frame)
         if topic is not None:
-            per = self._per_topic.get(topic)
-            if per is None:
-                per = self._per_topic[topic] = collections.deque()
+            per = self._per_topic[topic]
             per.append(entry)
-            if topic_limit > 0:
-                while len(per) > topic_limit:
-                    self._kill(per.popleft())
+            while 0 < topic_limit < len(per):  # the oldest frame of topic goes; its entry stays, dead
+                dead = per.popleft()
+                self.frames -= 1
+                self.bytes -= len(dead[0])
+                self.dropped += 1
+                dead[0] = None
         while self.frames > self.max_frames or (self.bytes > self.max_bytes and self.frames > 1):
             self.pop()  # the oldest goes first
             self.dropped += 1
@@ -64,24 +63,16 @@ class OutQueue:
         if not self.held and self.frames and self.notify is not None:
             self.notify()
 
-    def _kill(self, entry: Any) -> None:
-        entry[2] = False
-        self.frames -= 1
-        self.bytes -= len(entry[0])
-        self.dropped += 1
-        entry[0] = None
-
     def pop(self) -> Any:
         """Return the oldest live frame, or None when empty."""
         while self._queue:
-            frame, topic, live = entry = self._queue.popleft()
-            if live:  # the oldest live frame of its topic too: the per-topic limit drops from the front
+            frame, topic = self._queue.popleft()
+            if frame is not None:  # the oldest live frame of its topic too: the per-topic limit drops from the front
                 if topic is not None:
                     per = self._per_topic[topic]
                     per.popleft()
                     if not per:
                         del self._per_topic[topic]
-                entry[2] = False
                 self.frames -= 1
                 self.bytes -= len(frame)
                 return frame

@@ -24,13 +24,10 @@ def number(
     if isinstance(value, bool):
         raise ParamError("~%s must be a number, not %r" % (name, value))
     try:
-        if kind is int and isinstance(value, (float, str)):  # "1e6", 4096.0: whole numbers only
-            as_float = float(value)
-            if as_float != int(as_float):
-                raise ValueError(value)
-            parsed = int(as_float)
-        else:
-            parsed = kind(value)
+        whole = kind is int and isinstance(value, (float, str))  # "1e6", 4096.0: whole numbers only
+        parsed = kind(float(value) if whole else value)
+        if whole and parsed != float(value):
+            raise ValueError(value)
     except (TypeError, ValueError, OverflowError):
         wanted = "an integer" if kind is int else "a number"
         raise ParamError("~%s must be %s, not %r" % (name, wanted, value)) from None

@@ -1,9 +1,8 @@
 """rosbridge v2 protocol session: parse, check, dispatch, merge subscriptions, queue output.
 
-ROS-free and transport-free, driven from the event loop thread: ``receive()`` takes client
-frames; a *backend* (:class:`rbd_bridge.ros.backend.RosBackend`, or a fake) does the ROS work
-(one method per op, ``session_closed``, and ``begin_batch`` / ``end_batch`` around the frames
-of one read). Frames for the client go into a bounded :class:`rbd_bridge.core.outqueue.OutQueue`.
+ROS- and transport-free, on the event loop thread: ``receive()`` takes client frames; a *backend*
+(:class:`rbd_bridge.ros.backend.RosBackend`, or a fake) does the ROS work (a method per op, ``session_closed``,
+``begin_batch`` / ``end_batch`` around one read's frames); frames for the client go to a bounded ``OutQueue``.
 """
 
 import collections
@@ -11,7 +10,7 @@ import itertools
 import json
 import logging
 import time
-from typing import Any, Callable, Dict, NoReturn, Optional
+from typing import Any, Callable, Dict, Optional
 
 from rbd_bridge.core import encoding
 from rbd_bridge.core.security import AuthError, check_mac
@@ -26,27 +25,22 @@ _log = logging.getLogger("rbd_bridge")
 
 
 class _TopicSub:
-    """A client's merged subscriptions to one topic."""
+    """A client's merged subscriptions to one topic (:meth:`merge` sets the options)."""
 
     def __init__(self, topic: str, type_name: str) -> None:
         self.topic = topic
         self.type = type_name
-        self.by_id = collections.OrderedDict()
-        self.throttle = 0.0
-        self.queue_length = 0
-        self.fragment_size = None
-        self.compression = "none"
+        self.by_id = collections.OrderedDict()  # id -> (throttle_rate, queue_length, fragment_size, compression)
         self.last = -1e18
-        self.pending = collections.deque(maxlen=0)
+        self.pending = ()
         self.timer = None
 
     def merge(self) -> None:
-        opts = list(self.by_id.values())
-        self.throttle = min(o["throttle_rate"] for o in opts) / 1000.0
-        self.queue_length = max(o["queue_length"] for o in opts)
-        sizes = [o["fragment_size"] for o in opts if o["fragment_size"]]
-        self.fragment_size = min(sizes) if sizes else None
-        self.compression = opts[-1]["compression"]
+        throttles, lengths, sizes, compressions = zip(*self.by_id.values())
+        self.throttle = min(throttles) / 1000.0
+        self.queue_length = max(lengths)
+        self.fragment_size = min(filter(None, sizes), default=None)
+        self.compression = compressions[-1]
         self.pending = collections.deque(self.pending, maxlen=self.queue_length)  # the newest kept
 
 
@@ -127,9 +121,7 @@ class Session:
         self._ids = itertools.count(1)
         self.errors = 0
         self.max_message_size = None
-        # set by a transport that can send a frame at once, from any thread:
-        # direct(message, compression) -> True if it took the frame (see direct_compression)
-        self.direct = None
+        self.direct = None  # a transport's direct(message, compression) -> True if it sent the frame (any thread)
         self._rejected = 0
         self._rejected_logged = -1e18
 
@@ -144,11 +136,24 @@ class Session:
         except BridgeError as exc:
             self._rejected_frame(exc, {})
             return
-        self._handle(frame, 0)
+        self._dispatch(frame, 0)
 
-    def _handle(self, frame: Dict[str, Any], depth: int) -> None:
+    def _dispatch(self, frame: Dict[str, Any], depth: int) -> None:
         try:
-            self._dispatch(frame, depth)
+            op = frame.get("op")
+            if not isinstance(op, str):
+                raise BridgeError("frame without a string 'op' field")
+            handler = getattr(self, "_op_" + op, None)
+            if handler is None:
+                raise BridgeError("unsupported op %r" % op[:40])
+            if not self.authenticated and op != "auth":
+                # as rosbridge: anything but auth on an unauthenticated connection ends it
+                _log.warning("client %s (%s) sent %r before authenticating: closing", self.client_id, self.peer, op)
+                self._end(1008, "authentication required")
+            elif op == "fragment":
+                self._op_fragment(frame, depth)
+            else:
+                handler(frame)
         except (BridgeError, ConversionError) as exc:
             self._rejected_frame(exc, frame)
         except Exception as exc:  # a bug must not end the session
@@ -186,22 +191,6 @@ class Session:
             raise BridgeError("a frame must be a JSON object with an 'op' field, got %s" % type(frame).__name__)
         return frame
 
-    def _dispatch(self, frame: Dict[str, Any], depth: int) -> None:
-        op = frame.get("op")
-        if not isinstance(op, str):
-            raise BridgeError("frame without a string 'op' field")
-        handler = getattr(self, "_op_" + op, None)
-        if handler is None:
-            raise BridgeError("unsupported op %r" % op[:40])
-        if not self.authenticated and op != "auth":
-            # as rosbridge: anything but auth on an unauthenticated connection ends it
-            _log.warning("client %s (%s) sent %r before authenticating: closing", self.client_id, self.peer, op)
-            self._end(1008, "authentication required")
-        elif op == "fragment":
-            self._op_fragment(frame, depth)
-        else:
-            handler(frame)
-
     # ----------------------------------------------------------------- output
 
     def status(self, level: str, text: str, frame_id: Any = None) -> None:
@@ -217,17 +206,14 @@ class Session:
         self.out.push(self.wire(payload), topic, limit)
 
     def _push_text(self, text: str, fragment_size: Optional[int], compression: str, topic: Any, limit: int) -> None:
-        op = "fragment"
-        if compression == "png":
-            text, op = encoding.png_encode(text), "png"
-            if not fragment_size or len(text) <= fragment_size:
-                self._push(encoding.json_dumps({"op": "png", "data": text}), topic, limit)
-                return
+        op = "png" if compression == "png" else "fragment"
+        if op == "png":
+            text = encoding.png_encode(text)
         if fragment_size and len(text) > fragment_size:
             for part in encoding.fragment(text, fragment_size, "%s:%d" % (op, next(self._ids)), op):
                 self._push(part, topic, 0)
-            return
-        self._push(text, topic, limit)
+        else:
+            self._push(encoding.json_dumps({"op": "png", "data": text}) if op == "png" else text, topic, limit)
 
     def deliver(self, topic: str, message: Any) -> None:
         """Take one :class:`rbd_bridge.core.fanout.TopicMessage` of a subscribed topic (throttle/queue)."""
@@ -242,18 +228,14 @@ class Session:
             sub.last = now
             self._emit(sub, message, 0)
             return
-        if sub.queue_length <= 0:
-            return
-        sub.pending.append(message)
-        if sub.timer is None:
+        sub.pending.append(message)  # (it keeps queue_length messages, the newest)
+        if sub.timer is None and sub.pending:
             sub.timer = self.call_later(max(0.0, sub.last + sub.throttle - now), lambda: self._flush(topic))
 
     def direct_compression(self, topic: str) -> Optional[str]:
-        """Compression of topic if a message may bypass :meth:`deliver`, else None.
+        """Compression of topic if a message may bypass :meth:`deliver` (:attr:`direct`), else None.
 
-        True for a subscription without throttle, fragmentation or PNG: then the frame
-        :meth:`deliver` would queue is the message's frame unchanged, and a transport
-        whose queue is empty may send it at once (:attr:`direct`). Safe from any thread.
+        Only without throttle, fragmentation or PNG, where the frame is the message's own. Any thread.
         """
         if self.direct is None or self.closed:
             return None
@@ -267,12 +249,11 @@ class Session:
         if sub is None or self.closed:
             return
         sub.timer = None
-        if not sub.pending:
-            return
-        sub.last = self.clock()
-        self._emit(sub, sub.pending.popleft(), 0)
         if sub.pending:
-            sub.timer = self.call_later(sub.throttle, lambda: self._flush(topic))
+            sub.last = self.clock()
+            self._emit(sub, sub.pending.popleft(), 0)
+            if sub.pending:
+                sub.timer = self.call_later(sub.throttle, lambda: self._flush(topic))
 
     def _emit(self, sub: Any, message: Any, limit: int) -> None:
         compression = sub.compression
@@ -295,7 +276,7 @@ class Session:
         except encoding.DecodeError as exc:
             raise BridgeError("fragment: %s" % exc) from None
         if text is not None:
-            self._handle(self._decode(text), depth + 1)
+            self._dispatch(self._decode(text), depth + 1)
 
     def _op_set_level(self, frame: Dict[str, Any]) -> None:
         level = frame.get("level")
@@ -320,16 +301,16 @@ class Session:
         self.status("info", "authenticated", frame.get("id"))
 
     @staticmethod
-    def _denied(what: str, name: str) -> NoReturn:
-        raise BridgeError("%s %s: not allowed by this bridge's allow-list" % (what, name))
+    def _allow(allowed: bool, what: str, name: str) -> None:
+        if not allowed:
+            raise BridgeError("%s %s: not allowed by this bridge's allow-list" % (what, name))
 
     def _op_advertise(self, frame: Dict[str, Any]) -> None:
         topic = _name(frame, "topic")
         type_name = _get(frame, "type", (str,), required=True)
         latch = bool(_get(frame, "latch", (bool, int), default=False))
         queue_size = int(min(_nonneg(frame, "queue_size") or 100, 1000))
-        if not self.policy.may_publish(topic):
-            self._denied("advertise", topic)
+        self._allow(self.policy.may_publish(topic), "advertise", topic)
         self.backend.advertise(self, topic, type_name, latch, queue_size)
         self.advertised.add(topic)
         self.status("info", "advertised %s" % topic, frame.get("id"))
@@ -347,8 +328,7 @@ class Session:
     def _op_publish(self, frame: Dict[str, Any]) -> None:
         topic = _name(frame, "topic")
         msg = _get(frame, "msg", (dict,), default={})
-        if not self.policy.may_publish(topic):
-            self._denied("publish", topic)
+        self._allow(self.policy.may_publish(topic), "publish", topic)
         missing = self.backend.publish(self, topic, msg)
         self.advertised.add(topic)  # publish without advertise advertises implicitly
         if missing:
@@ -365,23 +345,19 @@ class Session:
         fragment_size = _get(frame, "fragment_size", (int,))
         if fragment_size is not None and fragment_size <= 0:
             raise BridgeError("subscribe: fragment_size must be > 0")
-        opts = {
-            "throttle_rate": _nonneg(frame, "throttle_rate"),
-            "queue_length": int(min(_nonneg(frame, "queue_length"), 10000)),
-            "fragment_size": fragment_size,
-            "compression": compression,
-        }
-        if not self.policy.may_subscribe(topic):
-            self._denied("subscribe", topic)
+        throttle_rate = _nonneg(frame, "throttle_rate")
+        opts = (throttle_rate, int(min(_nonneg(frame, "queue_length"), 10000)), fragment_size, compression)
+        self._allow(self.policy.may_subscribe(topic), "subscribe", topic)
         sub = self.subs.get(topic)
         if sub is None:
-            sub = self.subs[topic] = _TopicSub(topic, self.backend.subscribe(self, topic, type_name))
+            sub = _TopicSub(topic, self.backend.subscribe(self, topic, type_name))
         elif type_name and sub.type and normalize_type(type_name) != normalize_type(sub.type):
             raise BridgeError("subscribe: %s has type %s, not %s" % (topic, sub.type, type_name))
         key = sub_id if sub_id is not None else "subscribe:%s:%d" % (topic, next(self._ids))
         sub.by_id.pop(key, None)
         sub.by_id[key] = opts
         sub.merge()
+        self.subs[topic] = sub  # (a new one only once merged: direct_compression reads it from any thread)
         self.status("info", "subscribed to %s" % topic, sub_id)
 
     def _op_unsubscribe(self, frame: Dict[str, Any]) -> None:
@@ -390,11 +366,9 @@ class Session:
         if sub is None:
             raise BridgeError("unsubscribe: not subscribed to %s" % topic, "warning")
         sub_id = frame.get("id")
-        if sub_id is not None and sub_id in sub.by_id:
-            del sub.by_id[sub_id]
-        elif sub_id is not None and len(sub.by_id) > 1:
-            raise BridgeError("unsubscribe: no subscription %r on %s" % (sub_id, topic), "warning")
-        else:
+        if sub.by_id.pop(sub_id, None) is None:  # no id (None is never a key), or not one of ours
+            if sub_id is not None and len(sub.by_id) > 1:
+                raise BridgeError("unsubscribe: no subscription %r on %s" % (sub_id, topic), "warning")
             sub.by_id.clear()
         if sub.by_id:
             sub.merge()
@@ -422,7 +396,7 @@ class Session:
         try:
             if not self.policy.may_call(service):
                 _log.warning("client %s (%s): call_service %s denied", self.client_id, self.peer, service)
-                self._denied("call_service", service)
+                self._allow(False, "call_service", service)
             self.backend.call_service(self, service, args, timeout if timeout and timeout > 0 else None, done)
         except BridgeError as exc:
             self.status("error", str(exc), call_id)
@@ -431,8 +405,7 @@ class Session:
     def _op_advertise_service(self, frame: Dict[str, Any]) -> None:
         service = _name(frame, "service")
         type_name = _get(frame, "type", (str,), required=True)
-        if not self.policy.may_call(service) or service.startswith("/rosapi/"):
-            self._denied("advertise_service", service)
+        self._allow(self.policy.may_call(service) and not service.startswith("/rosapi/"), "advertise_service", service)
         self.backend.advertise_service(self, service, type_name)
         self.services.add(service)
         self.status("info", "advertised service %s" % service, frame.get("id"))
