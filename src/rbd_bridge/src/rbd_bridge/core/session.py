@@ -169,8 +169,7 @@ class Session:
             _log.warning("client %s (%s): frame rejected (%d): %s", self.client_id, self.peer, self._rejected, exc)
             self._rejected, self._rejected_logged = 0, now
         text = str(exc) if isinstance(exc, BridgeError) else "%s: %s" % (frame.get("op"), exc)
-        # the status names the frame's id, as rosbridge's does
-        self.status(getattr(exc, "level", "error"), text, frame.get("id"))
+        self.status(getattr(exc, "level", "error"), text, frame.get("id"))  # with the frame's id, as rosbridge's
 
     @staticmethod
     def _decode(data: Any) -> Dict[str, Any]:
