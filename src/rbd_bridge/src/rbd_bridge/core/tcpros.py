@@ -79,7 +79,6 @@ class LoopReader:
     """
 
     def __init__(self, loop: Any, sock: socket.socket, on_messages: Callable, on_close: Callable) -> None:
-        """Prepare; nothing is read before :meth:`start`."""
         self.loop = loop
         self.sock = sock
         self.on_messages = on_messages
@@ -99,10 +98,7 @@ class LoopReader:
         if self.closed:
             return
         self.closed = True
-        try:
-            self.loop.remove_reader(self._fd)
-        except Exception:  # loop already closed
-            pass
+        self.loop.remove_reader(self._fd)  # (False, no error, once the loop is closed)
         try:
             self.sock.close()
         except OSError:
