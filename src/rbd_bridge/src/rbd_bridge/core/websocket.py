@@ -103,6 +103,8 @@ class _Connection(asyncio.Protocol):
                     return
         except ParseFailed as exc:  # RFC 6455 violations, invalid UTF-8 (1007) among them
             self.close(exc.code, str(exc))
+        except UnicodeDecodeError:  # a text frame of the fast path
+            self.close(1007, "invalid UTF-8 in a text message")
         except Exception:  # never leave a half-dead connection behind a bug
             _log.exception("client %s: frame handling error", self.peer)
             self.close(1011, "internal error")
@@ -118,11 +120,14 @@ class _Connection(asyncio.Protocol):
         while not self.closing and end - pos >= 2:
             b0, b1 = buf[pos], buf[pos + 1]
             length, head = b1 & 0x7F, pos + 2
-            if length > 125:  # 16- or 64-bit length
-                fmt, head = ("!H", pos + 4) if length == 126 else ("!Q", pos + 10)
-                if end < head:
+            if length == 126:
+                if end - pos < 4:
                     break
-                length = struct.unpack_from(fmt, buf, pos + 2)[0]
+                length, head = struct.unpack_from("!H", buf, head)[0], pos + 4
+            elif length == 127:
+                if end - pos < 10:
+                    break
+                length, head = struct.unpack_from("!Q", buf, head)[0], pos + 10
             opcode = b0 & 0x0F
             if b0 & 0xF0 != 0x80 or not b1 & 0x80 or opcode not in _FAST_OPCODES or (opcode > 8 and length > 125):
                 rest = bytes(buf[pos:])  # anything else: wsproto from this frame on
@@ -140,12 +145,7 @@ class _Connection(asyncio.Protocol):
             if opcode == 9:
                 self._write(self.proto.pong(payload))
             elif opcode == 1:
-                try:
-                    text = payload.decode("utf-8")
-                except UnicodeDecodeError:
-                    self.close(1007, "invalid UTF-8 in a text message")
-                    return b""
-                self.session.receive(text)
+                self.session.receive(payload.decode("utf-8"))  # (invalid UTF-8: 1007 in data_received)
             elif opcode == 2:
                 self.session.receive(payload)
         del buf[:pos]
@@ -249,7 +249,7 @@ class _Connection(asyncio.Protocol):
         Otherwise (False, never waiting) the caller queues it as usual: order, the bounded
         queue and the stalled-client guarantee are unchanged.
         """
-        if self.paused or self.closing:  # (set only after the handshake, with a socket: BridgeServer.opened)
+        if self.paused or self.closing:  # (session.direct only after the handshake, with a socket: opened)
             return False
         frame = message.wired.get(compression) or message.wire(compression, wire)  # (no call per client)
         with self.lock:
@@ -272,8 +272,7 @@ class _Connection(asyncio.Protocol):
         """Send a close frame (or answer the client's) and drop the connection shortly after."""
         if self.closing:
             return
-        if self.proto is not None:
-            self._write(self.proto.close(code, reason[:120] or None))
+        self._write(self.proto.close(code, reason[:120] or None))  # (only open connections are closed)
         with self.lock:
             self.closing = True
         self.server.loop.call_later(2.0, self.transport.abort)
@@ -333,7 +332,7 @@ class BridgeServer:
         self.max_message_size = max_message_size
         self.max_queue_frames, self.max_queue_bytes = max_queue_frames, max_queue_bytes
         self.ping_interval, self.ping_timeout = ping_interval, ping_timeout
-        self.on_clients = on_clients
+        self.on_clients = on_clients or (lambda count: None)
         self.direct_writes = direct_writes
         self.sessions = {}
         self._connections = {}
@@ -393,8 +392,7 @@ class BridgeServer:
         return sorted(conn.peer for conn in list(self._connections.values()))
 
     def _clients_changed(self) -> None:
-        if self.on_clients is not None:
-            try:
-                self.on_clients(len(self.sessions))
-            except Exception:
-                _log.exception("client count callback failed")
+        try:
+            self.on_clients(len(self.sessions))
+        except Exception:
+            _log.exception("client count callback failed")
