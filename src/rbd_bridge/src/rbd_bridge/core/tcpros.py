@@ -87,7 +87,7 @@ class LoopReader:
         self.closed = False
         self.messages = 0
         self._fd = sock.fileno()
-        self._rbuf = bytearray(_READ_SIZE)
+        self._view = memoryview(bytearray(_READ_SIZE))
 
     def start(self) -> None:
         """Watch the socket (raises if the loop cannot)."""
@@ -110,11 +110,10 @@ class LoopReader:
 
     def _readable(self) -> None:
         sock = self.sock
-        rbuf = self._rbuf
-        view = memoryview(rbuf)
+        view = self._view
         for _ in range(_READS_PER_WAKEUP):
             try:
-                n = sock.recv_into(rbuf, _READ_SIZE, socket.MSG_DONTWAIT)
+                n = sock.recv_into(view, _READ_SIZE, socket.MSG_DONTWAIT)
             except (BlockingIOError, InterruptedError):
                 return
             except OSError as exc:
