@@ -83,11 +83,7 @@ class Policy:
         self.param_globs, self.may_read_param = param_globs, _matcher(param_globs)
         self.params_writable = params_writable
         self.secret = secret
-
-    @property
-    def authenticate(self) -> bool:
-        """True when clients must authenticate."""
-        return bool(self.secret)
+        self.authenticate = bool(secret)  # clients must auth first
 
     def may_see_topic(self, topic: str) -> bool:
         """Return True if rosapi may list topic (allowed in either direction)."""
