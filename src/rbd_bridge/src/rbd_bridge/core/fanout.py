@@ -36,8 +36,20 @@ class TopicMessage:
     def frame(self, compression: str) -> Any:
         """Return the whole ``publish`` frame (str for none/png, bytes for cbor*)."""
         frame = self._frames.get(compression)
-        if frame is None:
-            frame = self._frames[compression] = self._encode(compression)
+        if frame is not None:
+            return frame
+        if compression == "none":
+            msg = encoding.json_dumps(self._to_dict(False))
+            frame = '{"op":"publish","topic":%s,"msg":%s}' % (json.dumps(self.topic), msg)
+        elif compression == "cbor":
+            frame = encoding.cbor_dumps({"op": "publish", "topic": self.topic, "msg": self._to_dict(True)})
+        elif compression == "cbor-raw":
+            data, secs, nsecs = self._raw()
+            msg = {"secs": secs, "nsecs": nsecs, "bytes": data}
+            frame = encoding.cbor_dumps({"op": "publish", "topic": self.topic, "msg": msg})
+        else:
+            raise ValueError(compression)
+        self._frames[compression] = frame
         return frame
 
     def wire(self, compression: str, make: Callable[[Any], bytes]) -> bytes:
@@ -46,20 +58,6 @@ class TopicMessage:
         if wire is None:
             wire = self.wired[compression] = make(self.frame(compression))
         return wire
-
-    def _encode(self, compression: str) -> Any:
-        if compression == "none":
-            return '{"op":"publish","topic":%s,"msg":%s}' % (
-                json.dumps(self.topic),
-                encoding.json_dumps(self._to_dict(False)),
-            )
-        if compression == "cbor":
-            return encoding.cbor_dumps({"op": "publish", "topic": self.topic, "msg": self._to_dict(True)})
-        if compression == "cbor-raw":
-            data, secs, nsecs = self._raw()
-            msg = {"secs": secs, "nsecs": nsecs, "bytes": data}
-            return encoding.cbor_dumps({"op": "publish", "topic": self.topic, "msg": msg})
-        raise ValueError(compression)
 
 
 def prepare(message: TopicMessage, sessions: Iterable[Any]) -> bool:

@@ -13,35 +13,6 @@ from rbd_bridge.core.types import ConversionError
 
 __all__ = ["RosApi", "ROSAPI_TYPES", "RosApiError"]
 
-# name: (rosapi type, request fields in order: list args are mapped by position)
-_SERVICES = {
-    "topics": ("Topics", ()),
-    "topic_type": ("TopicType", ("topic",)),
-    "topics_for_type": ("TopicsForType", ("type",)),
-    "topics_and_raw_types": ("TopicsAndRawTypes", ()),
-    "services": ("Services", ()),
-    "service_type": ("ServiceType", ("service",)),
-    "services_for_type": ("ServicesForType", ("type",)),
-    "service_providers": ("ServiceProviders", ("service",)),
-    "service_node": ("ServiceNode", ("service",)),
-    "service_host": ("ServiceHost", ("service",)),
-    "nodes": ("Nodes", ()),
-    "node_details": ("NodeDetails", ("node",)),
-    "publishers": ("Publishers", ("topic",)),
-    "subscribers": ("Subscribers", ("topic",)),
-    "message_details": ("MessageDetails", ("type",)),
-    "service_request_details": ("ServiceRequestDetails", ("type",)),
-    "service_response_details": ("ServiceResponseDetails", ("type",)),
-    "get_param": ("GetParam", ("name", "default")),
-    "set_param": ("SetParam", ("name", "value")),
-    "has_param": ("HasParam", ("name",)),
-    "delete_param": ("DeleteParam", ("name",)),
-    "search_param": ("SearchParam", ("name",)),
-    "get_param_names": ("GetParamNames", ()),
-    "get_time": ("GetTime", ()),
-    "action_servers": ("GetActionServers", ()),
-}
-ROSAPI_TYPES = {name: "rosapi/" + spec[0] for name, spec in _SERVICES.items()}
 _ACTION_SUFFIXES = ("/goal", "/cancel", "/status", "/feedback", "/result")
 
 
@@ -56,6 +27,14 @@ def _str_arg(args: Dict[str, Any], key: str) -> str:
     if not isinstance(value, str):
         raise RosApiError("rosapi: %r must be a string" % key)
     return value
+
+
+def _loads(text: str) -> Any:
+    """JSON text as its value, any other text as itself (parameter values, as rosapi)."""
+    try:
+        return json.loads(text)
+    except ValueError:
+        return text
 
 
 class RosApi:
@@ -79,36 +58,6 @@ class RosApi:
         self.types = types
         self.now = now
         self.lookup_service_type = service_type
-        may_call, may_read, names = policy.may_call, policy.may_read_param, self._service_names
-        self._handlers = {
-            "topics": self._topics,
-            "topic_type": lambda a: {"type": dict(self._topic_types()).get(_str_arg(a, "topic"), "")},
-            "topics_for_type": lambda a: {"topics": [t for t, ty in self._topic_types() if ty == _str_arg(a, "type")]},
-            "topics_and_raw_types": self._topics_and_raw_types,
-            "services": lambda a: {"services": names()},
-            "service_type": lambda a: {"type": self._service_type_of(_str_arg(a, "service"))},
-            "services_for_type": lambda a: {
-                "services": [s for s in names() if self._service_type_of(s) == _str_arg(a, "type")]
-            },
-            "service_providers": lambda a: {"providers": self._on(a, "service", 2, may_call)},
-            "service_node": lambda a: {"node": (self._on(a, "service", 2, may_call) or [""])[0]},
-            "service_host": self._service_host,
-            "nodes": self._nodes,
-            "node_details": self._node_details,
-            "publishers": lambda a: {"publishers": self._on(a, "topic", 0, policy.may_see_topic)},
-            "subscribers": lambda a: {"subscribers": self._on(a, "topic", 1, policy.may_see_topic)},
-            "message_details": lambda a: self._details(a, ""),
-            "service_request_details": lambda a: self._details(a, "request"),
-            "service_response_details": lambda a: self._details(a, "response"),
-            "get_param": self._get_param,
-            "set_param": self._set_param,
-            "has_param": lambda a: {"exists": bool(self.params.has(self._param_name(a)))},
-            "delete_param": self._delete_param,
-            "search_param": self._search_param,
-            "get_param_names": lambda a: {"names": sorted(n for n in self.params.names() if may_read(n))},
-            "get_time": lambda a: {"time": dict(zip(("secs", "nsecs"), self.now()))},
-            "action_servers": self._action_servers,
-        }
 
     @staticmethod
     def handles(service: str) -> bool:
@@ -122,12 +71,12 @@ class RosApi:
             RosApiError: On a bad request or a denied name.
         """
         name = service[8:]
+        order, handler = _SERVICES[name]
         if isinstance(args, list):
-            order = _SERVICES[name][1]
             if len(args) > len(order):
                 raise RosApiError("rosapi/%s: too many arguments" % name)
             args = dict(zip(order, args))
-        return self._handlers[name](args or {})
+        return handler(self, args or {})
 
     # ------------------------------------------------------------ graph
 
@@ -151,9 +100,14 @@ class RosApi:
         except Exception:
             return ""
 
-    def _on(self, args: Any, key: str, part: int, allowed: Callable[[str], bool]) -> Any:
-        """The nodes of the system state's part (publishers, subscribers, providers) of an allowed name."""
-        name = _str_arg(args, key)
+    def _services_for_type(self, args: Any) -> Any:
+        wanted = _str_arg(args, "type")
+        return {"services": [s for s in self._service_names() if self._service_type_of(s) == wanted]}
+
+    def _on(self, args: Any, part: int) -> Any:
+        """Nodes publishing (part 0), subscribing (1) to an allowed topic or providing (2) an allowed service."""
+        name = _str_arg(args, "service" if part == 2 else "topic")
+        allowed = self.policy.may_call if part == 2 else self.policy.may_see_topic
         state = self.graph.getSystemState()[part] if allowed(name) else []
         return next((sorted(nodes) for n, nodes in state if n == name), [])
 
@@ -222,22 +176,13 @@ class RosApi:
         name = self._param_name(args)
         default = args.get("default", args.get("default_value", ""))
         if self.params.has(name):
-            return {"value": json.dumps(self.params.get(name))}
-        if isinstance(default, str) and default:
-            try:
-                return {"value": json.dumps(json.loads(default))}
-            except ValueError:
-                return {"value": json.dumps(default)}
-        return {"value": "null"}
+            value = self.params.get(name)
+        else:
+            value = _loads(default) if isinstance(default, str) and default else None
+        return {"value": json.dumps(value)}
 
     def _set_param(self, args: Any) -> Any:
-        name = self._param_name(args, write=True)
-        text = _str_arg(args, "value")
-        try:
-            value = json.loads(text)
-        except ValueError:
-            value = text
-        self.params.set(name, value)
+        self.params.set(self._param_name(args, write=True), _loads(_str_arg(args, "value")))
         return {}
 
     def _delete_param(self, args: Any) -> Any:
@@ -249,3 +194,39 @@ class RosApi:
     def _search_param(self, args: Any) -> Any:
         found = self.params.search(_str_arg(args, "name")) or ""
         return {"global_name": found if found and self.policy.may_read_param(found) else ""}
+
+
+# name: (request fields in order, for args given as a list; handler(api, args) -> response)
+_SERVICES = {
+    "topics": ((), RosApi._topics),
+    "topic_type": (("topic",), lambda api, a: {"type": dict(api._topic_types()).get(_str_arg(a, "topic"), "")}),
+    "topics_for_type": (
+        ("type",),
+        lambda api, a: {"topics": [t for t, ty in api._topic_types() if ty == _str_arg(a, "type")]},
+    ),
+    "topics_and_raw_types": ((), RosApi._topics_and_raw_types),
+    "services": ((), lambda api, a: {"services": api._service_names()}),
+    "service_type": (("service",), lambda api, a: {"type": api._service_type_of(_str_arg(a, "service"))}),
+    "services_for_type": (("type",), RosApi._services_for_type),
+    "service_providers": (("service",), lambda api, a: {"providers": api._on(a, 2)}),
+    "service_node": (("service",), lambda api, a: {"node": (api._on(a, 2) or [""])[0]}),
+    "service_host": (("service",), RosApi._service_host),
+    "nodes": ((), RosApi._nodes),
+    "node_details": (("node",), RosApi._node_details),
+    "publishers": (("topic",), lambda api, a: {"publishers": api._on(a, 0)}),
+    "subscribers": (("topic",), lambda api, a: {"subscribers": api._on(a, 1)}),
+    "message_details": (("type",), lambda api, a: api._details(a, "")),
+    "service_request_details": (("type",), lambda api, a: api._details(a, "request")),
+    "service_response_details": (("type",), lambda api, a: api._details(a, "response")),
+    "get_param": (("name", "default"), RosApi._get_param),
+    "set_param": (("name", "value"), RosApi._set_param),
+    "has_param": (("name",), lambda api, a: {"exists": bool(api.params.has(api._param_name(a)))}),
+    "delete_param": (("name",), RosApi._delete_param),
+    "search_param": (("name",), RosApi._search_param),
+    "get_param_names": ((), lambda api, a: {"names": sorted(filter(api.policy.may_read_param, api.params.names()))}),
+    "get_time": ((), lambda api, a: {"time": dict(zip(("secs", "nsecs"), api.now()))}),
+    "action_servers": ((), RosApi._action_servers),
+}
+# rosapi's type of each: its CamelCase name
+ROSAPI_TYPES = {name: "rosapi/" + name.title().replace("_", "") for name in _SERVICES}
+ROSAPI_TYPES["action_servers"] = "rosapi/GetActionServers"

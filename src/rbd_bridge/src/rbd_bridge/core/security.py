@@ -1,6 +1,7 @@
 """Allow-lists (glob patterns; the RoboDog default moves nothing, DESIGN §5.4) and rosauth MACs. ROS-free."""
 
 import fnmatch
+import functools
 import hashlib
 import hmac
 import math
@@ -44,21 +45,11 @@ def parse_glob_list(text: Any) -> Any:
     return tuple(i for i in (item.strip().strip("'\"").strip() for item in items) if i)
 
 
-class _Globs:
-    """A glob list (None = everything) whose answers are cached (at most 4096 names)."""
-
-    def __init__(self, globs: Any) -> None:
-        self.globs = globs
-        self.cache = {}
-
-    def __call__(self, name: str) -> bool:
-        hit = self.cache.get(name)
-        if hit is None:
-            hit = self.globs is None or any(fnmatch.fnmatchcase(name, p) for p in self.globs)
-            if len(self.cache) >= 4096:
-                self.cache.clear()
-            self.cache[name] = hit
-        return hit
+def _matcher(globs: Any) -> Callable[[str], bool]:
+    """``(name) -> bool`` for a glob list (None or ``*`` in it: everything); answers cached (4096 names)."""
+    if globs is None or "*" in globs:
+        return lambda name: True
+    return functools.lru_cache(maxsize=4096)(lambda name: any(fnmatch.fnmatchcase(name, p) for p in globs))
 
 
 class Policy:
@@ -66,7 +57,7 @@ class Policy:
 
     ``may_publish`` (into ROS), ``may_subscribe``, ``may_call`` (call or advertise a service;
     rosapi's are ``/rosapi/*``) and ``may_read_param`` (rosapi) are ``(name) -> bool``. A glob
-    list of ``None`` allows everything.
+    list of ``None`` (or one holding ``*``) allows everything.
 
     Args:
         publish_globs: Topics a client may advertise/publish.
@@ -86,17 +77,13 @@ class Policy:
         params_writable: bool = False,
         secret: str = None,
     ) -> None:
-        self.publish_globs, self.may_publish = publish_globs, _Globs(publish_globs)
-        self.subscribe_globs, self.may_subscribe = subscribe_globs, _Globs(subscribe_globs)
-        self.service_globs, self.may_call = service_globs, _Globs(service_globs)
-        self.param_globs, self.may_read_param = param_globs, _Globs(param_globs)
+        self.publish_globs, self.may_publish = publish_globs, _matcher(publish_globs)
+        self.subscribe_globs, self.may_subscribe = subscribe_globs, _matcher(subscribe_globs)
+        self.service_globs, self.may_call = service_globs, _matcher(service_globs)
+        self.param_globs, self.may_read_param = param_globs, _matcher(param_globs)
         self.params_writable = params_writable
         self.secret = secret
-
-    @property
-    def authenticate(self) -> bool:
-        """True when clients must authenticate."""
-        return bool(self.secret)
+        self.authenticate = bool(secret)  # clients must auth first
 
     def may_see_topic(self, topic: str) -> bool:
         """Return True if rosapi may list topic (allowed in either direction)."""
@@ -127,20 +114,17 @@ def check_mac(secret: str, frame: Dict[str, Any], now: Callable[..., Any], max_s
     Raises:
         AuthError: A field is missing, t is more than max_skew from now, end has passed, or the MAC differs.
     """
-    fields = {}
     for key in ("mac", "client", "dest", "rand", "level"):
-        value = frame.get(key)
-        if not isinstance(value, str):
+        if not isinstance(frame.get(key), str):
             raise AuthError("auth: field %r must be a string" % key)
-        fields[key] = value
     t = _secs(frame.get("t"), "t")
     end = _secs(frame.get("end"), "end")
     if abs(t - now) > max_skew:
         raise AuthError("auth: request time is more than %.0f s away from the server clock" % max_skew)
     if end <= now:
         raise AuthError("auth: session end time has passed")
-    expected = make_mac(secret, fields["client"], fields["dest"], fields["rand"], t, fields["level"], end)
-    if not hmac.compare_digest(expected, fields["mac"].lower()):
+    expected = make_mac(secret, frame["client"], frame["dest"], frame["rand"], t, frame["level"], end)
+    if not hmac.compare_digest(expected, frame["mac"].lower()):
         raise AuthError("auth: MAC does not match")
 
 
@@ -174,11 +158,4 @@ def policy_from_params(get: Callable[..., Any], secret: str = None) -> Any:
         writable = writable.strip().lower() in ("true", "1", "yes")
     if params is None:
         params = ROBODOG_PARAMS
-    return Policy(
-        publish_globs=None if publish == ("*",) else publish,
-        subscribe_globs=None if subscribe == ("*",) else subscribe,
-        service_globs=None if "*" in services else services,
-        param_globs=None if params == ("*",) else params,
-        params_writable=bool(writable),
-        secret=secret,
-    )
+    return Policy(publish, subscribe, services, params, params_writable=bool(writable), secret=secret)

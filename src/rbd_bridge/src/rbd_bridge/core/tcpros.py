@@ -79,7 +79,6 @@ class LoopReader:
     """
 
     def __init__(self, loop: Any, sock: socket.socket, on_messages: Callable, on_close: Callable) -> None:
-        """Prepare; nothing is read before :meth:`start`."""
         self.loop = loop
         self.sock = sock
         self.on_messages = on_messages
@@ -88,7 +87,7 @@ class LoopReader:
         self.closed = False
         self.messages = 0
         self._fd = sock.fileno()
-        self._rbuf = bytearray(_READ_SIZE)
+        self._view = memoryview(bytearray(_READ_SIZE))
 
     def start(self) -> None:
         """Watch the socket (raises if the loop cannot)."""
@@ -99,10 +98,7 @@ class LoopReader:
         if self.closed:
             return
         self.closed = True
-        try:
-            self.loop.remove_reader(self._fd)
-        except Exception:  # loop already closed
-            pass
+        self.loop.remove_reader(self._fd)  # (False, no error, once the loop is closed)
         try:
             self.sock.close()
         except OSError:
@@ -114,11 +110,10 @@ class LoopReader:
 
     def _readable(self) -> None:
         sock = self.sock
-        rbuf = self._rbuf
-        view = memoryview(rbuf)
+        view = self._view
         for _ in range(_READS_PER_WAKEUP):
             try:
-                n = sock.recv_into(rbuf, _READ_SIZE, socket.MSG_DONTWAIT)
+                n = sock.recv_into(view, _READ_SIZE, socket.MSG_DONTWAIT)
             except (BlockingIOError, InterruptedError):
                 return
             except OSError as exc:

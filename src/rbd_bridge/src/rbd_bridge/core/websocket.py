@@ -53,8 +53,6 @@ class _Connection(asyncio.Protocol):
         self.server = server
         self.ws = WSConnection(ConnectionType.SERVER)  # the handshake
         self.proto = None  # then wsproto's frame protocol
-        self.transport = None
-        self.sock = None
         self.session = None
         self.out = None
         self.closing = False
@@ -64,8 +62,6 @@ class _Connection(asyncio.Protocol):
         self.buf = bytearray()  # an incomplete frame of the fast path
         self.fast = True  # False once wsproto has the stream
         self.alive = True
-        self.timer = None
-        self.peer = "?"
         self.head_buf = bytearray()
         # Writes may also come from a ROS thread (try_direct); the lock orders them with
         # the loop's writes, and head is the unsent rest of a direct write (goes first).
@@ -77,10 +73,9 @@ class _Connection(asyncio.Protocol):
         peer = transport.get_extra_info("peername")
         self.peer = "%s:%s" % tuple(peer[:2]) if peer else "?"
         transport.set_write_buffer_limits(high=1 << 18)
-        if hasattr(transport, "max_size"):
-            transport.max_size = _RECV_SIZE
+        transport.max_size = _RECV_SIZE
         self.sock = getattr(transport, "_sock", None)  # the transport's own non-blocking socket
-        self.timer = self.server.loop.call_later(10.0, self._handshake_timeout)
+        self.timer = self.server.loop.call_later(10.0, transport.abort)  # no handshake within 10 s
 
     def data_received(self, data: bytes) -> None:
         if self.proto is None:
@@ -108,6 +103,8 @@ class _Connection(asyncio.Protocol):
                     return
         except ParseFailed as exc:  # RFC 6455 violations, invalid UTF-8 (1007) among them
             self.close(exc.code, str(exc))
+        except UnicodeDecodeError:  # a text frame of the fast path
+            self.close(1007, "invalid UTF-8 in a text message")
         except Exception:  # never leave a half-dead connection behind a bug
             _log.exception("client %s: frame handling error", self.peer)
             self.close(1011, "internal error")
@@ -148,33 +145,21 @@ class _Connection(asyncio.Protocol):
             if opcode == 9:
                 self._write(self.proto.pong(payload))
             elif opcode == 1:
-                try:
-                    text = payload.decode("utf-8")
-                except UnicodeDecodeError:
-                    self.close(1007, "invalid UTF-8 in a text message")
-                    return b""
-                self.session.receive(text)
+                self.session.receive(payload.decode("utf-8"))  # (invalid UTF-8: 1007 in data_received)
             elif opcode == 2:
                 self.session.receive(payload)
         del buf[:pos]
         return b""
 
     def _message(self, data: Any, finished: bool) -> None:
+        """A frame of a message from wsproto (str or bytes): join the parts; over the limit in bytes: 1009."""
+        self.parts.append(data)
+        self.parts_size += len(data.encode() if isinstance(data, str) else data)
         limit = self.server.max_message_size
-        if finished and not self.parts:
-            size = len(data)
-        else:
-            self.parts.append(data)
-            self.parts_size += len(data)
-            size = self.parts_size
-            if finished:
-                data = ("" if isinstance(data, str) else b"").join(self.parts)
-                self.parts, self.parts_size = [], 0
-        if limit and finished and isinstance(data, str) and 4 * size > limit:
-            size = len(data.encode())  # size counted characters: a big text is measured in bytes
-        if limit and size > limit:
+        if limit and self.parts_size > limit:
             self.close(1009, "message larger than max_message_size")
         elif finished:
+            data, self.parts, self.parts_size = data[:0].join(self.parts), [], 0
             self.session.receive(data)
 
     def pause_writing(self) -> None:
@@ -187,18 +172,11 @@ class _Connection(asyncio.Protocol):
     def connection_lost(self, exc: Optional[Exception]) -> None:
         with self.lock:  # no direct write is in progress once this returns
             self.closing = True
-        if self.timer is not None:
-            self.timer.cancel()
-            self.timer = None
+        self.timer.cancel()
         if self.session is not None:
             self.server.closed(self)
 
     # ------------------------------------------------------------ handshake
-
-    def _handshake_timeout(self) -> None:
-        self.timer = None
-        if self.proto is None:
-            self.transport.abort()
 
     def _handshake(self, data: bytes) -> None:
         # wsproto gets the request alone: frames a client sends without waiting for the
@@ -219,12 +197,11 @@ class _Connection(asyncio.Protocol):
         if request is None:
             self._reject(RejectConnection(status_code=400), "not a WebSocket upgrade request")
             return
-        if self.timer is not None:
-            self.timer.cancel()
+        self.timer.cancel()
         self.transport.write(self.ws.send(AcceptConnection()))
         self.proto = FrameProtocol(client=False, extensions=[])
         self.server.opened(self)
-        self._schedule_ping()
+        self._keepalive(False)
         if rest:
             self.data_received(rest)
 
@@ -272,17 +249,14 @@ class _Connection(asyncio.Protocol):
         Otherwise (False, never waiting) the caller queues it as usual: order, the bounded
         queue and the stalled-client guarantee are unchanged.
         """
-        sock = self.sock
-        if sock is None or self.paused or self.closing or self.proto is None:
+        if self.paused or self.closing:  # (session.direct only after the handshake, with a socket: opened)
             return False
         frame = message.wired.get(compression) or message.wire(compression, wire)  # (no call per client)
         with self.lock:
-            if self.closing or self.paused or self.head is not None or len(self.out):
-                return False
-            if self.transport.get_write_buffer_size():
+            if self.closing or self.paused or self.head or len(self.out) or self.transport.get_write_buffer_size():
                 return False
             try:
-                sent = sock.send(frame)
+                sent = self.sock.send(frame)
             except OSError:  # full (BlockingIOError) or broken: the loop sees it next time
                 return False
             if sent == len(frame):
@@ -296,40 +270,29 @@ class _Connection(asyncio.Protocol):
 
     def close(self, code: int = 1000, reason: str = "") -> None:
         """Send a close frame (or answer the client's) and drop the connection shortly after."""
-        if self.closing or self.transport is None:
+        if self.closing:
             return
-        if self.proto is not None:
-            try:
-                self._write(self.proto.close(code, reason[:120] or None))
-            except Exception:
-                pass
+        self._write(self.proto.close(code, reason[:120] or None))  # (only open connections are closed)
         with self.lock:
             self.closing = True
         self.server.loop.call_later(2.0, self.transport.abort)
         self.transport.close()
 
-    def _schedule_ping(self) -> None:
-        if self.server.ping_interval:
-            self.timer = self.server.loop.call_later(self.server.ping_interval, self._ping)
-
-    def _ping(self) -> None:
-        self.timer = None
-        if self.closing:
+    def _keepalive(self, ping: bool) -> None:
+        """Ping every ping_interval; a client silent for ping_timeout after a ping is dropped."""
+        server = self.server
+        if self.closing or not server.ping_interval:
             return
-        self.alive = False
-        self._write(self.proto.ping())
-        self.timer = self.server.loop.call_later(self.server.ping_timeout or self.server.ping_interval, self._check)
-
-    def _check(self) -> None:
-        self.timer = None
-        if self.closing:
-            return
-        if not self.alive:
+        if ping:
+            self.alive = False
+            self._write(self.proto.ping())
+            self.timer = server.loop.call_later(server.ping_timeout or server.ping_interval, self._keepalive, False)
+        elif self.alive:
+            self.timer = server.loop.call_later(server.ping_interval, self._keepalive, True)
+        else:
             _log.warning("client %s: no answer to ping, closing", self.peer)
             self.close(1011, "keepalive ping timeout")
             self.transport.abort()
-            return
-        self._schedule_ping()
 
 
 class BridgeServer:
@@ -369,7 +332,7 @@ class BridgeServer:
         self.max_message_size = max_message_size
         self.max_queue_frames, self.max_queue_bytes = max_queue_frames, max_queue_bytes
         self.ping_interval, self.ping_timeout = ping_interval, ping_timeout
-        self.on_clients = on_clients
+        self.on_clients = on_clients or (lambda count: None)
         self.direct_writes = direct_writes
         self.sessions = {}
         self._connections = {}
@@ -379,9 +342,7 @@ class BridgeServer:
     async def start(self) -> int:
         """Bind and listen; return the port."""
         self._server = await self.loop.create_server(lambda: _Connection(self), self.host, self.port, backlog=128)
-        sockets = self._server.sockets or []
-        if sockets:
-            self.port = sockets[0].getsockname()[1]
+        self.port = self._server.sockets[0].getsockname()[1]
         return self.port
 
     async def stop(self) -> None:
@@ -431,8 +392,7 @@ class BridgeServer:
         return sorted(conn.peer for conn in list(self._connections.values()))
 
     def _clients_changed(self) -> None:
-        if self.on_clients is not None:
-            try:
-                self.on_clients(len(self.sessions))
-            except Exception:
-                _log.exception("client count callback failed")
+        try:
+            self.on_clients(len(self.sessions))
+        except Exception:
+            _log.exception("client count callback failed")
