@@ -51,9 +51,11 @@ class RosBackend:
     ) -> None:
         """Create the backend (rospy.init_node must have been called)."""
         master = ThreadLocalMaster(rospy.get_name())
-        self.fast = FastPath(loop, self._subscription, direct_reads, fail_direct_reads) if fast_path else None
-        self.topics = Topics(loop, master, advertise_window, self.fast, publisher_linger)
-        self.services = Services(loop, master, None, service_timeout, call_timeout)
+        self.topics = Topics(loop, master, advertise_window, None, publisher_linger)
+        if fast_path:
+            self.topics.fast = FastPath(loop, self.topics.subs.get, direct_reads, fail_direct_reads)
+        self.fast = self.topics.fast
+        self.services = Services(loop, master, service_timeout, call_timeout)
         self.services.rosapi = RosApi(policy, master, RosParams(), _now, self.services.service_type, RosTypes())
         for name in ("advertise", "unadvertise", "publish", "subscribe", "unsubscribe"):
             setattr(self, name, getattr(self.topics, name))
@@ -61,9 +63,6 @@ class RosBackend:
             setattr(self, name, getattr(self.services, name))
         self.begin_batch = self.fast.begin_batch if self.fast else lambda: None
         self.end_batch = self.fast.end_batch if self.fast else lambda: None
-
-    def _subscription(self, topic: str) -> Any:
-        return self.topics.subs.get(topic)
 
     def session_closed(self, session: Any) -> None:
         """Release publishers, subscriptions and hosted services of a gone client."""

@@ -27,10 +27,8 @@ __all__ = ["FastPath"]
 
 _log = logging.getLogger("rbd_bridge")
 _ADOPT_TIMEOUT = 5.0  # a ROS thread waits this long for the loop to take a connection [s]
-# A write to a ROS subscriber holds at most min(the client's queue_size, this) publishes;
-# the rest of a bigger burst is written message by message, as rospy would. rospy keeps
-# only the newest queue_size messages of each socket read: one write of a whole WebSocket
-# read (~1200 short publishes) made a queue-1000 subscriber drop 245 of 5000.
+# A corked write holds at most min(queue_size, this) publishes (rospy keeps only the newest
+# queue_size of each socket read; README, Design: Bursts); the rest are written one by one
 _CORK_MESSAGES = 256
 
 
@@ -57,7 +55,6 @@ class _DirectConnection:
         self._wake = threading.Condition(self._lock)
         self._backlog = collections.deque()
         self._busy = False
-        self._error = None
         self._thread = None
         self.dropped = 0
         connection.set_cleanup_callback(self._closed)
@@ -81,7 +78,8 @@ class _DirectConnection:
         cork = self._cork
         if cork is not None and cork.thread == threading.get_ident():
             with self._lock:
-                self._check()
+                if self._connection.done:
+                    raise TransportTerminated("connection closed")
                 parts = self._parts
                 if parts is None:
                     self._parts = [data]
@@ -94,14 +92,6 @@ class _DirectConnection:
                     self._parts = False  # the limit: what is held leaves now, the rest writes through
                     self._write(b"".join(parts))
         return self._write(data)
-
-    def _check(self) -> None:
-        """Raise the writer thread's error, or TransportTerminated once closed (lock held)."""
-        if self._error is not None:
-            error, self._error = self._error, None
-            raise error
-        if self._connection.done:
-            raise TransportTerminated("connection closed")
 
     def uncork(self) -> None:
         """Send the held writes as one (errors close the connection; rospy sees it next time)."""
@@ -119,7 +109,8 @@ class _DirectConnection:
     def _write(self, data: bytes) -> bool:
         conn = self._connection
         with self._lock:
-            self._check()
+            if conn.done:  # (also after the writer thread's error: it closes conn)
+                raise TransportTerminated("connection closed")
             if not self._busy:
                 sock = conn.socket
                 if sock is None:
@@ -145,10 +136,7 @@ class _DirectConnection:
                     self._wake.notify()
                 return True
             if len(self._backlog) > self._queue_size:
-                # drop the oldest whole message (never the partly sent head)
-                head = self._backlog.popleft()
-                self._backlog.popleft()
-                self._backlog.appendleft(head)
+                del self._backlog[1]  # the oldest whole message (never the partly sent head)
                 self.dropped += 1
             self._backlog.append(data)
             self._wake.notify()
@@ -170,9 +158,8 @@ class _DirectConnection:
                 conn.socket.sendall(data)
                 conn.stat_bytes += len(data)
                 conn.stat_num_msg += 1
-            except Exception as exc:
+            except Exception:
                 with self._lock:
-                    self._error = TransportTerminated(str(exc))
                     self._backlog.clear()
                 try:
                     conn.close()
@@ -187,8 +174,7 @@ def _lazy_dict(cls: Any, payload: bytes) -> Callable[[bool], Any]:
 
     def to_dict(binary: bool) -> Any:
         if not kept:
-            kept.append(cls())
-            kept[0].deserialize(payload)
+            kept.append(cls().deserialize(payload))
         return msg_to_dict(kept[0], binary)
 
     return to_dict
@@ -274,25 +260,14 @@ class FastPath:
         original = impl.add_connection
 
         def add_connection(conn: Any) -> Any:
-            try:
-                conn.receive_loop = functools.partial(self._receive_loop, conn, topic)
-            except Exception:  # not a TCPROSTransport: rospy's path
-                pass
+            conn.receive_loop = functools.partial(self._receive_loop, conn, topic)
             return original(conn)
 
         impl.add_connection = add_connection
         impl._rbd_direct_reads = True
 
     def _receive_loop(self, conn: Any, topic: str, msgs_callback: Any) -> None:
-        """Rospy thread, after the handshake: hand the socket to the loop, else read as rospy."""
-        if self._offer(conn, topic):
-            return  # the loop reads it now; this thread ends
-        self.counters["direct_read_fallbacks"] += 1
-        _log.warning("topic %s: reading the connection from %s with rospy's thread", topic, conn.endpoint_id)
-        TCPROSTransport.receive_loop(conn, msgs_callback)
-
-    def _offer(self, conn: Any, topic: str) -> bool:
-        """Rospy thread: ask the loop to adopt conn; True once it did (never both paths)."""
+        """Rospy thread, after the handshake: the loop adopts conn, else rospy's loop reads it (never both)."""
         decided = concurrent.futures.Future()
 
         def adopt() -> None:
@@ -306,11 +281,16 @@ class FastPath:
 
         try:
             self.loop.call_soon_threadsafe(adopt)
-            return decided.result(_ADOPT_TIMEOUT)
+            if decided.result(_ADOPT_TIMEOUT):
+                return  # the loop reads it now; this thread ends
         except RuntimeError:  # loop closed
-            return False
+            pass
         except concurrent.futures.TimeoutError:  # no cancel once the loop is adopting it: its answer counts
-            return False if decided.cancel() else decided.result()
+            if not decided.cancel() and decided.result():
+                return
+        self.counters["direct_read_fallbacks"] += 1
+        _log.warning("topic %s: reading the connection from %s with rospy's thread", topic, conn.endpoint_id)
+        TCPROSTransport.receive_loop(conn, msgs_callback)
 
     def _adopt(self, conn: Any, topic: str) -> None:
         """Loop thread: start reading conn's socket here (raises if it cannot)."""

@@ -11,20 +11,16 @@ from rbd_bridge.ros.msgconv import get_message_class, get_service_class, message
 __all__ = ["ThreadLocalMaster", "RosParams", "RosTypes"]
 
 
-class ThreadLocalMaster:
+class ThreadLocalMaster(threading.local):
     """rosgraph.Master per thread (an XML-RPC ServerProxy must not be shared by threads)."""
 
     def __init__(self, caller_id: str) -> None:
-        """Create the masters lazily, one per calling thread."""
-        self._caller_id = caller_id
-        self._local = threading.local()
+        """Create the calling thread's master (threading.local runs this again in each thread that uses it)."""
+        self.master = rosgraph.Master(caller_id)
 
     def __getattr__(self, name: str) -> Any:
         """The calling thread's master's attribute (``getTopicTypes``, ``getSystemState``, ...)."""
-        master = getattr(self._local, "master", None)
-        if master is None:
-            master = self._local.master = rosgraph.Master(self._caller_id)
-        return getattr(master, name)
+        return getattr(self.master, name)
 
 
 class RosParams:

@@ -13,6 +13,7 @@ from typing import Any, Callable, Optional
 
 import genpy
 import roslib.message
+from genmsg.msgs import parse_type
 
 from rbd_bridge.core.types import ConversionError, TypedArray, normalize_type
 
@@ -48,20 +49,6 @@ def get_service_class(type_name: str) -> Any:
     return _load("service", type_name)
 
 
-def _split_array(slot_type: str) -> Any:  # (base type, is_array, fixed length or None)
-    if slot_type.endswith("]"):
-        base, _, rest = slot_type.partition("[")
-        length = rest[:-1]
-        return base, True, (int(length) if length else None)
-    return slot_type, False, None
-
-
-def _nested_class(base: str) -> Any:
-    if base == "Header":
-        base = "std_msgs/Header"
-    return get_message_class(base)
-
-
 # --------------------------------------------------------------------------- outgoing
 
 
@@ -74,66 +61,42 @@ def _time_out(value: Any) -> Any:
     return {"secs": value.secs, "nsecs": value.nsecs}
 
 
-def _raw_bytes(value: Any) -> Any:
-    if isinstance(value, str):  # old genpy hands out str for uint8[]
-        value = value.encode("latin-1")
-    return bytes(value)
-
-
 def _b64(value: Any) -> Any:
-    return base64.b64encode(_raw_bytes(value)).decode("ascii")
+    return base64.b64encode(bytes(value)).decode("ascii")
 
 
-_out_cache = {}
-
-
+@functools.lru_cache(maxsize=None)
 def _compile_out(cls: Any, binary: bool) -> Any:
-    key = (cls, binary)
-    plan = _out_cache.get(key)
-    if plan is not None:
-        return plan
     plan = []
     for name, slot_type in zip(cls.__slots__, cls._slot_types):
-        base, is_array, _ = _split_array(slot_type)
-        conv = None
+        base, is_array, _ = parse_type(slot_type)
         if base in _BINARY and is_array:
-            conv = _raw_bytes if binary else _b64
+            conv = bytes if binary else _b64
+        elif binary and is_array and (base in _FLOATS or base in _INT_RANGES):
+            conv = functools.partial(TypedArray, base)
         elif base in _FLOATS:
-            if is_array:
-                conv = _typed(base) if binary else _float_list
-            elif not binary:
-                conv = _finite
+            conv = _float_list if is_array else None if binary else _finite
         elif base in ("time", "duration"):
             conv = (lambda v: [_time_out(x) for x in v]) if is_array else _time_out
         elif base in _INT_RANGES or base in ("bool", "string"):
-            if is_array:
-                conv = _typed(base) if (binary and base in _INT_RANGES) else list
+            conv = list if is_array else None
         else:
-            conv = _nested_out(_nested_class(base), binary, is_array)
+            conv = _nested_out(_compile_out(get_message_class(base), binary), is_array)
         plan.append((name, conv))
-    plan = tuple(plan)
-    _out_cache[key] = plan
-    return plan
-
-
-def _typed(kind: str) -> Any:
-    return lambda v: TypedArray(kind, v)
+    return tuple(plan)
 
 
 def _float_list(values: Any) -> Any:
     return [v if v - v == 0 else None for v in values]  # (as _finite)
 
 
-def _nested_out(nested_cls: Any, binary: bool, is_array: bool) -> Any:
-    def one(value: Any) -> Any:
-        return _convert_out(value, _compile_out(nested_cls, binary))
-
+def _nested_out(plan: Any, is_array: bool) -> Any:
     if is_array:
-        return lambda v: [one(x) for x in v]
-    return one
+        return lambda v: [_convert_out(plan, x) for x in v]
+    return functools.partial(_convert_out, plan)
 
 
-def _convert_out(msg: Any, plan: Any) -> Any:
+def _convert_out(plan: Any, msg: Any) -> Any:
     out = {}
     for name, conv in plan:
         value = getattr(msg, name)
@@ -147,7 +110,7 @@ def msg_to_dict(msg: Any, binary: bool = False) -> Any:
     With binary (for CBOR) byte arrays stay ``bytes``, numeric arrays become
     :class:`TypedArray` s and floats keep NaN/Inf.
     """
-    return _convert_out(msg, _compile_out(type(msg), binary))
+    return _convert_out(_compile_out(type(msg), binary), msg)
 
 
 # --------------------------------------------------------------------------- incoming
@@ -197,9 +160,7 @@ def _string_in(value: Any, path: str, ctx: Any) -> Any:
 
 
 def _time_in(kind: str) -> Any:
-    cls = genpy.Time if kind == "time" else genpy.Duration
-    low = 0 if kind == "time" else -(2**31)
-    high = 2**32 - 1 if kind == "time" else 2**31 - 1
+    cls, low, high = (genpy.Time, 0, 2**32 - 1) if kind == "time" else (genpy.Duration, -(2**31), 2**31 - 1)
 
     def conv(value: Any, path: str, ctx: Any) -> Any:
         if value == "now" and kind == "time":
@@ -256,21 +217,15 @@ def _array_in(elem: Any, fixed: Optional[int]) -> Any:
     return conv
 
 
-_in_cache = {}
-
-
+@functools.lru_cache(maxsize=None)
 def _compile_in(cls: Any) -> Any:
-    plan = _in_cache.get(cls)
-    if plan is not None:
-        return plan
     fields = {}
     header_slot = None
     for name, slot_type in zip(cls.__slots__, cls._slot_types):
-        base, is_array, fixed = _split_array(slot_type)
+        base, is_array, fixed = parse_type(slot_type)
         if base in _BINARY and is_array:
-            fields[name] = _binary_in(fixed)
-            continue
-        if base in _INT_RANGES:
+            elem, is_array = _binary_in(fixed), False  # converted whole, not per element
+        elif base in _INT_RANGES:
             elem = _int_in(base)
         elif base in _FLOATS:
             elem = _float_in
@@ -281,14 +236,12 @@ def _compile_in(cls: Any) -> Any:
         elif base in ("time", "duration"):
             elem = _time_in(base)
         else:
-            nested = _nested_class(base)
+            nested = get_message_class(base)
             elem = functools.partial(_fill, nested)
             if nested._type == "std_msgs/Header" and not is_array:
                 header_slot = name
         fields[name] = _array_in(elem, fixed) if is_array else elem
-    plan = (fields, header_slot)
-    _in_cache[cls] = plan
-    return plan
+    return fields, header_slot
 
 
 def _fill(cls: Any, data: Any, path: str, ctx: Any) -> Any:
@@ -332,7 +285,7 @@ def _describe(value: Any) -> str:
     return "%s %s" % (type(value).__name__, text)
 
 
-_EXAMPLES = {"bool": "False", "string": "", "time": "{}", "duration": "{}"}
+_EXAMPLES = dict(dict.fromkeys(_INT_RANGES, "0"), float32="0.0", float64="0.0", bool="False", string="")
 
 
 def message_typedefs(cls: Any) -> Any:
@@ -350,34 +303,23 @@ def message_typedefs(cls: Any) -> Any:
         if c._type in seen:
             return
         seen.add(c._type)
-        names, types, lens, examples, nested = [], [], [], [], []
-        for name, slot_type in zip(c.__slots__, c._slot_types):
-            base, is_array, fixed = _split_array(slot_type)
-            base = "std_msgs/Header" if base == "Header" else base
-            primitive = base in _INT_RANGES or base in _FLOATS or base in _EXAMPLES
-            names.append(name)
-            types.append(base)
-            lens.append((fixed or 0) if is_array else -1)
-            if is_array:
-                examples.append("[]")
-            else:
-                examples.append("0" if base in _INT_RANGES else "0.0" if base in _FLOATS else _EXAMPLES.get(base, "{}"))
-            if not primitive:
-                nested.append(_nested_class(base))
-        constnames, constvalues = [], []
-        for line in (getattr(c, "_full_text", "") or "").split("\n"):
-            if line.startswith("==="):
-                break
-            line = line.split("#", 1)[0].strip()
-            if "=" in line and " " in line.split("=", 1)[0].strip():
-                left, value = line.split("=", 1)
-                constnames.append(left.split()[-1])
-                constvalues.append(value.strip())
-        fields = (names, types, lens, examples, constnames, constvalues)
-        keys = ("fieldnames", "fieldtypes", "fieldarraylen", "examples", "constnames", "constvalues")
-        out.append(dict(zip(keys, fields), type=c._type))
-        for n in nested:
-            visit(n)
+        fields = [parse_type(slot_type) for slot_type in c._slot_types]
+        # genpy makes each constant a class attribute, in definition order (rosapi reads them too)
+        consts = [(k, v) for k, v in vars(c).items() if k[0] != "_" and isinstance(v, (int, float, str))]
+        out.append(
+            {
+                "fieldnames": list(c.__slots__),
+                "fieldtypes": [base for base, _, _ in fields],
+                "fieldarraylen": [(fixed or 0) if is_array else -1 for _, is_array, fixed in fields],
+                "examples": ["[]" if is_array else _EXAMPLES.get(base, "{}") for base, is_array, _ in fields],
+                "constnames": [k for k, _ in consts],
+                "constvalues": [str(v) for _, v in consts],
+                "type": c._type,
+            }
+        )
+        for base, _, _ in fields:
+            if "/" in base:
+                visit(get_message_class(base))
 
     visit(cls)
     return out

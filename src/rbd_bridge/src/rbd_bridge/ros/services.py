@@ -20,14 +20,13 @@ _log = logging.getLogger("rbd_bridge")
 
 
 def _is_transport_error(exc: Exception) -> bool:
-    if isinstance(exc, (rospy.exceptions.TransportException, socket.error, EOFError)):
-        return True
     text = str(exc).lower()
-    return "transport error" in text or "unable to connect" in text or "connection" in text
+    kinds = (rospy.exceptions.TransportException, socket.error, EOFError)
+    return isinstance(exc, kinds) or "transport error" in text or "unable to connect" in text or "connection" in text
 
 
 class _Hosted:
-    """A service that a WebSocket client provides to ROS."""
+    """A service that a WebSocket client provides to ROS (registered with it)."""
 
     def __init__(self, services: Any, name: str, type_name: str, cls: Any, session: Any) -> None:
         self.services = services
@@ -38,8 +37,8 @@ class _Hosted:
         self.pending = {}
         self.lock = threading.Lock()
         self.closed = False
-        self.server = None
         self.false_logged = False
+        self.server = rospy.Service(name, cls, self.handle)
 
     def handle(self, request: Any) -> Any:
         """Rospy thread: forward the request to the client and wait for its answer."""
@@ -89,8 +88,7 @@ class _Hosted:
             pending, self.pending = self.pending, {}
         for answer in pending.values():
             answer.set_result((False, reason))
-        if self.server is not None:
-            self.server.shutdown(reason)
+        self.server.shutdown(reason)
 
 
 class Services:
@@ -101,21 +99,13 @@ class Services:
     ``timeout`` gives up after ``call_timeout`` s (0 = never).
     """
 
-    def __init__(
-        self,
-        loop: Any,
-        master: Any,
-        rosapi: Any,
-        service_timeout: float = 10.0,
-        call_timeout: float = 30.0,
-        workers: int = 8,
-    ) -> None:
+    def __init__(self, loop: Any, master: Any, service_timeout: float = 10.0, call_timeout: float = 30.0) -> None:
         self.loop = loop
         self.master = master
-        self.rosapi = rosapi
+        self.rosapi = None  # (the backend's RosApi, which needs service_type)
         self.service_timeout = service_timeout
         self.call_timeout = call_timeout
-        self.pool = concurrent.futures.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rbd_bridge_call")
+        self.pool = concurrent.futures.ThreadPoolExecutor(max_workers=8, thread_name_prefix="rbd_bridge_call")
         self.hosted = {}
         self.ids = itertools.count(1)
         self._proxies = {}
@@ -139,12 +129,11 @@ class Services:
         text = "service %s: no response within %.1f s" % (service, timeout)
         handle = self.loop.call_later(timeout, finish, False, text) if timeout else None
 
+        call = self.rosapi.call if RosApi.handles(service) else self._call_ros
+
         def work() -> None:
             try:
-                if RosApi.handles(service):
-                    result = (True, self.rosapi.call(service, args))
-                else:
-                    result = (True, self._call_ros(service, args))
+                result = (True, call(service, args))
             except (RosApiError, BridgeError, ConversionError) as exc:
                 result = (False, str(exc))
             except Exception as exc:  # rospy raises a zoo of types
@@ -164,27 +153,18 @@ class Services:
             self._types[service] = type_name
         return type_name
 
-    def _request(self, service: str, cls: Any, args: Any) -> Any:
-        req_cls = cls._request_class
-        if isinstance(args, list):
-            if len(args) > len(req_cls.__slots__):
-                raise BridgeError(
-                    "service %s: %d arguments given, request has %d fields"
-                    % (service, len(args), len(req_cls.__slots__))
-                )
-            args = dict(zip(req_cls.__slots__, args))
-        try:
-            return dict_to_msg(req_cls, args, rospy.Time.now)[0]
-        except ConversionError as exc:
-            raise BridgeError("service %s: %s" % (service, exc)) from None
-
     def _call_ros(self, service: str, args: Any) -> Any:
         try:
             type_name = self.service_type(service)
-        except rosservice.ROSServiceIOException as exc:
+            cls = get_service_class(type_name)
+            fields = cls._request_class.__slots__
+            if isinstance(args, list):  # by field order
+                if len(args) > len(fields):
+                    raise ConversionError("%d arguments given, request has %d fields" % (len(args), len(fields)))
+                args = dict(zip(fields, args))
+            request = dict_to_msg(cls._request_class, args, rospy.Time.now)[0]
+        except (rosservice.ROSServiceIOException, ConversionError) as exc:
             raise BridgeError("service %s: %s" % (service, exc)) from None
-        cls = get_service_class(type_name)
-        request = self._request(service, cls, args)
         with self._proxy_lock:
             entry = self._proxies.get(service)
             fresh = entry is None or entry[0] != type_name
@@ -199,7 +179,14 @@ class Services:
             try:
                 response = proxy.call(request)
             except Exception as exc:
-                self._drop_proxy(service, entry)
+                with self._proxy_lock:
+                    if self._proxies.get(service) is entry:
+                        del self._proxies[service]
+                self._types.pop(service, None)
+                try:
+                    proxy.close()
+                except Exception:
+                    pass
                 if fresh or not _is_transport_error(exc):
                     raise
                 # the provider restarted since the connection was made: retry once on a new one
@@ -207,16 +194,6 @@ class Services:
         finally:
             lock.release()
         return msg_to_dict(response)
-
-    def _drop_proxy(self, service: str, entry: Any) -> None:
-        with self._proxy_lock:
-            if self._proxies.get(service) is entry:
-                del self._proxies[service]
-        self._types.pop(service, None)
-        try:
-            entry[1].close()
-        except Exception:
-            pass
 
     def advertise_service(self, session: Any, service: str, type_name: str) -> None:
         """Serve service in ROS on behalf of session."""
@@ -234,9 +211,7 @@ class Services:
                 uri = None
             if uri:
                 raise BridgeError("advertise_service: %s is already provided in ROS (%s)" % (service, uri))
-        hosted = _Hosted(self, service, type_name, cls, session)
-        hosted.server = rospy.Service(service, cls, hosted.handle)
-        self.hosted[service] = hosted
+        self.hosted[service] = _Hosted(self, service, type_name, cls, session)
         self._types.pop(service, None)
 
     def _unhost(self, hosted: Any, reason: str) -> None:

@@ -23,22 +23,27 @@ from rbd_bridge.ros.msgconv import dict_to_msg, get_message_class, msg_to_dict
 __all__ = ["Topics"]
 
 _log = logging.getLogger("rbd_bridge")
-# Messages of one topic closer together than this [s] are a burst: they go through the
-# event loop, which writes a whole burst per wake-up; isolated ones are sent directly.
-_BURST_GAP = 0.0002
+_BURST_GAP = 0.0002  # messages of a topic closer than this [s] are a burst: sent via the loop, not directly
 _RECV_SIZE = 65536  # rospy's recv() size per read of a subscribed topic [bytes]
 
 
-class _Pub(Publication):
-    def __init__(self, type_name: str, latch: bool, cls: Any, publisher: Any, window: Any) -> None:
+class _Pub(Publication, rospy.SubscribeListener):
+    """A topic's publisher; as rospy's hook for a new subscriber connection it replays the advertise window."""
+
+    def __init__(self, type_name: str, latch: bool, cls: Any, window: ReplayWindow) -> None:
         super().__init__(type_name, latch)
         self.cls = cls
-        self.publisher = publisher
         self.window = window
+        self.publisher = None
 
     def revive(self) -> None:
         with self.window.lock:
             self.window.reopen()
+
+    def peer_subscribe(self, topic_name: str, topic_publish: Any, peer_publish: Any) -> None:
+        with self.window.lock:
+            for message in self.window.replay():
+                peer_publish(message)
 
 
 class _Sub:
@@ -50,19 +55,6 @@ class _Sub:
         self.sessions = set()
         self.latched = {}  # latched messages by publisher (callerid)
         self.last_rx = -1.0
-
-
-class _Replay(rospy.SubscribeListener):
-    """rospy's hook for a new subscriber connection: replay the advertise window to it."""
-
-    def __init__(self, window: ReplayWindow) -> None:
-        super().__init__()
-        self.window = window
-
-    def peer_subscribe(self, topic_name: str, topic_publish: Any, peer_publish: Any) -> None:
-        with self.window.lock:
-            for message in self.window.replay():
-                peer_publish(message)
 
 
 class Topics:
@@ -109,13 +101,12 @@ class Topics:
             existing = self.master_type(topic)
             if existing and existing != type_name:
                 raise BridgeError("advertise: %s already exists with type %s" % (topic, existing))
-            window = ReplayWindow(self.window, queue_size, latch)
-            hook = _Replay(window)
+            pub = _Pub(type_name, latch, cls, ReplayWindow(self.window, queue_size, latch))
             if self.fast is not None:
-                publisher = self.fast.publisher(topic, cls, queue_size, latch, hook, window)
+                pub.publisher = self.fast.publisher(topic, cls, queue_size, latch, pub, pub.window)
             else:
-                publisher = rospy.Publisher(topic, cls, queue_size=queue_size, latch=latch, subscriber_listener=hook)
-            self.pubs.add(topic, _Pub(type_name, latch, cls, publisher, window), session.client_id)
+                pub.publisher = rospy.Publisher(topic, cls, queue_size=queue_size, latch=latch, subscriber_listener=pub)
+            self.pubs.add(topic, pub, session.client_id)
 
     def unadvertise(self, session: Any, topic: str) -> None:
         """Drop session from topic's publishers; unregister after the linger when nobody is left."""
@@ -143,13 +134,10 @@ class Topics:
             pub = self.pubs.held[topic]
         try:
             message, missing = dict_to_msg(pub.cls, msg, rospy.Time.now)
-        except ConversionError as exc:
-            raise BridgeError("publish %s: %s" % (topic, exc)) from None
-        try:
             with pub.window.lock:
                 pub.window.record(message)
                 pub.publisher.publish(message)
-        except rospy.ROSSerializationException as exc:
+        except (ConversionError, rospy.ROSSerializationException) as exc:
             raise BridgeError("publish %s: %s" % (topic, exc)) from None
         return missing
 
@@ -172,9 +160,8 @@ class Topics:
         cls = get_message_class(type_name)
         sub = self.subs[topic] = _Sub(topic, type_name, cls)
         sub.sessions.add(session)
-        # queue_size=None: everything one read holds is handed over (a slow WebSocket client
-        # is bounded in its own OutQueue); buff_size is rospy's recv() size: each recv
-        # allocates that much (1 MiB cost ~0.1 ms per message here), big messages take several
+        # queue_size=None: all of a read is handed over (OutQueue bounds a slow client); each
+        # recv allocates buff_size (1 MiB cost ~0.1 ms per message), big messages take several
         sub.subscriber = rospy.Subscriber(
             topic, cls, self._on_message, callback_args=sub, queue_size=None, buff_size=_RECV_SIZE, tcp_nodelay=True
         )
@@ -241,8 +228,7 @@ class Topics:
                 if not self._inbox:
                     self._draining = False
                     return
-                items = list(self._inbox)
-                self._inbox.clear()
+                items, self._inbox = self._inbox, collections.deque()
                 self._draining = True  # no direct send may overtake these
             for sub, message, only in items:
                 deliver(message, list(sub.sessions) if only is None else only, sub.sessions)
