@@ -13,9 +13,7 @@ class OutQueue:
     per-topic limit (the subscription's ``queue_length``): then only that topic's newest frames are kept.
     """
 
-    def __init__(
-        self, max_frames: int = 1000, max_bytes: int = 16 * 1024 * 1024, notify: Callable[..., Any] = None
-    ) -> None:
+    def __init__(self, max_frames: int = 1000, max_bytes: int = 1 << 24, notify: Callable[..., Any] = None) -> None:
         """Create an empty queue; notify() is called when a frame arrives in an empty queue."""
         self.max_frames = max_frames
         self.max_bytes = max_bytes

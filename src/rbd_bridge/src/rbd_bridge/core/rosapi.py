@@ -78,8 +78,6 @@ class RosApi:
             args = dict(zip(order, args))
         return handler(self, args or {})
 
-    # ------------------------------------------------------------ graph
-
     def _topic_types(self) -> Any:
         # as rosapi: the master's topic types keep topics whose publishers are all gone, so
         # only topics with a publisher or subscriber now count (unknown type: "")
@@ -158,8 +156,6 @@ class RosApi:
             return {"typedefs": self.types.typedefs(_str_arg(args, "type"), part)}
         except ConversionError as exc:
             raise RosApiError(str(exc)) from None
-
-    # ------------------------------------------------------------ params
 
     def _param_name(self, args: Any, write: bool = False) -> str:
         name = _str_arg(args, "name")

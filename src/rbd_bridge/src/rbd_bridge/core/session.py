@@ -125,8 +125,6 @@ class Session:
         self._rejected = 0
         self._rejected_logged = -1e18
 
-    # ----------------------------------------------------------------- input
-
     def receive(self, data: Any) -> None:
         """Handle one frame from the client (str or bytes). Never raises."""
         if self.closed:
@@ -189,8 +187,6 @@ class Session:
         if not isinstance(frame, dict):
             raise BridgeError("a frame must be a JSON object with an 'op' field, got %s" % type(frame).__name__)
         return frame
-
-    # ----------------------------------------------------------------- output
 
     def status(self, level: str, text: str, frame_id: Any = None) -> None:
         """Send a status frame if the client asked for this level (set_level)."""
@@ -264,8 +260,6 @@ class Session:
     def send_service_request(self, service: str, call_id: Any, args: Any) -> None:
         """Forward a ROS call of a client-hosted service to the client."""
         self._push(encoding.json_dumps({"op": "call_service", "id": call_id, "service": service, "args": args}))
-
-    # ----------------------------------------------------------------- ops
 
     def _op_fragment(self, frame: Dict[str, Any], depth: int) -> None:
         if depth > 1:
@@ -420,8 +414,6 @@ class Session:
         # flag; roslibpy handlers returning False rely on it); the backend logs it
         ok = frame.get("result", True) is not False
         self.backend.service_response(self, service, frame["id"], frame.get("values"), ok)
-
-    # ----------------------------------------------------------------- teardown
 
     def _end(self, code: int, reason: str) -> None:
         if self.close_cb is not None:

@@ -4,6 +4,7 @@
 socket watched by the loop (non-blocking reads in the loop's thread). No rospy, no thread.
 """
 
+import contextlib
 import logging
 import socket
 import struct
@@ -99,10 +100,8 @@ class LoopReader:
             return
         self.closed = True
         self.loop.remove_reader(self._fd)  # (False, no error, once the loop is closed)
-        try:
+        with contextlib.suppress(OSError):
             self.sock.close()
-        except OSError:
-            pass
         try:
             self.on_close(error)
         except Exception:

@@ -5,6 +5,7 @@ Design: why); no extension is negotiated.
 """
 
 import asyncio
+import contextlib
 import itertools
 import logging
 import struct
@@ -176,8 +177,6 @@ class _Connection(asyncio.Protocol):
         if self.session is not None:
             self.server.closed(self)
 
-    # ------------------------------------------------------------ handshake
-
     def _handshake(self, data: bytes) -> None:
         # wsproto gets the request alone: frames a client sends without waiting for the
         # answer go to the connection once it is open (a wsproto server drops them)
@@ -210,14 +209,10 @@ class _Connection(asyncio.Protocol):
         status = 426 if status == 400 and "Upgrade" in text else status  # plain HTTP to a WebSocket server
         body = (text + "\n").encode()
         headers = [(b"content-type", b"text/plain"), (b"content-length", b"%d" % len(body))]
-        try:
+        with contextlib.suppress(Exception):  # the handshake state machine refuses: just drop the connection
             reject = RejectConnection(status_code=status, headers=headers, has_body=True)
             self.transport.write(self.ws.send(reject) + self.ws.send(RejectData(data=body)))
-        except Exception:  # the handshake state machine refuses: just drop the connection
-            pass
         self.transport.close()
-
-    # ------------------------------------------------------------ frames out
 
     def _write(self, data: bytes) -> None:
         """Loop thread: write data after any unsent rest of a direct write."""
@@ -262,10 +257,8 @@ class _Connection(asyncio.Protocol):
             if sent == len(frame):
                 return True
             self.head = frame[sent:]
-        try:
+        with contextlib.suppress(RuntimeError):  # loop closed
             self.server.loop.call_soon_threadsafe(self.flush)
-        except RuntimeError:  # loop closed
-            pass
         return True
 
     def close(self, code: int = 1000, reason: str = "") -> None:

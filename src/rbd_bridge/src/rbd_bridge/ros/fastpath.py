@@ -7,6 +7,7 @@ connections read by the event loop after rospy's handshake (``~direct_reads``).
 
 import collections
 import concurrent.futures
+import contextlib
 import functools
 import logging
 import socket
@@ -161,10 +162,8 @@ class _DirectConnection:
             except Exception:
                 with self._lock:
                     self._backlog.clear()
-                try:
+                with contextlib.suppress(Exception):
                     conn.close()
-                except Exception:
-                    pass
                 return
 
 
@@ -236,9 +235,7 @@ class FastPath:
 
     def stats(self) -> dict:
         """Counters of the direct reads (for the node's ``~stats``)."""
-        stats = dict(self.counters)
-        stats["direct_read_open"] = len(self._readers)
-        return stats
+        return dict(self.counters, direct_read_open=len(self._readers))
 
     def shutdown(self) -> None:
         """Stop every direct reader."""

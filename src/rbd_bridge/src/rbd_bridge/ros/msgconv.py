@@ -49,9 +49,6 @@ def get_service_class(type_name: str) -> Any:
     return _load("service", type_name)
 
 
-# --------------------------------------------------------------------------- outgoing
-
-
 def _finite(value: Any) -> Any:
     # inf - inf and nan - nan are nan; finite - finite is 0.0
     return value if value - value == 0 else None
@@ -111,9 +108,6 @@ def msg_to_dict(msg: Any, binary: bool = False) -> Any:
     :class:`TypedArray` s and floats keep NaN/Inf.
     """
     return _convert_out(_compile_out(type(msg), binary), msg)
-
-
-# --------------------------------------------------------------------------- incoming
 
 
 def _is_int(value: Any) -> Any:

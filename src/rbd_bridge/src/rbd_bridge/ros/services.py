@@ -1,6 +1,7 @@
 """Services: ``call_service`` into ROS (and rosapi) in a thread pool; services hosted by clients."""
 
 import concurrent.futures
+import contextlib
 import itertools
 import logging
 import socket
@@ -48,9 +49,8 @@ class _Hosted:
             if self.closed:
                 raise rospy.ServiceException("service %s: its WebSocket provider is gone" % self.name)
             self.pending[call_id] = answer
-        self.services.loop.call_soon_threadsafe(
-            self.session.send_service_request, self.name, call_id, msg_to_dict(request)
-        )
+        values = msg_to_dict(request)
+        self.services.loop.call_soon_threadsafe(self.session.send_service_request, self.name, call_id, values)
         timeout = self.services.service_timeout
         try:
             ok, values = answer.result(timeout)
@@ -63,11 +63,7 @@ class _Hosted:
             raise rospy.ServiceException("service %s failed: %s" % (self.name, values))
         if not ok and not self.false_logged:  # (Session._op_service_response says why)
             self.false_logged = True
-            _log.warning(
-                "service %s: its WebSocket provider answered result=false; the values go to the caller"
-                " as with rosbridge (logged once)",
-                self.name,
-            )
+            _log.warning("service %s: provider answered result=false; values passed on as by rosbridge", self.name)
         try:
             response, _ = dict_to_msg(self.cls._response_class, values if isinstance(values, dict) else {})
         except ConversionError as exc:
@@ -183,10 +179,8 @@ class Services:
                     if self._proxies.get(service) is entry:
                         del self._proxies[service]
                 self._types.pop(service, None)
-                try:
+                with contextlib.suppress(Exception):
                     proxy.close()
-                except Exception:
-                    pass
                 if fresh or not _is_transport_error(exc):
                     raise
                 # the provider restarted since the connection was made: retry once on a new one

@@ -7,6 +7,7 @@ rospy's threads: isolated ones go straight to idle clients, bursts through the e
 """
 
 import collections
+import contextlib
 import io
 import logging
 import threading
@@ -89,8 +90,6 @@ class Topics:
             raise BridgeError("cannot reach the ROS master: %s" % exc) from None
         return None if type_name == "*" else type_name
 
-    # ------------------------------------------------------------ into ROS
-
     def advertise(self, session: Any, topic: str, type_name: str, latch: bool, queue_size: int) -> None:
         """Register session as publisher of topic (one rospy.Publisher per topic)."""
         type_name, cls = normalize_type(type_name), get_message_class(type_name)
@@ -140,8 +139,6 @@ class Topics:
         except (ConversionError, rospy.ROSSerializationException) as exc:
             raise BridgeError("publish %s: %s" % (topic, exc)) from None
         return missing
-
-    # ------------------------------------------------------------ out of ROS
 
     def subscribe(self, session: Any, topic: str, type_name: Optional[str]) -> str:
         """Share one rospy.Subscriber per topic among all sessions; return the type."""
@@ -217,10 +214,8 @@ class Topics:
             wake = not self._inbox
             self._inbox.append((sub, message, rest))
         if wake:  # one loop wake-up per burst, not per message
-            try:
+            with contextlib.suppress(RuntimeError):  # loop closed: shutting down
                 self.loop.call_soon_threadsafe(self._drain_inbox)
-            except RuntimeError:  # loop closed: shutting down
-                pass
 
     def _drain_inbox(self) -> None:
         while True:
