@@ -11,7 +11,7 @@ import time
 import lcm
 import pytest
 
-from rbd_a1_driver.keepalive import KeepAlive, at_rest, record, zero_velocity
+from rbd_a1_driver.keepalive import RECORD, KeepAlive, at_rest, publish_and_record, record, zero_velocity
 from rbd_wire_oracle import unitree as vendor
 
 WALK = vendor.pack(vendor.HIGH_CMD, {"mode": 2, "gaitType": 1, "velocity": (0.3, 0.1), "yawSpeed": 0.2})
@@ -26,6 +26,28 @@ def test_silent_while_the_driver_sends():
         k.from_driver(WALK, i * 0.004)
         assert k.due(i * 0.004 + 0.009) is None
     assert k.filled == 0
+
+
+def test_a_stall_right_after_the_publish_does_not_delay_the_first_fill():
+    """The record's stamp is the packet's departure, so the first fill comes ``gap`` after it.
+
+    The driver's thread stalls 15 ms right after the publish (a GIL wait under load). Stamped
+    after the publish, the keep-alive would count its gap from 15 ms after the packet.
+    """
+    now = [5.0]
+    wire = []
+
+    def publish(packet):
+        wire.append((now[0], packet))
+        now[0] += 0.015  # the thread does not get back before this
+
+    rec = publish_and_record(publish, WALK, clock=lambda: now[0])
+    sent, packet = RECORD.unpack(rec)
+    assert packet == WALK and wire == [(5.0, WALK)]
+    assert sent == 5.0  # when it left, not when the thread got back
+    k = KeepAlive(0.004, 0.010, 0.05)
+    k.from_driver(packet, sent)
+    assert k.due(5.0 + 0.010) == WALK  # 10 ms after the packet on the wire, not 25
 
 
 def test_fills_a_stall_with_the_last_command_then_zero_velocity():

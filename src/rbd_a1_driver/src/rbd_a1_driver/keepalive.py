@@ -31,7 +31,7 @@ import select
 import struct
 import sys
 import time
-from typing import Optional
+from typing import Callable, Optional
 
 from rbd_a1_driver import unitree_layout as ul
 
@@ -43,6 +43,21 @@ RECORD = struct.Struct("<d%ds" % ul.HIGH_CMD_SIZE)
 def record(packet: bytes, sent: float) -> bytes:
     """The pipe record of a HighCmd the driver published at ``sent`` (monotonic)."""
     return RECORD.pack(sent, packet)
+
+
+def publish_and_record(publish: Callable[[bytes], object], packet: bytes,
+                       clock: Callable[[], float] = time.monotonic) -> bytes:
+    """Publish ``packet`` and return its pipe record, stamped just *before* the publish.
+
+    The keep-alive counts its gap from this stamp. Stamped after the publish, a stall of the
+    driver's thread right after the packet left (a GIL wait on a loaded machine) would move the
+    stamp by the stall, and the keep-alive, once it read that record, would wait stall + gap
+    after the packet for its next fill. Early is harmless: after a stall between the stamp and
+    the publish, the fill comes sooner and repeats the command just sent (``hold`` ends sooner).
+    """
+    sent = clock()
+    publish(packet)
+    return record(packet, sent)
 
 
 def zero_velocity(packet: bytes) -> bytes:
