@@ -9,6 +9,7 @@ executing), :class:`~rbd_controller.stops.Stops` (e-stop, collision, operator lo
 :class:`~rbd_controller.context.Context`; this file only routes.
 """
 
+import traceback
 from typing import Any, List, Tuple
 
 from rbd_controller.avoidance import Avoidance
@@ -18,7 +19,6 @@ from rbd_controller.fsm import Event, Fsm, State
 from rbd_controller.perception import AvoidParams
 from rbd_controller.stops import Stops
 from rbd_controller.tricks import Tricks
-from rbd_controller.watchdog import POLICIES, OperatorWatchdog
 
 __all__ = ["MainController", "Ports"]
 #: States whose time counts on the avoidance episode's no-progress clock.
@@ -60,30 +60,35 @@ class MainController:
         lidar_timeout: float = 0.0,
         avoid: AvoidParams = None,
     ) -> None:
-        if operator_policy not in POLICIES:
-            raise ValueError("operator_policy must be one of %s, got %r" % (POLICIES, operator_policy))
-        self.operator = OperatorWatchdog(operator_timeout)
-        self.operator_policy = operator_policy
-        self.lidar = OperatorWatchdog(lidar_timeout)
-        self.remote_held = False  # the A1 remote's e-stop combination is held (rbd_a1_driver reports it)
         avoid = avoid if avoid is not None else AvoidParams(enabled=False, dodge=False)
         self.ctx = ctx = Context(ports, avoid, start_timeout)
         self.ports, self.avoid, self.perception, self.lock = ctx.ports, ctx.avoid, ctx.perception, ctx.lock
         self.tricks = Tricks(ctx, attentive_pitch, gesture_period, pose_timeout)
         self.avoidance = Avoidance(ctx, self.tricks)
-        self.stops = Stops(ctx, self.avoidance)
+        self.stops = stops = Stops(ctx, self.avoidance, operator_timeout, operator_policy, lidar_timeout)
         self.dodging = Dodging(ctx)
         self.routes = {}  # type: Dict[State, Behaviour]
         for behaviour in (self.tricks, self.stops, self.avoidance, self.dodging):
             self.routes.update((state, behaviour) for state in behaviour.states)
+        # The stop inputs (node callbacks) are the stops behaviour's.
+        self.set_emergency, self.release_refusal, self.set_remote_estop = (
+            stops.set_emergency, stops.release_refusal, stops.set_remote_estop)
+        self.set_collision, self.on_heartbeat, self.on_lidar_state = (
+            stops.set_collision, stops.on_heartbeat, stops.on_lidar_state)
+        self.check_lidar, self.check_operator = stops.check_lidar, stops.check_operator
+        self.faults = 0  # behaviours that raised (each engaged the e-stop)
+        self._fault = None  # type: Optional[Tuple[str, str]]  # raised in an on_enter hook, not handled yet
         self._last_tick = None  # type: Optional[float]
         ctx.controller = self
         ctx.fsm = self.fsm = Fsm(on_enter={state: self._on_enter for state in State})
 
     def _on_enter(self, previous: State) -> None:
         state = self.fsm.state
-        self.stops.on_transition(previous, state)
-        self.routes[state].on_enter(state, previous)
+        try:
+            self.stops.on_transition(previous, state)
+            self.routes[state].on_enter(state, previous)
+        except Exception as exc:  # noqa: BLE001 -- handled by the next tick: e-stop, not a dead node
+            self._fault = ("entering %s" % state.name, "%s: %s" % (type(exc).__name__, exc))
 
     # ------------------------------------------------------------------ properties
     @property
@@ -101,6 +106,7 @@ class MainController:
     home = property(lambda self: self.ctx.home, doc="Where the show is (x, y) [m] (None before the first pose).")
     home_yaw = property(lambda self: self.ctx.home_yaw, doc="The robot's yaw at home [rad].")
     stats = property(lambda self: self.ctx.stats, doc="Avoidance counters (avoided, gave_up, escapes, ...).")
+    remote_held = property(lambda self: self.stops.remote_held, doc="The A1 remote holds its e-stop combination.")
 
     @property
     def pose_timeout(self) -> float:
@@ -117,113 +123,6 @@ class MainController:
         with self.lock:
             self.ctx.sync_stops()
             self.ctx.publish()
-
-    # ------------------------------------------------------------------ stop inputs
-    def set_emergency(self, engaged: bool) -> str:
-        """Engage/release the e-stop (service, CLI, GUI); returns a message.
-
-        A release while the A1 remote's e-stop combination is held is refused (see
-        :meth:`release_refusal`); the state does not change.
-        """
-        with self.lock:
-            if not engaged and self.remote_held:
-                return self.release_refusal()
-            before = self.fsm.state
-            if not engaged and self.operator.lost(self.ctx.now):
-                self.operator.disarm()  # the release acknowledges the lost link
-            self.fsm.fire(Event.ESTOP if engaged else Event.ESTOP_RELEASE)
-            self.ctx.sync_stops()
-            self.ctx.publish()
-            return "%s -> %s" % (before.name, self.fsm.state.name)
-
-    def release_refusal(self) -> str:
-        """Why an e-stop release would be refused now ("" if it would not)."""
-        if self.remote_held:
-            return "release refused: the e-stop combination is held on the A1's remote"
-        return ""
-
-    def set_remote_estop(self, held: bool) -> str:
-        """The A1's remote holds (True) or let go of (False) its e-stop combination.
-
-        Held engages the e-stop through the same event as the service and blocks releases
-        until it is let go; letting go releases nothing (the operator does). Returns a message.
-        """
-        with self.lock:
-            self.remote_held = bool(held)
-            if not held:
-                return "remote e-stop combination let go"
-            return self.set_emergency(True)
-
-    def set_collision(self, detected: bool) -> str:
-        """Collision reported (True) or cleared (False) by rbd_lidar; returns a message."""
-        with self.lock:
-            before = self.fsm.state
-            self.fsm.fire(Event.COLLISION if detected else Event.COLLISION_CLEAR)
-            self.ctx.sync_stops()
-            self.ctx.publish()
-            return "%s -> %s" % (before.name, self.fsm.state.name)
-
-    def on_heartbeat(self, now: float) -> None:
-        """An operator heartbeat arrived at ``now`` [s]."""
-        with self.lock:
-            self.ctx.now = max(self.ctx.now, now)
-            self.operator.beat(now)
-            if self.fsm.operator_lost:
-                before = self.fsm.state
-                self.fsm.fire(Event.OPERATOR_BACK)
-                self.ctx.sync_stops()
-                self.ctx.publish()
-                self.ports.log("info", "operator link back (%s -> %s)" % (before.name, self.fsm.state.name))
-
-    def on_lidar_state(self, now: float, collision: bool, reading: Any = None) -> None:
-        """A CollisionState from rbd_lidar arrived at ``now`` [s].
-
-        Args:
-            now: arrival time [s].
-            collision: its ``collision`` flag.
-            reading: the same as an :class:`rbd_controller.escape.ZoneReading` (per-side points and
-                distances) for the avoidance; None when not available.
-        """
-        if reading is not None:
-            self.perception.on_zone(now, reading)
-        with self.lock:
-            self.lidar.beat(now)
-            if not self.ctx.lidar_lost:
-                return
-            self.ctx.lidar_lost = False
-            self.ports.log("info", "collision monitor back (collision %s)" % collision)
-            self.fsm.fire(Event.COLLISION if collision else Event.COLLISION_CLEAR)
-            self.ctx.sync_stops()
-            self.ctx.publish()
-
-    def check_lidar(self, now: float) -> None:
-        """No state from the collision monitor for lidar_timeout => collision; called from tick()."""
-        with self.lock:
-            if self.ctx.lidar_lost or not self.lidar.lost(now):
-                return
-            self.ctx.lidar_lost = True
-            self.ports.log("error", "no /rbd_lidar/state for > %.2f s: collision (monitor lost)" % self.lidar.timeout)
-            self.fsm.fire(Event.COLLISION)
-            self.ctx.sync_stops()
-            self.ctx.publish()
-
-    def check_operator(self, now: float) -> None:
-        """Fire OPERATOR_LOST when the heartbeat is gone (per policy); called from tick()."""
-        with self.lock:
-            self.ctx.now = max(self.ctx.now, now)
-            if self.fsm.operator_lost or not self.operator.lost(now):
-                return
-            if self.operator_policy == "finish" and self.fsm.state != State.WAITING_FOR_GESTURE:
-                return  # let the current trick (or stop) run its course
-            before = self.fsm.state
-            self.fsm.fire(Event.OPERATOR_LOST)
-            self.ctx.sync_stops()
-            self.ctx.publish()
-            self.ports.log(
-                "warn",
-                "operator heartbeat lost for > %.1f s (policy %s): %s -> %s"
-                % (self.operator.timeout, self.operator_policy, before.name, self.fsm.state.name),
-            )
 
     def on_pos_status(self, status: str) -> None:
         """Status message from the position controller (idle/running/emergency/collision)."""
@@ -243,4 +142,27 @@ class MainController:
             epoch = self.fsm.epoch
             state = self.fsm.state
             self.tricks.latch_body_pose()
-        self.routes[state].tick(state, now, epoch)
+        try:
+            self.routes[state].tick(state, now, epoch)
+        except Exception as exc:  # noqa: BLE001 -- a fault must stop the robot, not kill the node
+            self._fault = ("%s tick" % state.name, "%s: %s\n%s" % (type(exc).__name__, exc, traceback.format_exc()))
+        if self._fault is not None:
+            self._stop_on_fault()
+
+    def _stop_on_fault(self) -> None:
+        """A behaviour raised: engage the e-stop (no motion until an operator releases it, then a new trick).
+
+        The behaviour that raised may have left its state half-updated, so it is not resumed: the
+        release goes to WAITING_FOR_GESTURE. The driver gate and the position controller are told
+        first; publishing comes last.
+        """
+        with self.lock:
+            where, what = self._fault
+            self._fault = None
+            self.faults += 1
+            self.fsm.fire(Event.ESTOP)
+            self.fsm.resume = State.WAITING_FOR_GESTURE
+            self.ctx.sync_stops()
+            self.ports.log("error", "fault in %s, e-stop engaged (a release waits for a new gesture): %s"
+                           % (where, what))
+            self.ctx.publish()

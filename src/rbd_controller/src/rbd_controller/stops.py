@@ -11,6 +11,7 @@ from typing import Any
 from rbd_controller.blocking import MOVING, STATIC
 from rbd_controller.context import Behaviour, Context
 from rbd_controller.fsm import Event, State
+from rbd_controller.watchdog import POLICIES, OperatorWatchdog
 
 #: Stopped again within this many seconds of a resume: the same blockage (stop-and-go creeping) [s].
 REBLOCK_WINDOW = 3.0
@@ -19,17 +20,38 @@ MOTION_STATES = (State.EXECUTING, State.ESCAPING, State.AVOIDING, State.DODGING)
 
 
 class Stops(Behaviour):
-    """EMERGENCY_STOP, COLLISION_DETECTED, OPERATOR_LOST and BLOCKED.
+    """EMERGENCY_STOP, COLLISION_DETECTED, OPERATOR_LOST and BLOCKED, and the inputs that stop.
+
+    The inputs (e-stop service, the A1 remote's e-stop, collision service, operator heartbeat,
+    collision monitor state and their watchdogs) are called from the node's callbacks and from
+    the controller's tick; each fires its event, tells the stops and publishes.
 
     Args:
         ctx: the shared context.
         avoidance: the avoidance behaviour (its no-progress timeout also runs while BLOCKED).
+        operator_timeout: operator heartbeat silence that stops the robot [s]; <= 0 disables
+            the watchdog. It arms with the first heartbeat.
+        operator_policy: ``stop`` (stop the current trick at once, resume it when heartbeats
+            return or on an e-stop release) or ``finish`` (finish the current trick, then
+            wait in OPERATOR_LOST).
+        lidar_timeout: no /rbd_lidar/state for this long counts as a collision (the collision
+            monitor died or hangs) [s]; <= 0 disables. It arms with the first state message.
+
+    Raises:
+        ValueError: unknown operator_policy or non-finite operator_timeout.
     """
 
     states = (State.EMERGENCY_STOP, State.COLLISION_DETECTED, State.OPERATOR_LOST, State.BLOCKED)
 
-    def __init__(self, ctx: Context, avoidance: Any) -> None:
+    def __init__(self, ctx: Context, avoidance: Any, operator_timeout: float = 0.0, operator_policy: str = "stop",
+                 lidar_timeout: float = 0.0) -> None:
         super().__init__(ctx)
+        if operator_policy not in POLICIES:
+            raise ValueError("operator_policy must be one of %s, got %r" % (POLICIES, operator_policy))
+        self.operator = OperatorWatchdog(operator_timeout)
+        self.operator_policy = operator_policy
+        self.lidar = OperatorWatchdog(lidar_timeout)
+        self.remote_held = False  # the A1 remote's e-stop combination is held (rbd_a1_driver reports it)
         self.avoidance = avoidance
         self.stop_since = None  # type: Optional[float]  # first stop of the current blockage
         self.last_stop_end = -1e9
@@ -99,3 +121,111 @@ class Stops(Behaviour):
             if now - since >= ctx.avoid.blocked_timeout:
                 ctx.ports.log("info", "blocked for %.1f s by a static obstacle: avoiding" % (now - since))
                 ctx.fire_if(epoch, Event.AVOID)
+
+    # ------------------------------------------------------------------ stop inputs (node callbacks)
+    def set_emergency(self, engaged: bool) -> str:
+        """Engage/release the e-stop (service, CLI, GUI); returns a message.
+
+        A release while the A1 remote's e-stop combination is held is refused (see
+        :meth:`release_refusal`); the state does not change.
+        """
+        with self.ctx.lock:
+            if not engaged and self.remote_held:
+                return self.release_refusal()
+            before = self.ctx.fsm.state
+            if not engaged and self.operator.lost(self.ctx.now):
+                self.operator.disarm()  # the release acknowledges the lost link
+            self.ctx.fsm.fire(Event.ESTOP if engaged else Event.ESTOP_RELEASE)
+            self.ctx.sync_stops()
+            self.ctx.publish()
+            return "%s -> %s" % (before.name, self.ctx.fsm.state.name)
+
+    def release_refusal(self) -> str:
+        """Why an e-stop release would be refused now ("" if it would not)."""
+        if self.remote_held:
+            return "release refused: the e-stop combination is held on the A1's remote"
+        return ""
+
+    def set_remote_estop(self, held: bool) -> str:
+        """The A1's remote holds (True) or let go of (False) its e-stop combination.
+
+        Held engages the e-stop through the same event as the service and blocks releases
+        until it is let go; letting go releases nothing (the operator does). Returns a message.
+        """
+        with self.ctx.lock:
+            self.remote_held = bool(held)
+            if not held:
+                return "remote e-stop combination let go"
+            return self.set_emergency(True)
+
+    def set_collision(self, detected: bool) -> str:
+        """Collision reported (True) or cleared (False) by rbd_lidar; returns a message."""
+        with self.ctx.lock:
+            before = self.ctx.fsm.state
+            self.ctx.fsm.fire(Event.COLLISION if detected else Event.COLLISION_CLEAR)
+            self.ctx.sync_stops()
+            self.ctx.publish()
+            return "%s -> %s" % (before.name, self.ctx.fsm.state.name)
+
+    def on_heartbeat(self, now: float) -> None:
+        """An operator heartbeat arrived at ``now`` [s]."""
+        with self.ctx.lock:
+            self.ctx.now = max(self.ctx.now, now)
+            self.operator.beat(now)
+            if self.ctx.fsm.operator_lost:
+                before = self.ctx.fsm.state
+                self.ctx.fsm.fire(Event.OPERATOR_BACK)
+                self.ctx.sync_stops()
+                self.ctx.publish()
+                self.ctx.ports.log("info", "operator link back (%s -> %s)" % (before.name, self.ctx.fsm.state.name))
+
+    def on_lidar_state(self, now: float, collision: bool, reading: Any = None) -> None:
+        """A CollisionState from rbd_lidar arrived at ``now`` [s].
+
+        Args:
+            now: arrival time [s].
+            collision: its ``collision`` flag.
+            reading: the same as an :class:`rbd_controller.escape.ZoneReading` (per-side points and
+                distances) for the avoidance; None when not available.
+        """
+        if reading is not None:
+            self.ctx.perception.on_zone(now, reading)
+        with self.ctx.lock:
+            self.lidar.beat(now)
+            if not self.ctx.lidar_lost:
+                return
+            self.ctx.lidar_lost = False
+            self.ctx.ports.log("info", "collision monitor back (collision %s)" % collision)
+            self.ctx.fsm.fire(Event.COLLISION if collision else Event.COLLISION_CLEAR)
+            self.ctx.sync_stops()
+            self.ctx.publish()
+
+    def check_lidar(self, now: float) -> None:
+        """No state from the collision monitor for lidar_timeout => collision; called from tick()."""
+        with self.ctx.lock:
+            if self.ctx.lidar_lost or not self.lidar.lost(now):
+                return
+            self.ctx.lidar_lost = True
+            self.ctx.ports.log("error", "no /rbd_lidar/state for > %.2f s: collision (monitor lost)"
+                               % self.lidar.timeout)
+            self.ctx.fsm.fire(Event.COLLISION)
+            self.ctx.sync_stops()
+            self.ctx.publish()
+
+    def check_operator(self, now: float) -> None:
+        """Fire OPERATOR_LOST when the heartbeat is gone (per policy); called from tick()."""
+        with self.ctx.lock:
+            self.ctx.now = max(self.ctx.now, now)
+            if self.ctx.fsm.operator_lost or not self.operator.lost(now):
+                return
+            if self.operator_policy == "finish" and self.ctx.fsm.state != State.WAITING_FOR_GESTURE:
+                return  # let the current trick (or stop) run its course
+            before = self.ctx.fsm.state
+            self.ctx.fsm.fire(Event.OPERATOR_LOST)
+            self.ctx.sync_stops()
+            self.ctx.publish()
+            self.ctx.ports.log(
+                "warn",
+                "operator heartbeat lost for > %.1f s (policy %s): %s -> %s"
+                % (self.operator.timeout, self.operator_policy, before.name, self.ctx.fsm.state.name),
+            )
