@@ -185,6 +185,7 @@ class Avoidance(Behaviour):
                     plan.length, a.max_detour_factor, plan.direct))
                 return None
             self.plan, self.plan_start, self.detour = plan, (start[0], start[1]), None
+            p.remember_static()  # going around it: a stop at it is not classified from scratch
             ctx.ports.log("info", "detour to (%.2f, %.2f): %r" % (goal[0], goal[1], plan))
             ctx.ports.publish_avoidance({"event": "plan", "detail": plan.reason,
                                          "plan": [self.plan_start] + list(plan.waypoints)})

@@ -121,6 +121,10 @@ class Stops(Behaviour):
             if now - since >= ctx.avoid.blocked_timeout:
                 ctx.ports.log("info", "blocked for %.1f s by a static obstacle: avoiding" % (now - since))
                 ctx.fire_if(epoch, Event.AVOID)
+            elif result == STATIC and ctx.perception.known_match:
+                # The obstacle a detour is going around: no new wait for it to go away (issue 27).
+                ctx.ports.log("info", "stopped again at the static obstacle being avoided: avoiding")
+                ctx.fire_if(epoch, Event.AVOID)
 
     # ------------------------------------------------------------------ stop inputs (node callbacks)
     def set_emergency(self, engaged: bool) -> str:

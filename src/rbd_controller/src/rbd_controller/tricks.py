@@ -54,6 +54,7 @@ class Tricks(Behaviour):
                 # and releasing it there moves the show), not wherever a trick happened to end.
                 ctx.home, ctx.home_yaw = (pose[0], pose[1]), pose[2]
             self._returning = False
+            ctx.perception.forget_static()
             ctx.episode.start = None
             ctx.episode.trick_since = None
             self.command = ""
