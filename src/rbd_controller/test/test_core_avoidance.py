@@ -386,3 +386,60 @@ def test_home_is_where_the_estop_was_released_not_where_a_trick_ended():
     assert w.run_until(lambda: w.ctl.state == State.EXECUTING, 3.0)
     assert w.run_until(lambda: w.ctl.state == State.WAITING_FOR_GESTURE, 60.0)
     assert w.ctl.home == (1.0, 0.5) and not any("walking back" in msg for _, msg in w.logs)
+
+
+# --------------------------------------------------------------------------- issue 27: no flapping
+def spells(world, predicate, seconds):
+    """Run until predicate; return the [state, seconds] spells (consecutive ticks in one state)."""
+    out = []
+    for _ in range(int(seconds / DT)):
+        if predicate():
+            break
+        if out and out[-1][0] == world.ctl.state:
+            out[-1][1] += DT
+        else:
+            out.append([world.ctl.state, DT])
+        world.step()
+    return out
+
+
+def test_stops_at_the_box_being_avoided_are_not_classified_from_scratch():
+    # A detour that passes close (small inflation) runs into the box's zone again, and the way back
+    # passes it too. Once the box was classified static and a detour planned around it, each of these
+    # stops is classified static at once (0.5 s of scans on it), not after ~static_after (5 s).
+    w = World(path=STROLL, inflation=0.3, clearance=0.3, static_after=5.0, blocked_timeout=3.0)
+    w.start_walk()
+    assert w.run_until(lambda: w.x > 0.3, 5.0)
+    w.obstacles["box"] = box(1.1, 0.0)
+    got = spells(w, lambda: w.ctl.state == State.WAITING_FOR_GESTURE, 60.0)
+    assert w.ctl.state == State.WAITING_FOR_GESTURE, got
+    stops = [d for s, d in got if s == State.COLLISION_DETECTED]
+    assert len(stops) >= 3, got  # the first stop and at least two at the known box
+    assert stops[0] >= 5.0  # the first: unknown until static_after
+    assert max(stops[1:]) <= 0.6, got
+    blocked = [e["detail"] for e in w.events if e["event"] == "blocked"]
+    assert all("static obstacle being avoided" in d for d in blocked[1:]), blocked
+    assert w.ctl.stats["gave_up"] == 0 and (w.x, w.y) == pytest.approx((0.0, 0.0), abs=1e-9)
+    assert w.min_clearance > 0.25
+
+
+def test_a_person_crossing_during_the_detour_is_waited_for_at_once():
+    w = World(path=STROLL, static_after=5.0, blocked_timeout=3.0)
+    w.start_walk()
+    assert w.run_until(lambda: w.x > 0.3, 5.0)
+    w.obstacles["box"] = box(1.1, 0.0)
+    assert w.run_until(lambda: w.ctl.state == State.AVOIDING and w.goal is not None, 15.0), states(w)
+    assert len(w.ctl.perception.known_static)  # the detour is planned: the box is known static
+    c, s = math.cos(w.yaw), math.sin(w.yaw)
+    n = len(w.goals)
+    held = 0
+    for i in range(30):  # a visitor walks across 0.5 m ahead at 0.3 m/s, from the left (the box is right)
+        u = 0.7 - 0.03 * i
+        w.obstacles["person"] = box(w.x + 0.5 * c - u * s, w.y + 0.5 * s + u * c, half=0.15)
+        w.step()
+        assert w.ctl.state not in (State.BLOCKED, State.ESCAPING), (i, states(w)[-4:])
+        held += w.ctl.state == State.COLLISION_DETECTED
+    assert held >= 5 and all(g[1] == "normal" for g in w.goals[n:])
+    del w.obstacles["person"]
+    assert w.run_until(lambda: w.ctl.state == State.WAITING_FOR_GESTURE, 60.0), (states(w), w.logs[-5:])
+    assert w.min_clearance > 0.25
