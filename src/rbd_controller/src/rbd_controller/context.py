@@ -8,7 +8,7 @@ home and the avoidance counters.
 """
 
 import threading
-from typing import Any, Callable, Optional, Sequence, Tuple
+from typing import Any, Callable, List, Optional, Sequence, Tuple
 
 from rbd_controller.detour import zone_occupied_at
 from rbd_controller.fsm import Event, State
@@ -36,6 +36,7 @@ class Ports:
         make_pose: (x, y, yaw) -> a pose for set_position (geometry_msgs/Pose in the node).
         pose_xy: pose -> (x, y, yaw) of a trick pose.
         publish_avoidance: dict -> None: avoidance events, plans and the arena (RViz, reports).
+        follow_path: ([(x, y, yaw), ...], max_speed) -> (accepted, message) (FollowPath: the detour).
     """
 
     def __init__(
@@ -53,6 +54,7 @@ class Ports:
         make_pose: Callable[[float, float, float], Any] = None,
         pose_xy: Callable[[Any], Tuple[float, float, float]] = None,
         publish_avoidance: Callable[[dict], None] = None,
+        follow_path: Callable[[List[Tuple[float, float, float]], float], Tuple[bool, str]] = None,
     ) -> None:
         self.get_gesture = get_gesture
         self.generate_path = generate_path
@@ -67,6 +69,7 @@ class Ports:
         self.make_pose = make_pose or (lambda x, y, yaw: (x, y, yaw))
         self.pose_xy = pose_xy or (lambda pose: (pose[0], pose[1], pose[2]))
         self.publish_avoidance = publish_avoidance or (lambda info: None)
+        self.follow_path = follow_path or (lambda poses, v: (False, "no path follower"))
 
 
 class Goal:

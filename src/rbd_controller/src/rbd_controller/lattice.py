@@ -28,7 +28,7 @@ import numpy as np
 
 from rbd_controller.arena import Arena
 from rbd_controller.detour import MAX_DETOUR_SPAN, GridMap, dilate, finite_points
-from rbd_controller.footprint import ZoneGrowth, motion_zone, sample_path
+from rbd_controller.footprint import ZoneGrowth, motion_zone, sample_path, swept_hits
 
 Pose = Tuple[float, float, float]
 Window = Tuple[float, float, int, int]  # x0, y0 [m], width, height [cells]
@@ -631,3 +631,50 @@ def speed_ahead(plan: LatticePlan, index: int, lookahead: int = 3) -> float:
     """The speed limit for following plan.poses from pose index on: the slowest of the next poses [m/s]."""
     vs = plan.speeds[max(0, index): max(0, index) + max(1, lookahead)]
     return min(vs) if vs else 0.0
+
+
+def progress_index(plan: LatticePlan, pose: Sequence[float], current: int = 0, reached: float = 0.15) -> int:
+    """Index of the plan's next pose for a robot at pose, never behind current.
+
+    A pose is passed when the robot is within ``reached`` of it, or closer to the segment after it
+    than to the segment before it (and past its start).
+    """
+    poses = plan.poses
+    i = max(0, current)
+    while i < len(poses) - 1:
+        a = poses[i - 1] if i > 0 else poses[0]
+        b, c = poses[i], poses[i + 1]
+        if math.hypot(pose[0] - b[0], pose[1] - b[1]) <= reached and math.hypot(c[0] - b[0], c[1] - b[1]) > 1e-9:
+            i += 1
+            continue
+        u2, d2 = _segment(pose, b, c)
+        _, d1 = _segment(pose, a, b)
+        if u2 > 0.0 and d2 < d1:
+            i += 1
+            continue
+        break
+    return i
+
+
+def remaining_clear(plan: LatticePlan, progress: int, pose: Sequence[float], points: Sequence[Sequence[float]],
+                    threshold: int = 1) -> bool:
+    """True if the rest of the plan, from the robot's pose, keeps fewer than threshold points in its zones.
+
+    The zones are the plan's own, per motion, swept along it.
+    """
+    pts = finite_points(points)
+    if not len(pts) or progress >= len(plan.poses):
+        return True
+    path = [tuple(pose[:3])] + list(plan.poses[progress:])
+    for zone, a, b in zip(plan.zones[progress:], path, path[1:]):
+        if swept_hits([a, b], zone, pts) >= threshold:
+            return False
+    return True
+
+
+def _segment(p: Sequence[float], a: Sequence[float], b: Sequence[float]) -> Tuple[float, float]:
+    """(projection parameter in [0, 1], distance) of p on the segment a-b."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    len2 = dx * dx + dy * dy
+    u = 0.0 if len2 <= 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2))
+    return u, math.hypot(a[0] + u * dx - p[0], a[1] + u * dy - p[1])
