@@ -85,6 +85,68 @@ def test_points_on_the_map_are_static_after_map_confirm_and_clear_is_clear():
     assert c.classify() == CLEAR
 
 
+def box_outline(cx, cy, half=0.2, step=0.02):
+    u = np.arange(-half, half + 1e-9, step)
+    lo, hi = np.full(len(u), -half), np.full(len(u), half)
+    sides = [(u, lo), (u, hi), (lo, u), (hi, u)]
+    return np.concatenate([np.stack([cx + a, cy + b], 1) for a, b in sides])
+
+
+def test_the_known_static_obstacle_is_static_after_map_confirm_whatever_part_of_it_is_seen():
+    # Issue 27: going around a box already classified static, the robot stops at it again and sees
+    # another part of it each time (its own motion changed what is in the zone). Without the known
+    # obstacle that change reads as motion, and the stop starts from "unknown" (static_after, 5 s).
+    known = box_outline(1.1, 0.0)
+    walking = [box_face(0.9, -0.2, 0.2)] * 5 + [box_outline(1.1, 0.0)[:21]] * 2  # the part in the zone changes
+    stopped = [box_face(1.3, -0.2, 0.0)] * 6  # then the robot stands at another face of it for 0.5 s
+    plain, with_known = BlockClassifier(static_after=5.0), BlockClassifier(static_after=5.0)
+    for i, pts in enumerate(walking + stopped):
+        plain.update(0.1 * i, pts)
+        with_known.update(0.1 * i, pts)
+        if i == len(walking) + 2:
+            assert with_known.classify(known=known) != STATIC  # 0.2 s of the stop: not yet
+    assert plain.classify() == MOVING  # the visible part changed within static_after
+    assert with_known.classify(known=known) == STATIC and with_known.known_match
+    assert "static obstacle being avoided" in with_known.reason
+    assert with_known.classify() == MOVING and not with_known.known_match  # it is the known set that decides
+
+
+def test_the_known_obstacle_needs_map_confirm_of_scans_on_it():
+    known = box_outline(1.1, 0.0)
+    c = BlockClassifier(static_after=5.0, map_confirm=0.5)
+    c.update(0.0, box_face(0.9, -0.2, 0.2))
+    c.update(0.2, box_face(0.9, -0.2, 0.2))
+    assert c.classify(known=known) == UNKNOWN  # observed 0.2 s
+    c.update(0.3, box_face(0.75, -0.2, 0.2))  # off the box by 0.15 m (a person in front of it)
+    c.update(0.6, box_face(0.9, -0.2, 0.2))
+    assert c.classify(known=known) != STATIC
+    for i in range(7, 13):
+        c.update(0.1 * i, box_face(0.9, -0.2, 0.2))
+    assert c.classify(known=known) == STATIC
+
+
+@pytest.mark.parametrize("speed", [0.3, 0.7, 1.2])
+def test_a_person_beside_the_known_obstacle_is_still_moving_and_never_static(speed):
+    # A moving person still means stop and wait, at once, next to the box being avoided.
+    known = box_outline(1.1, 0.0)
+    c = BlockClassifier(static_after=5.0)
+    seen = []
+    for i in range(30):
+        pts = np.concatenate([box_face(0.9, -0.2, 0.2), person(0.6, -0.8 + speed * 0.1 * i)])
+        c.update(0.1 * i, pts)
+        seen.append(c.classify(known=known))
+    assert STATIC not in seen, c.reason
+    assert MOVING in seen[:8], seen
+
+
+def test_a_standing_person_where_the_box_is_not_is_not_the_known_obstacle():
+    known = box_outline(1.1, 0.0)
+    c = BlockClassifier(static_after=5.0)
+    for i in range(20):
+        c.update(0.1 * i, person(0.6, 0.3))
+        assert c.classify(known=known) == UNKNOWN, i  # static_after applies: 5 s, as without a known box
+
+
 @pytest.mark.parametrize("speed", [0.4, 0.7, 1.0])
 def test_a_person_walking_where_the_map_is_occupied_is_never_static(speed):
     # The map is built live from the scans: the lab's visitor walks one loop over and over (0.7 m/s),

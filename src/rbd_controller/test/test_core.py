@@ -398,3 +398,64 @@ def test_remote_let_go_alone_releases_nothing():
     release(world, ctl)
     ctl.set_remote_estop(False)
     assert ctl.state == State.WAITING_FOR_GESTURE and world.estop_flag is False
+
+
+# --------------------------------------------------------------------------- issue 27: routing, faults
+def test_every_state_is_routed_to_exactly_one_behaviour():
+    _, ctl = make()
+    owned = [s for b in (ctl.tricks, ctl.stops, ctl.avoidance, ctl.dodging) for s in b.states]
+    assert sorted(s.value for s in owned) == sorted(s.value for s in State)
+    assert all(s in ctl.routes[s].states for s in State)
+
+
+def test_a_behaviour_raising_in_tick_engages_the_estop_instead_of_killing_the_node():
+    world, ctl = make()
+    release(world, ctl)
+    real = world.set_position
+
+    def crash_on_second(pose):
+        if pose == "p2":
+            raise IndexError("list assignment index out of range")
+        return real(pose)
+
+    ctl.ports.set_position = crash_on_second
+    world.gestures.append("walk")
+    run(world, ctl, 12)  # must not raise
+    assert ctl.state == State.EMERGENCY_STOP and ctl.faults == 1
+    assert world.estop_flag is True and world.calls[-2:] == [("estop", True), ("pos_emergency", True)]
+    assert any(level == "error" and "fault in EXECUTING tick" in msg and "IndexError" in msg
+               for level, msg in world.logs)
+    sent = list(world.sent)
+    run(world, ctl, 10)
+    assert world.sent == sent  # nothing more is sent while stopped
+    ctl.set_emergency(False)  # the release starts over: the crashed trick is not resumed
+    run(world, ctl, 10)
+    assert ctl.state == State.WAITING_FOR_GESTURE and world.sent == sent and ctl.remaining() == []
+
+
+def test_a_raising_on_enter_hook_is_an_estop_at_the_next_tick():
+    world, ctl = make()
+    release(world, ctl)
+
+    def broken(state, previous):
+        raise ValueError("broken hook")
+
+    ctl.tricks.on_enter = broken
+    world.gestures.append("walk")
+    run(world, ctl, 1)  # GESTURE -> GENERATING_PATH: the hook raises inside the tick
+    assert ctl.state == State.EMERGENCY_STOP and ctl.faults == 1
+    assert any("entering GENERATING_PATH" in msg for _, msg in world.logs)
+
+
+def test_a_raising_hook_in_a_stop_input_still_tells_the_position_controller():
+    world, ctl = make()
+    release(world, ctl)
+
+    def broken(state, previous):
+        raise ValueError("broken hook")
+
+    ctl.stops.on_enter = broken
+    ctl.set_collision(True)  # from the service thread: must not raise, must still hold the robot
+    assert ctl.state == State.COLLISION_DETECTED and world.calls[-1] == ("pos_collision", True)
+    run(world, ctl, 1)
+    assert ctl.state == State.EMERGENCY_STOP and world.estop_flag is True

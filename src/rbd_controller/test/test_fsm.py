@@ -302,3 +302,78 @@ def test_escaped_with_the_collision_flag_still_set_waits_for_it_to_clear():
     fsm.fire(Event.COLLISION)
     fsm.fire(Event.ESCAPED)
     assert fsm.state == State.COLLISION_DETECTED and fsm.resume == State.AVOIDING
+
+
+# --------------------------------------------------------------------------- issue 27: the table against a spec
+# Written by hand from DESIGN.md §4 (Fig. 6: e-stop, gesture -> path -> poses, collision preemption and
+# resume), §5.1 (power-up e-stop), issue 16 (operator-link watchdog) and issue 17 (avoidance states) --
+# NOT derived from TRANSITIONS. Each row: the FSM placed in a state with that state's own stop flags
+# (e-stop engaged in EMERGENCY_STOP, zone occupied in COLLISION_DETECTED/BLOCKED, link lost in
+# OPERATOR_LOST, none in a work state; a stop interrupted EXECUTING), the event, the state it ends in.
+# "back" = the interrupted state (EXECUTING). Every (state, event) pair not listed must change nothing.
+ES, WAIT, GEN, EXE = State.EMERGENCY_STOP, State.WAITING_FOR_GESTURE, State.GENERATING_PATH, State.EXECUTING
+COLL, LOST, BLK = State.COLLISION_DETECTED, State.OPERATOR_LOST, State.BLOCKED
+ESC, AVD, DDG = State.ESCAPING, State.AVOIDING, State.DODGING
+E = Event
+SPEC = [
+    # DESIGN §4: the trick cycle
+    (WAIT, E.GESTURE, GEN), (GEN, E.PATH_READY, EXE), (GEN, E.PATH_FAILED, WAIT),
+    (EXE, E.QUEUE_EMPTY, WAIT), (EXE, E.ABORT, WAIT),
+    # DESIGN §4: the e-stop preempts every state, only an explicit release ends it, then resume
+    (ES, E.ESTOP_RELEASE, "back"), (COLL, E.ESTOP, ES), (LOST, E.ESTOP, ES), (BLK, E.ESTOP, ES),
+    # DESIGN §4: a collision preempts every state and clears by itself, then resume
+    (COLL, E.COLLISION_CLEAR, "back"),
+    # issue 16: the operator link; its loss holds like a collision, an e-stop release acknowledges it
+    (LOST, E.OPERATOR_BACK, "back"), (LOST, E.ESTOP_RELEASE, "back"),
+    # issue 17: classify while stopped; people are waited for; static -> avoid after blocked_timeout
+    (COLL, E.BLOCKED_STATIC, BLK), (COLL, E.DODGE, DDG),
+    (BLK, E.OBSTACLE_MOVING, COLL), (BLK, E.COLLISION_CLEAR, "back"), (BLK, E.AVOID, ESC),
+    (BLK, E.GIVE_UP, COLL),  # the pose is dropped, but the zone is still occupied: stop first
+    (ESC, E.ESCAPED, AVD), (ESC, E.GIVE_UP, EXE), (ESC, E.OBSTACLE_MOVING, COLL),
+    (AVD, E.DETOUR_DONE, EXE), (AVD, E.GIVE_UP, EXE),
+    (WAIT, E.DODGE, DDG), (DDG, E.DODGE_DONE, WAIT),
+]
+for _work in (WAIT, GEN, EXE, ESC, AVD, DDG):
+    SPEC.append((_work, E.ESTOP, ES))
+    SPEC.append((_work, E.OPERATOR_LOST, LOST))
+    SPEC.append((_work, E.ZONE_STALE, COLL))  # issue 17: a stale zone stops every motion
+    if _work not in (ESC, DDG):  # issue 17: the guarded motions are gated per side, not by the flag
+        SPEC.append((_work, E.COLLISION, COLL))
+
+
+def placed(state):
+    """An FSM in state with that state's own stop flags; a stop state interrupted EXECUTING."""
+    fsm = Fsm(initial=state)
+    fsm.collision = state in (COLL, BLK)
+    fsm.operator_lost = state == LOST
+    fsm.resume = EXE if state in (ES, COLL, LOST, BLK) else WAIT
+    return fsm
+
+
+def test_spec_has_one_row_per_pair():
+    pairs = [(s, e) for s, e, _ in SPEC]
+    assert len(pairs) == len(set(pairs))
+
+
+@pytest.mark.parametrize("state,event,expected", SPEC, ids=["%s-%s" % (s.name, e.name) for s, e, _ in SPEC])
+def test_table_follows_the_spec(state, event, expected):
+    fsm = placed(state)
+    fsm.fire(event)
+    want = EXE if expected == "back" else expected
+    assert fsm.state == want
+    if want in (ES, COLL, LOST, BLK) and state not in (ES, COLL, LOST, BLK):
+        assert fsm.resume == state  # a work state interrupted by a stop is resumed afterwards
+    if state in (ES, COLL, LOST, BLK) and want in (ES, COLL, LOST, BLK):
+        assert fsm.resume == EXE  # a stop preempting a stop keeps what to resume
+
+
+@pytest.mark.parametrize("state", list(State))
+def test_every_pair_outside_the_spec_changes_nothing(state):
+    listed = {e for s, e, _ in SPEC if s == state}
+    for event in Event:
+        if event in listed:
+            continue
+        fsm = placed(state)
+        before = (fsm.resume, fsm.epoch)
+        fsm.fire(event)
+        assert (fsm.state, fsm.resume, fsm.epoch) == (state,) + before, event

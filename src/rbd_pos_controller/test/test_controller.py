@@ -34,6 +34,8 @@ def controller_in(state, **params):
     elif state == State.GUARDED:
         ctl.update_zone(0.0, [0, 0, 0, 0])
         ctl.set_guarded_goal(Goal(-0.3, 0.0, 0.0), 0.15, 0.0)
+    elif state == State.FOLLOWING:
+        ctl.set_path([(1.0, 0.0, 0.0)], 0.2, 0.0)
     elif state == State.EMERGENCY_STOP:
         ctl.set_emergency(True)
     elif state == State.COLLISION_DETECTED:

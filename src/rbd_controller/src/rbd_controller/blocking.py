@@ -9,7 +9,13 @@ proof: it is built live from the scans (rbd_localization's log-odds map), so a v
 the same loop, or stood somewhere while the map grew, is on it too; being unmoved for
 ``map_confirm`` (a person walking at 0.3 m/s or faster has moved by more than ``max_shift``)
 is what makes the map's verdict count. People are waited for, as the thesis robot does; only static blockers start
-the avoidance. A person who stands still for ``static_after`` counts as static: the avoidance
+the avoidance. Points on an obstacle already classified static and avoided during this trick
+(``known``) are static when every scan of the last ``map_confirm`` lies on it (>= 90 % of the
+points) and did not move (tighter than the normal test): what the robot saw of it before the stop
+(its own motion changes the part in the zone) is not taken for motion, so a robot going around it
+does not start from "unknown" at each stop (issue 27). Anything else in the zone (a person) keeps
+the normal classification, so a moving person is still waited for at once.
+A person who stands still for ``static_after`` counts as static: the avoidance
 then steps away from them and walks around, never towards (the position controller's zone
 guard), and a person who starts to move again is classified moving at the next scan.
 """
@@ -26,6 +32,9 @@ CLEAR = "clear"  # no blocking points in the last scan
 UNKNOWN = "unknown"  # not observed for static_after yet, no motion seen
 STATIC = "static"
 MOVING = "moving"
+#: A stop counts as the known static obstacle when at least this fraction of the points of every scan of
+#: the last map_confirm lies on it.
+KNOWN_FRACTION = 0.9
 
 
 def near_fraction(points: np.ndarray, reference: np.ndarray, radius: float) -> float:
@@ -94,6 +103,7 @@ class BlockClassifier:
         self.max_gap = float(max_gap)
         self.scans = []  # type: List[Tuple[float, np.ndarray]]
         self.reason = ""
+        self.known_match = False  # the last STATIC came from the known obstacle
 
     def reset(self) -> None:
         """Forget the history (the robot moved, or a new stop began)."""
@@ -116,16 +126,51 @@ class BlockClassifier:
         """The last scan's points (N x 2), empty before the first."""
         return self.scans[-1][1] if self.scans else np.zeros((0, 2))
 
-    def classify(self, occupied: Optional[Callable[[float, float], bool]] = None) -> str:
+    def _on_known(self, known: Optional[np.ndarray]) -> Optional[float]:
+        """The smallest fraction of points on known over the last map_confirm; None unless all scans are on it, unmoved.
+
+        Only the known obstacle's points count (within half the match radius): whatever else shows up
+        (a person) keeps the normal classification. The scans of the last map_confirm must not have
+        moved against the latest one either (the robot stands; a person beside the box moves).
+        """
+        if known is None or not len(known) or self.scans[0][0] > self.scans[-1][0] - self.map_confirm:
+            return None
+        known = np.asarray(known, dtype=np.float64).reshape(-1, 2)
+        t_last, last = self.scans[-1]
+        window = [pts for t, pts in self.scans if t >= t_last - self.map_confirm and len(pts)]
+        if len(window) < 3:
+            return None
+        fractions = [near_fraction(pts, known, self.match_radius / 2.0) for pts in window]
+        if min(fractions) < KNOWN_FRACTION:
+            return None
+        centre = last.mean(axis=0)
+        for pts in window[:-1]:
+            if (float(np.hypot(*(pts.mean(axis=0) - centre))) > self.max_shift / 2.0
+                    or near_fraction(last, pts, self.match_radius / 2.0) < self.min_match
+                    or near_fraction(pts, last, self.match_radius / 2.0) < self.min_match):
+                return None
+        return min(fractions)
+
+    def classify(self, occupied: Optional[Callable[[float, float], bool]] = None,
+                 known: Optional[np.ndarray] = None) -> str:
         """CLEAR, UNKNOWN, STATIC or MOVING for the history so far; ``reason`` says why.
 
         Args:
             occupied: (x, y) -> True if the map has an obstacle there (None: no map).
+            known: points (N x 2) of obstacles already classified static and avoided (None: none);
+                ``known_match`` tells whether a STATIC came from them.
         """
+        self.known_match = False
         if not self.scans or len(self.scans[-1][1]) == 0:
             self.reason = "no blocking points"
             return CLEAR
         t_last, last = self.scans[-1]
+        on_known = self._on_known(known)
+        if on_known is not None:
+            self.known_match = True
+            self.reason = "%.0f %% of the blocking points are on the static obstacle being avoided for %.1f s" % (
+                100.0 * on_known, self.map_confirm)
+            return STATIC
         centre = last.mean(axis=0)
         oldest = t_last
         next_check = 0.0  # compare with about ten scans per static_after, not every one

@@ -20,6 +20,8 @@ from rbd_controller.arena import Arena
 
 Point = Tuple[float, float]
 SQRT2 = math.sqrt(2.0)
+#: Start and goal farther apart than this are refused (the window would be needlessly large) [m].
+MAX_DETOUR_SPAN = 30.0
 
 
 class GridMap:
@@ -126,6 +128,12 @@ class Plan:
         )
 
 
+def finite_points(points: Sequence[Point]) -> np.ndarray:
+    """Points as an N x 2 float array without the rows holding NaN or inf (bad returns are dropped)."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    return pts[np.isfinite(pts).all(axis=1)]
+
+
 def _disk(radius_cells: int) -> List[Tuple[int, int]]:
     r = int(radius_cells)
     return [(dr, dc) for dr in range(-r, r + 1) for dc in range(-r, r + 1) if dr * dr + dc * dc <= r * r]
@@ -172,7 +180,7 @@ def zone_occupied_at(goal: Tuple[float, float, float], zone: Sequence[float], po
         The number of points inside (a goal with points inside cannot be held: the zone would stop
         the robot there).
     """
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    pts = finite_points(points)
     if not len(pts):
         return 0
     c, s = math.cos(goal[2]), math.sin(goal[2])
@@ -233,7 +241,27 @@ class DetourPlanner:
             A Plan; ``ok`` False with the reason when the goal is blocked, outside the arena, or
             unreachable.
         """
+        try:
+            return self._plan(start, goal, grid, points, arena)
+        except (ArithmeticError, IndexError, MemoryError, TypeError, ValueError) as err:
+            # Last line of defence: the checks in _plan() should make this unreachable (the property
+            # tests assert that no scene ends here), but a planner error must never kill the node.
+            return Plan(False, [], 0.0, math.nan, "planner error: %s: %s" % (type(err).__name__, err))
+
+    def _plan(
+        self,
+        start: Point,
+        goal: Point,
+        grid: Optional[GridMap],
+        points: Sequence[Point],
+        arena: Optional[Arena],
+    ) -> Plan:
+        if not all(math.isfinite(float(v)) for v in (start[0], start[1], goal[0], goal[1])):
+            return Plan(False, [], 0.0, math.nan, "start or goal not finite: %r -> %r" % (start, goal))
         direct = math.hypot(goal[0] - start[0], goal[1] - start[1])
+        if direct > MAX_DETOUR_SPAN:
+            return Plan(False, [], 0.0, direct, "goal %.1f m away: beyond the planner's %.0f m" % (
+                direct, MAX_DETOUR_SPAN))
         res = self.resolution
         m = self.window_margin
         x0, y0 = min(start[0], goal[0]) - m, min(start[1], goal[1]) - m
@@ -251,7 +279,7 @@ class DetourPlanner:
             sub = np.zeros((h, w), dtype=bool)
             sub[np.ix_(vr, vc)] = grid.occupied[np.ix_(gr[vr], gc[vc])]
             obstacles |= sub
-        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        pts = finite_points(points)
         if len(pts):
             c = np.floor((pts[:, 0] - x0) / res).astype(np.int64)
             r = np.floor((pts[:, 1] - y0) / res).astype(np.int64)
@@ -265,8 +293,9 @@ class DetourPlanner:
         if arena is not None:
             gx, gy = np.meshgrid(xs, ys)
             outside = ~arena.contains_many(np.stack([gx.ravel(), gy.ravel()], axis=1)).reshape(h, w)
-        sr, sc = int((start[1] - y0) / res), int((start[0] - x0) / res)
-        gr_, gc_ = int((goal[1] - y0) / res), int((goal[0] - x0) / res)
+        # Start and goal are at least window_margin inside the window; clip for a zero margin.
+        sr, sc = min(h - 1, int((start[1] - y0) / res)), min(w - 1, int((start[0] - x0) / res))
+        gr_, gc_ = min(h - 1, int((goal[1] - y0) / res)), min(w - 1, int((goal[0] - x0) / res))
         if arena is not None and not arena.contains(*goal):
             return Plan(False, [], 0.0, direct, "goal outside the arena")
         if blocked[gr_, gc_]:
@@ -291,8 +320,10 @@ class DetourPlanner:
             )
         cells_xy = [(x0 + (c + 0.5) * res, y0 + (r + 0.5) * res) for r, c in path]
         keep = self._simplify(path, blocked)
-        waypoints = [(x0 + (c + 0.5) * res, y0 + (r + 0.5) * res) for r, c in keep[1:]]
-        waypoints[-1] = (float(goal[0]), float(goal[1]))
+        # The cells between start and goal, then the goal itself (its cell's centre is replaced).
+        # Start and goal in one cell: the cell path is that one cell and the goal is all there is.
+        waypoints = [(x0 + (c + 0.5) * res, y0 + (r + 0.5) * res) for r, c in keep[1:-1]]
+        waypoints.append((float(goal[0]), float(goal[1])))
         length = 0.0
         prev = start
         for p in waypoints:

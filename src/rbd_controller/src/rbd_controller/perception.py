@@ -12,7 +12,7 @@ from typing import List, Sequence, Tuple
 import numpy as np
 
 from rbd_controller.arena import Arena, default_arena
-from rbd_controller.blocking import BlockClassifier
+from rbd_controller.blocking import STATIC, BlockClassifier
 from rbd_controller.detour import GridMap
 from rbd_controller.dodge import ApproachDetector
 from rbd_controller.escape import ZoneReading
@@ -157,6 +157,8 @@ class Perception:
         self._blocking = {}  # type: Dict[Tuple[int, int], float]
         self._pruned = -math.inf
         self._scan = []  # type: List[Tuple[float, np.ndarray]]
+        self._static = np.zeros((0, 2))  # the blocking points last classified static
+        self.known_static = np.zeros((0, 2))  # static obstacles avoided in this trick (see remember_static)
         self.arena = params.arena
         self._arena_from_map = False
 
@@ -247,12 +249,51 @@ class Perception:
             self.classifier.reset()
 
     def classify(self) -> Tuple[str, str]:
-        """(classification, reason) of the blocking points (see rbd_controller.blocking)."""
+        """(classification, reason) of the blocking points (see rbd_controller.blocking).
+
+        Points on a remembered static obstacle (:meth:`remember_static`) count like map points.
+        """
         with self.lock:
             grid = self.grid
             occupied = (lambda x, y: grid.is_occupied(x, y)) if grid is not None else None
-            result = self.classifier.classify(occupied)
+            result = self.classifier.classify(occupied, self.known_static)
+            if result == STATIC:
+                self._static = self.classifier.latest()
             return result, self.classifier.reason
+
+    @property
+    def known_match(self) -> bool:
+        """The last :meth:`classify` found the blocker on a remembered static obstacle."""
+        with self.lock:
+            return self.classifier.known_match
+
+    def remember_static(self) -> None:
+        """A detour is planned around the blocker last classified static: keep it static (issue 27).
+
+        Remembered are the obstacle memory's cells within ``shadow_depth`` + 0.1 m of the points
+        classified static (so the obstacle's depth behind the face seen, and later faces of it, are
+        known too). Until :meth:`forget_static`, a stop at them is classified static after the map's
+        short confirmation instead of ``static_after``; motion still wins at once.
+        """
+        with self.lock:
+            if not len(self._static):
+                return
+            parts = [self.known_static, self._static]
+            if self._blocking:
+                cells = (np.asarray(list(self._blocking), dtype=np.float64) + 0.5) * MEMORY_CELL
+                reach = self.shadow_depth + 0.1
+                near = np.zeros(len(cells), dtype=bool)
+                for x, y in self._static:
+                    near |= np.hypot(cells[:, 0] - x, cells[:, 1] - y) <= reach
+                parts.append(cells[near])
+            keys = np.unique(np.floor(np.concatenate(parts) / MEMORY_CELL).astype(np.int64), axis=0)
+            self.known_static = (keys + 0.5) * MEMORY_CELL
+
+    def forget_static(self) -> None:
+        """Drop the remembered static obstacles (the trick is over)."""
+        with self.lock:
+            self._static = np.zeros((0, 2))
+            self.known_static = np.zeros((0, 2))
 
     def recently_approached(self, now: float, within: float = 0.5) -> List[int]:
         """Sides something approached within the last ``within`` seconds."""

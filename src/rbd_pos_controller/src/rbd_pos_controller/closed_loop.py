@@ -1,7 +1,7 @@
 """Closed-loop runs of the controller on the kinematic robot, recorded as a RunLog. ROS-free."""
 
 import math
-from typing import Optional, Sequence
+from typing import Callable, Optional, Sequence
 
 from rbd_pos_controller.controller import Goal, Params, PositionController, State
 from rbd_pos_controller.kinematic_sim import KinematicRobot
@@ -50,6 +50,51 @@ def run_goals(
             t += dt
             if t > limit:
                 raise RuntimeError("goals not reached within %.0f s" % limit)
+    log.done = t
+    log.poses.append((t, robot.x, robot.y, robot.yaw))
+    return log
+
+
+def run_path(
+    poses: Sequence[Sequence[float]],
+    max_speed: float,
+    params: Optional[Params] = None,
+    start: Sequence[float] = (0.0, 0.0, 0.0),
+    latency: float = 0.08,
+    rate: float = 20.0,
+    dt: float = 0.005,
+    limit: float = 120.0,
+    on_step: Optional[Callable[[float, PositionController, KinematicRobot], None]] = None,
+) -> RunLog:
+    """Follow a path of poses (FOLLOWING) with the kinematic robot from start; return the recorded run.
+
+    ``on_step(t, controller, robot)`` is called before each control step (tests inject events there).
+
+    Raises:
+        RuntimeError: if the path is not done within limit seconds.
+    """
+    robot = KinematicRobot(x=start[0], y=start[1], yaw=start[2], latency=latency)
+    ctl = PositionController(params)
+    log = RunLog(tuple(start))
+    t, next_ctl = 0.0, 0.0
+    ctl.update_pose(robot.x, robot.y, robot.yaw, t)
+    last = poses[-1]
+    log.goals.append((t, last[0], last[1], last[2]))
+    ctl.set_path(poses, max_speed, t)
+    while ctl.state != State.WAITING_FOR_POSE:
+        if t >= next_ctl - 1e-9:
+            ctl.update_pose(robot.x, robot.y, robot.yaw, t)
+            log.poses.append((t, robot.x, robot.y, robot.yaw))
+            if on_step is not None:
+                on_step(t, ctl, robot)
+            cmd = ctl.step(t)
+            robot.command(*cmd)
+            log.cmds.append((t,) + tuple(cmd))
+            next_ctl += 1.0 / rate
+        robot.advance(dt)
+        t += dt
+        if t > limit:
+            raise RuntimeError("path not done within %.0f s (state %s)" % (limit, ctl.state.value))
     log.done = t
     log.poses.append((t, robot.x, robot.y, robot.yaw))
     return log

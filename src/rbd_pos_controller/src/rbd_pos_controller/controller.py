@@ -7,6 +7,10 @@ GUARDED is the avoidance motion (issue 17: escape, dodge): a straight translatio
 position without turning, capped at a low speed, gated per side by the LiDAR zone
 (:mod:`rbd_pos_controller.zone_guard`) instead of the slowdown scale, because it starts with
 something in the zone. E-stop and collision preempt it like every motion state.
+
+FOLLOWING follows a path of poses (issue 27: the detour), walking and turning at once
+(:mod:`rbd_pos_controller.path_follower`); a new path (or goal) replaces it without stopping, the
+slowdown scale applies, and e-stop and collision preempt it like every motion state.
 """
 
 import enum
@@ -22,6 +26,7 @@ from rbd_pos_controller.control_law import (
     rotation_command,
     wrap_angle,
 )
+from rbd_pos_controller.path_follower import PathFollower, check_path
 from rbd_pos_controller.zone_guard import ZoneGuard, cap_speed
 
 
@@ -34,6 +39,7 @@ class State(enum.Enum):
     POST_ROTATION = "POST_ROTATION"
     BODY_POSE = "BODY_POSE"
     GUARDED = "GUARDED"  # avoidance translation, gated per side by the zone
+    FOLLOWING = "FOLLOWING"  # following a path of poses (detour)
     EMERGENCY_STOP = "EMERGENCY_STOP"
     COLLISION_DETECTED = "COLLISION_DETECTED"
 
@@ -45,6 +51,8 @@ class Event(enum.Enum):
     GOAL_NEAR = "GOAL_NEAR"  # new goal, rho < skip distance: no pre-rotation
     GOAL_GUARDED = "GOAL_GUARDED"  # new avoidance goal (translation only, zone-gated)
     GUARDED_REACHED = "GUARDED_REACHED"  # the avoidance goal's position is reached (no rotation follows)
+    GOAL_PATH = "GOAL_PATH"  # new path to follow
+    PATH_DONE = "PATH_DONE"  # the path's last pose, heading included, is reached
     ALIGNED = "ALIGNED"  # |gamma| within tolerance
     REACHED = "REACHED"  # rho within tolerance
     ORIENTED = "ORIENTED"  # |delta| within tolerance
@@ -55,7 +63,8 @@ class Event(enum.Enum):
     COLLISION_CLEAR = "COLLISION_CLEAR"
 
 
-MOTION_STATES = (State.PRE_ROTATION, State.LINEAR, State.POST_ROTATION, State.BODY_POSE, State.GUARDED)
+MOTION_STATES = (State.PRE_ROTATION, State.LINEAR, State.POST_ROTATION, State.BODY_POSE, State.GUARDED,
+                 State.FOLLOWING)
 STOP_STATES = (State.EMERGENCY_STOP, State.COLLISION_DETECTED)
 
 TRANSITIONS = {}  # type: Dict[Tuple[State, Event], State]
@@ -66,6 +75,7 @@ TRANSITIONS.update(
         (State.POST_ROTATION, Event.ORIENTED): State.BODY_POSE,
         (State.BODY_POSE, Event.BODY_POSE_DONE): State.WAITING_FOR_POSE,
         (State.GUARDED, Event.GUARDED_REACHED): State.WAITING_FOR_POSE,
+        (State.FOLLOWING, Event.PATH_DONE): State.WAITING_FOR_POSE,
         (State.EMERGENCY_STOP, Event.ESTOP_RELEASE): State.WAITING_FOR_POSE,
         (State.COLLISION_DETECTED, Event.COLLISION_CLEAR): State.WAITING_FOR_POSE,
         (State.COLLISION_DETECTED, Event.ESTOP): State.EMERGENCY_STOP,
@@ -78,6 +88,7 @@ for _state in (State.WAITING_FOR_POSE,) + MOTION_STATES:
     TRANSITIONS[(_state, Event.GOAL_FAR)] = State.PRE_ROTATION
     TRANSITIONS[(_state, Event.GOAL_NEAR)] = State.LINEAR
     TRANSITIONS[(_state, Event.GOAL_GUARDED)] = State.GUARDED
+    TRANSITIONS[(_state, Event.GOAL_PATH)] = State.FOLLOWING
     TRANSITIONS[(_state, Event.ESTOP)] = State.EMERGENCY_STOP
     TRANSITIONS[(_state, Event.COLLISION)] = State.COLLISION_DETECTED
 
@@ -88,6 +99,7 @@ STATUS = {
     State.POST_ROTATION: "running",
     State.BODY_POSE: "running",
     State.GUARDED: "running",
+    State.FOLLOWING: "running",
     State.EMERGENCY_STOP: "emergency",
     State.COLLISION_DETECTED: "collision",
 }
@@ -206,6 +218,8 @@ class PositionController:
         self.params = params if params is not None else Params()
         self.guard = guard if guard is not None else ZoneGuard()
         self.guarded_speed = 0.0
+        self.follower = None  # type: Optional[PathFollower]
+        self._next_follower = None  # type: Optional[PathFollower]
         self.state = State.WAITING_FOR_POSE
         self.goal = None  # type: Optional[Goal]
         self.hold = None  # type: Optional[Tuple[float, float]]
@@ -246,6 +260,8 @@ class PositionController:
             self.goal = None
             self.hold = None
             self.body_pose_request = None
+        self.follower = self._next_follower if state == State.FOLLOWING else None
+        self._next_follower = None
         if state == State.PRE_ROTATION and self._pose is not None:
             self.hold = (self._pose[0], self._pose[1])
         if state == State.POST_ROTATION and self.goal is not None:
@@ -317,6 +333,22 @@ class PositionController:
         self.guarded_speed = float(max_speed)
         self.fire(Event.GOAL_GUARDED)
 
+    def set_path(self, poses: Sequence[Sequence[float]], max_speed: float, now: float) -> None:
+        """Accept a path of poses (x, y, yaw) to follow at <= max_speed (replaces a running goal or path).
+
+        Raises:
+            GoalRejectedError: an empty, too long or non-finite path, max_speed outside (0, max_vx],
+                a stop state, or no fresh pose.
+        """
+        why = check_path(poses, max_speed, self.params.gains)
+        if why:
+            raise GoalRejectedError(why)
+        self._refuse_unless_ready(now)
+        last = poses[-1]
+        self.goal = Goal(float(last[0]), float(last[1]), float(last[2]))
+        self._next_follower = PathFollower(poses, max_speed, self.params.gains)
+        self.fire(Event.GOAL_PATH)
+
     def set_goal(self, goal: Goal, now: float) -> None:
         """Accept a new goal (replaces a running one).
 
@@ -356,6 +388,13 @@ class PositionController:
         if self.state == State.GUARDED:
             # No slowdown scale here: it is 0 while anything is in the zone; the guard gates per side.
             self._last_cmd = self._guarded_command(now)
+            return self._last_cmd
+        if self.state == State.FOLLOWING:
+            cmd = self.follower.command(self._pose)
+            if self.follower.done:
+                self.fire(Event.PATH_DONE)
+                return ZERO
+            self._last_cmd = tuple(v * self.speed_scale for v in cmd)
             return self._last_cmd
         cmd = self._motion_command()
         # Transitions may chain (e.g. a goal already reached skips straight to BODY_POSE).

@@ -7,11 +7,11 @@ import time
 import unittest
 
 import rospy
-from geometry_msgs.msg import Pose, PoseStamped, Twist, Vector3
+from geometry_msgs.msg import Pose, Pose2D, PoseStamped, Twist, Vector3
 from std_msgs.msg import Float32, String
 from std_srvs.srv import SetBool
 
-from rbd_msgs.srv import SetPosition
+from rbd_msgs.srv import FollowPath, SetPosition
 from rbd_pos_controller.geometry import quaternion_from_rpy, rpy_from_quaternion
 from rbd_testkit import wait_for
 from rbd_testkit.ros import run_rostest
@@ -69,11 +69,13 @@ class TestPosController(unittest.TestCase):
             "/rbd_pos_controller/set_position",
             "/rbd_pos_controller/emergency",
             "/kinematic_robot/pause_pose",
+            "/rbd_pos_controller/follow_path",
         ):
             rospy.wait_for_service(name, timeout=60.0)
         cls.set_position = rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)
         cls.emergency = rospy.ServiceProxy("/rbd_pos_controller/emergency", SetBool)
         cls.pause = rospy.ServiceProxy("/kinematic_robot/pause_pose", SetBool)
+        cls.follow_path = rospy.ServiceProxy("/rbd_pos_controller/follow_path", FollowPath)
         cls.scale_pub = rospy.Publisher("/rbd_lidar/speed_scale", Float32, queue_size=1, latch=True)
         assert wait_for(lambda: cls.rec.truth is not None and cls.rec.status, 30.0)
         # Our own pose subscription may connect before the controller's (CI: the first goal was
@@ -127,6 +129,26 @@ class TestPosController(unittest.TestCase):
         cmds = self.last_cmd_after(t0)
         self.assertGreaterEqual(len(cmds), 3, "cmd_vel must keep coming at >= 10 Hz")
         self.assertTrue(all(c.linear.x == 0 and c.linear.y == 0 and c.angular.z == 0 for c in cmds))
+
+    def test_follows_a_path_and_refuses_bad_ones(self):
+        x, y, yaw = self.rec.xy_yaw()
+        c, s = math.cos(yaw), math.sin(yaw)
+        # Ahead 0.4 m, then 0.4 m ahead and 0.3 m left, then a final turn on the spot.
+        pts = [(0.4, 0.0), (0.8, 0.3), (0.8, 0.3)]
+        path = [Pose2D(x + c * px - s * py, y + s * px + c * py, yaw) for px, py in pts]
+        path[-1].theta = yaw + 0.5
+        for bad, speed in (([], 0.2), (path, 0.0), (path, 0.5), ([Pose2D(float("nan"), 0.0, 0.0)], 0.2)):
+            res = self.follow_path(path=bad, max_speed=speed)
+            self.assertFalse(res.accepted)
+            self.assertTrue(res.message)
+        self.assertTrue(self.idle())
+        res = self.follow_path(path=path, max_speed=0.3)
+        self.assertTrue(res.accepted, res.message)
+        self.assertTrue(wait_for(lambda: self.rec.status[-1] == "running", 5.0))
+        self.assertTrue(wait_for(self.idle, 40.0), "path not done, status %s" % self.rec.status[-3:])
+        x1, y1, yaw1 = self.rec.xy_yaw()
+        self.assertLess(math.hypot(x1 - path[-1].x, y1 - path[-1].y), 0.04)
+        self.assertLess(abs(math.atan2(math.sin(yaw1 - yaw - 0.5), math.cos(yaw1 - yaw - 0.5))), 0.05)
 
     def test_bad_goals_rejected_without_motion(self):
         x0, y0, _ = self.rec.xy_yaw()
