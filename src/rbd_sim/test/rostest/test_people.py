@@ -12,7 +12,7 @@ import rospy
 from sensor_msgs.msg import PointCloud2
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rbd_sim.world import load_world
+from rbd_sim.world_file import load_world
 from rbd_testkit.ros import run_rostest
 
 
