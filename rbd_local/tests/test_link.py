@@ -307,14 +307,14 @@ def test_a_stall_of_the_whole_process_ending_just_before_the_verdict_keeps_the_l
     try:
         assert link.wait_connected(30)
         time.sleep(1.0)  # pings answered
-        assert link._unanswered is None
+        assert link.keepalive.unanswered is None
         bridge_stalled = threading.Event()
 
         def stall_bridge():
             bridge_stalled.set()
-            while link._unanswered is None:  # a ping goes out and stays unanswered
+            while link.keepalive.unanswered is None:  # a ping goes out and stays unanswered
                 time.sleep(0.005)
-            sent = link._unanswered
+            sent = link.keepalive.unanswered
             reactor.callFromThread(time.sleep, max(0.0, sent + keepalive - 0.2 - time.monotonic()))
             time.sleep(max(0.0, sent + keepalive + 0.5 - time.monotonic()))
 
