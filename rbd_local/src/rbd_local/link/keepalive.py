@@ -44,6 +44,7 @@ class KeepAlive:
         self._pings = 0  # pings sent since then (reactor thread)
         self._ping_queued = False  # a ping handed to the reactor and not yet sent
         self._next_ping = 0.0
+        self.pings_sent = 0  # every ping sent, on any connection (a proof for tests and logs)
 
     def watch(self, proto: object) -> None:
         """Watch the connection of this autobahn protocol (None or no ping support: nothing)."""
@@ -95,6 +96,7 @@ class KeepAlive:
         if proto is not self._alive:
             return
         proto.sendPing()
+        self.pings_sent += 1
         self._next_ping = time.monotonic() + self._ping_period()  # the cadence of pings actually sent
         self._pings = 1 if self.unanswered is None else self._pings + 1
         if self.unanswered is None:
