@@ -1,6 +1,5 @@
 #!/usr/bin/env python3
 """rbd_lidar on the simulator: ground truth from rbd_sim, body poses through the driver."""
-import math
 import sys
 import threading
 import time
@@ -10,6 +9,7 @@ import rospy
 from nav_msgs.msg import Odometry
 from std_srvs.srv import SetBool, SetBoolResponse
 
+from rbd_geometry.rotation import quat_to_rpy
 from rbd_msgs.msg import CollisionState
 from rbd_msgs.srv import PlaceObstacle, SetBodyPose
 from rbd_testkit import wait_for
@@ -68,9 +68,7 @@ class SimLidarTest(unittest.TestCase):
         wait_for(clear, timeout, what="rbd_lidar reporting clear", abort=rospy.is_shutdown)
 
     def _pitch_roll(self) -> tuple:
-        q = self.gt.pose.pose.orientation
-        roll = math.atan2(2 * (q.w * q.x + q.y * q.z), 1 - 2 * (q.x * q.x + q.y * q.y))
-        pitch = math.asin(max(-1.0, min(1.0, 2 * (q.w * q.y - q.z * q.x))))
+        roll, pitch, _yaw = quat_to_rpy(self.gt.pose.pose.orientation)
         return roll, pitch
 
     def test_floor_in_every_body_pose(self) -> None:

@@ -28,6 +28,8 @@ from rbd_testkit.ros import run_rostest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import synthetic_cloud  # noqa: E402
 
+from rbd_geometry.rotation import rpy_to_quat
+
 PERIOD = 0.1
 
 
@@ -323,8 +325,8 @@ class SyntheticLidarTest(unittest.TestCase):
         self.assertGreater(st.points[CollisionState.BACK], 5)
         odom = Odometry()
         odom.header.frame_id = "odom"
-        odom.pose.pose.orientation.y = math.sin(self.pitch / 2)
-        odom.pose.pose.orientation.w = math.cos(self.pitch / 2)
+        o = odom.pose.pose.orientation
+        o.x, o.y, o.z, o.w = rpy_to_quat(0.0, self.pitch, 0.0)
         type(self).odom = odom
         self.settle("tilted", False)
         type(self).odom = None

@@ -17,19 +17,13 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Bool
 
+from rbd_geometry.rotation import quat_to_rpy
 from rbd_msgs.srv import SetBodyPose
 from rbd_testkit import stays_unchanged, wait_for
 from rbd_testkit.ros import run_rostest
 
 PKG = "rbd_sim"
 RATE = 20.0  # cmd_vel rate of the test, like a controller [Hz]
-
-
-def rpy_from_quaternion(q):
-    roll = math.atan2(2 * (q.w * q.x + q.y * q.z), 1 - 2 * (q.x * q.x + q.y * q.y))
-    pitch = math.asin(max(-1.0, min(1.0, 2 * (q.w * q.y - q.z * q.x))))
-    yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-    return roll, pitch, yaw
 
 
 class GroundTruth:
@@ -44,7 +38,7 @@ class GroundTruth:
     def _cb(self, msg):
         p = msg.pose.pose.position
         with self.lock:
-            self.pose = (p.x, p.y, p.z) + rpy_from_quaternion(msg.pose.pose.orientation)
+            self.pose = (p.x, p.y, p.z) + quat_to_rpy(msg.pose.pose.orientation)
             self.frame = (msg.header.frame_id, msg.child_frame_id)
 
     def get(self):
