@@ -57,3 +57,26 @@ def test_wrap_angle():
     assert rot.wrap_angle(3.0 * math.pi / 2) == pytest.approx(-math.pi / 2)
     assert rot.wrap_angle(-math.pi) == pytest.approx(-math.pi)
     assert rot.wrap_angle(0.25) == pytest.approx(0.25)
+
+
+def _scipy_matrix(r):
+    return r.as_matrix() if hasattr(r, "as_matrix") else r.as_dcm()
+
+
+def test_every_conversion_agrees_with_scipys_rotation():
+    # scipy's Rotation is the independent truth for the closed forms of the module
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.RandomState(30)
+    for _ in range(200):
+        rpy = (rng.uniform(-math.pi, math.pi), rng.uniform(-1.5, 1.5), rng.uniform(-math.pi, math.pi))
+        ref = Rotation.from_euler("xyz", rpy)
+        q = ref.as_quat()
+        assert abs(float(np.dot(rot.rpy_to_quat(*rpy), q))) == pytest.approx(1.0)
+        assert rot.quat_to_rpy(tuple(q)) == pytest.approx(tuple(ref.as_euler("xyz")), abs=1e-9)
+        assert rot.quat_to_matrix(tuple(q)) == pytest.approx(_scipy_matrix(ref), abs=1e-12)
+        assert rot.rpy_to_matrix(*rpy) == pytest.approx(_scipy_matrix(ref), abs=1e-12)
+        assert rot.matrix_to_rpy(_scipy_matrix(ref)) == pytest.approx(rpy, abs=1e-9)
+        assert abs(float(np.dot(rot.matrix_to_quat(_scipy_matrix(ref)), q))) == pytest.approx(1.0)
+        yaw = rpy[2]
+        assert rot.yaw_to_quat(yaw) == pytest.approx(tuple(Rotation.from_euler("z", yaw).as_quat()), abs=1e-12)

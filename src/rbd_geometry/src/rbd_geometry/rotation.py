@@ -1,16 +1,20 @@
 """The one rotation module of RoboDog's Python: quaternions, roll/pitch/yaw and matrices.
 
-Built on scipy's ``Rotation`` (Debian 11/12, Ubuntu 20.04; ``as_dcm``/``from_dcm`` are used where
-scipy < 1.4 lacks ``as_matrix``/``from_matrix``). ROS-free; conventions are ROS's:
+ROS-free; conventions are ROS's:
 
 - quaternions are ``(x, y, z, w)`` tuples, or any object with ``x, y, z, w`` attributes
   (geometry_msgs/Quaternion), and are normalised before use;
 - roll, pitch, yaw are fixed-axis rotations about x, then y, then z (URDF ``rpy``, tf's
   ``setRPY``): ``R = Rz(yaw) Ry(pitch) Rx(roll)``.
+
+The library is scipy's ``Rotation`` (Debian's python3-scipy, also on Debian 11 and Ubuntu 20.04):
+:func:`matrix_to_quat` is scipy's, and the tests take their truth from scipy for every function
+here. The scalar conversions are written out once below instead of calling scipy per value: one
+``Rotation`` per call measured 232 us against 7.5 us for the closed form (this machine, load 20;
+about 30 times either way), and the simulated A1 converts its attitude 250 times a second.
 """
 
 import math
-import warnings
 from typing import Sequence, Tuple
 
 import numpy as np
@@ -18,7 +22,7 @@ from scipy.spatial.transform import Rotation
 
 Quaternion = Tuple[float, float, float, float]
 
-_as_matrix = getattr(Rotation, "as_matrix", None) or Rotation.as_dcm
+# scipy < 1.4 (Ubuntu 20.04's 1.3) names it from_dcm
 _from_matrix = getattr(Rotation, "from_matrix", None) or Rotation.from_dcm
 
 
@@ -42,20 +46,13 @@ def quat_tuple(q: object) -> Quaternion:
     return x, y, z, w
 
 
-def _rotation(q: object) -> Rotation:
-    return Rotation.from_quat(quat_tuple(q))
-
-
-def _euler(r: Rotation) -> Tuple[float, float, float]:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # gimbal lock: scipy sets roll to 0 and says so
-        roll, pitch, yaw = r.as_euler("xyz")
-    return float(roll), float(pitch), float(yaw)
-
-
 def quat_to_rpy(q: object) -> Tuple[float, float, float]:
     """Roll, pitch, yaw [rad] of a quaternion (yaw and roll in [-pi, pi], pitch in [-pi/2, pi/2])."""
-    return _euler(_rotation(q))
+    x, y, z, w = _unit(q)
+    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return roll, pitch, yaw
 
 
 def yaw_of(q: object) -> float:
@@ -65,32 +62,57 @@ def yaw_of(q: object) -> float:
 
 def rpy_to_quat(roll: float, pitch: float, yaw: float) -> Quaternion:
     """Unit quaternion (x, y, z, w) of roll, pitch, yaw [rad]."""
-    x, y, z, w = Rotation.from_euler("xyz", [roll, pitch, yaw]).as_quat()
-    return float(x), float(y), float(z), float(w)
+    cr, sr = math.cos(roll / 2.0), math.sin(roll / 2.0)
+    cp, sp = math.cos(pitch / 2.0), math.sin(pitch / 2.0)
+    cy, sy = math.cos(yaw / 2.0), math.sin(yaw / 2.0)
+    return (
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+        cr * cp * cy + sr * sp * sy,
+    )
 
 
 def yaw_to_quat(yaw: float) -> Quaternion:
     """Unit quaternion (x, y, z, w) of a rotation by ``yaw`` [rad] about z."""
-    return rpy_to_quat(0.0, 0.0, yaw)
+    return 0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)
 
 
 def quat_to_matrix(q: object) -> np.ndarray:
     """3x3 rotation matrix of a quaternion."""
-    return np.asarray(_as_matrix(_rotation(q)), dtype=float)
+    x, y, z, w = _unit(q)
+    return np.array(
+        [
+            [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)],
+            [2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)],
+            [2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)],
+        ]
+    )
 
 
 def rpy_to_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
     """3x3 rotation matrix ``Rz(yaw) Ry(pitch) Rx(roll)``."""
-    return np.asarray(_as_matrix(Rotation.from_euler("xyz", [roll, pitch, yaw])), dtype=float)
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
 
 
 def matrix_to_rpy(m: Sequence[Sequence[float]]) -> Tuple[float, float, float]:
     """Roll, pitch, yaw [rad] of a 3x3 rotation matrix (inverse of :func:`rpy_to_matrix`)."""
-    return _euler(_from_matrix(np.asarray(m, dtype=float)))
+    r = np.asarray(m, dtype=float)
+    pitch = math.asin(max(-1.0, min(1.0, -float(r[2, 0]))))
+    return math.atan2(float(r[2, 1]), float(r[2, 2])), pitch, math.atan2(float(r[1, 0]), float(r[0, 0]))
 
 
 def matrix_to_quat(m: Sequence[Sequence[float]]) -> Quaternion:
-    """Unit quaternion (x, y, z, w) of a 3x3 rotation matrix."""
+    """Unit quaternion (x, y, z, w) of a 3x3 rotation matrix (scipy's)."""
     x, y, z, w = _from_matrix(np.asarray(m, dtype=float)).as_quat()
     return float(x), float(y), float(z), float(w)
 
@@ -98,3 +120,9 @@ def matrix_to_quat(m: Sequence[Sequence[float]]) -> Quaternion:
 def wrap_angle(a: float) -> float:
     """Angle [rad] wrapped to [-pi, pi)."""
     return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def _unit(q: object) -> Quaternion:
+    x, y, z, w = quat_tuple(q)
+    n = math.sqrt(x * x + y * y + z * z + w * w)
+    return x / n, y / n, z / n, w / n
