@@ -163,14 +163,16 @@ class SimLidarTest(unittest.TestCase):
         x = self.gt.pose.pose.position.x
         y = self.gt.pose.pose.position.y
         t_floor = rospy.get_time()
-        time.sleep(1.0)
+        wait_for(lambda: sum(1 for t, _ in list(self.states) if t > t_floor) >= 10, 10.0,
+                 what="10 zone states of the floor alone", abort=rospy.is_shutdown)
         with self.lock:
             floor_only = [s for t, s in self.states if t > t_floor]
         self.assertGreater(len(floor_only), 5)
         self.assertEqual([list(s.points) for s in floor_only if s.collision], [], "floor alone tripped the zone")
         t0 = rospy.get_time()
         self.assertTrue(self.place(name="low", x=x + 0.75, y=y, radius=0.15, height=0.2, remove=False).success)
-        time.sleep(1.0)
+        wait_for(lambda: sum(1 for t, _ in list(self.states) if t > t0 + 0.25) >= 7, 10.0,
+                 what="7 zone states with the low obstacle", abort=rospy.is_shutdown)
         with self.lock:
             late = [s for t, s in self.states if t > t0 + 0.25]
         self.assertTrue(self.place(name="low", remove=True).success)
