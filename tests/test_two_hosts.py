@@ -25,6 +25,8 @@ import time
 
 import pytest
 
+from rbd_testkit import wait_for
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 PEERS = os.path.join(HERE, "two_hosts_peers.py")
@@ -104,14 +106,10 @@ class Peer:
 
     def wait(self, kind, t0=0.0, timeout=10.0, pred=None):
         """First event of kind at or after t0 (matching pred); None after timeout."""
-        deadline = time.monotonic() + timeout
-        while True:
-            for t, p in self.get(kind, t0):
-                if pred is None or pred(p):
-                    return t, p
-            if time.monotonic() > deadline:
-                return None
-            time.sleep(0.02)
+        def first():
+            return next(((t, p) for t, p in self.get(kind, t0) if pred is None or pred(p)), None)
+
+        return wait_for(first, timeout, step=0.02)
 
     def alive(self):
         return self.proc.poll() is None
@@ -377,10 +375,7 @@ def hosts():
     h = TwoHosts()
     try:
         h.start()
-        deadline = time.monotonic() + 120.0
-        while not (h.state() and h.probe.get("T")) and time.monotonic() < deadline:
-            h.check_alive()
-            time.sleep(0.2)
+        wait_for(lambda: h.check_alive() or (h.state() and h.probe.get("T")), 120.0, step=0.2)
         assert h.state(), "robot stack not up (no /rbd_controller/state in the robot namespace)"
         assert h.app.wait("C", timeout=30.0, pred=lambda p: p[0] == "1"), "laptop app never reached the bridge"
         assert h.viewer.wait("P", timeout=30.0), "laptop ROS node receives no /ouster/points from the robot"
@@ -517,11 +512,12 @@ def test_robot_camera_gesture_over_the_link(hosts):
     """
     h = hosts
     h.set_link()
-    deadline = time.monotonic() + 60.0
-    while h.state() != "WAITING_FOR_GESTURE" and time.monotonic() < deadline:
+    def waiting():
         if h.state() == "EMERGENCY_STOP":
             h.estop(False, 5.0)
-        time.sleep(0.2)
+        return h.state() == "WAITING_FOR_GESTURE"
+
+    wait_for(waiting, 60.0, step=0.2)
     assert h.state() == "WAITING_FOR_GESTURE", h.state()
     counts0 = h.link_counts()
     t0 = time.monotonic()

@@ -26,6 +26,7 @@ import sys
 import threading
 import time
 
+from rbd_geometry.rotation import yaw_of, yaw_to_quat
 from rbd_testkit import RosEnv, free_port, restore_sigint, wait_for
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -109,7 +110,7 @@ class Monitor:
         """Ground-truth pose: path, contacts with people."""
         p = msg.pose.pose.position
         q = msg.pose.pose.orientation
-        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        yaw = yaw_of(q)
         with self.lock:
             self.pose = (p.x, p.y, yaw)
             if not self.path or math.hypot(p.x - self.path[-1][0], p.y - self.path[-1][1]) > 0.01:
@@ -144,7 +145,7 @@ class Monitor:
                 if m.ns == "placed_boxes":
                     if m.action == 0 and m.type == 1:  # ADD CUBE
                         q = m.pose.orientation
-                        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+                        yaw = yaw_of(q)
                         self.boxes[m.text] = (m.pose.position.x, m.pose.position.y, yaw, m.scale.x, m.scale.y)
                         self.boxes_seen[m.text] = self.boxes[m.text]
                     elif m.action in (2, 3):
@@ -443,7 +444,7 @@ def turn(monitor, yaw, xy=None):
     x, y = xy if xy is not None else monitor.pose[:2]
     goal = Pose()
     goal.position.x, goal.position.y = x, y
-    goal.orientation.z, goal.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
+    _x, _y, goal.orientation.z, goal.orientation.w = yaw_to_quat(yaw)
     rospy.wait_for_service("/rbd_pos_controller/set_position", 10.0)
     rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)(pose=goal)
     turned = wait_for(lambda: abs(math.sin((monitor.pose[2] - yaw) / 2.0)) < 0.03

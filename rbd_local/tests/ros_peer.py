@@ -10,6 +10,7 @@ import sys
 
 import rospy
 from rbd_msgs.msg import PathQueue
+from rbd_msgs.msg import PosControllerStatus as Status
 from std_msgs.msg import Header, String
 from std_srvs.srv import SetBool, SetBoolResponse
 
@@ -23,7 +24,7 @@ def main():
 
     def em_stop(req):
         say("EMSTOP %s" % req.data)
-        status.publish(String(data="emergency" if req.data else "idle"))
+        status.publish(String(data=Status.EMERGENCY if req.data else Status.IDLE))
         return SetBoolResponse(success=True, message="engaged" if req.data else "released")
 
     status = rospy.Publisher("/rbd_pos_controller/status", String, queue_size=1, latch=True)
@@ -32,7 +33,7 @@ def main():
     rospy.Subscriber("/rbd_gestrec/gesture", String, lambda m: say("GESTURE %s" % m.data))
     rospy.Subscriber("/rbd_local/heartbeat", Header, lambda m: say("HEARTBEAT %d" % m.seq))
     rospy.Service("/rbd_controller/em_stop", SetBool, em_stop)
-    status.publish(String(data="idle"))
+    status.publish(String(data=Status.IDLE))
     state.publish(String(data="WAITING_FOR_GESTURE"))
     queue.publish(PathQueue(command="walk", names=["walk: to (0.6, 0)", "walk: back"]))
     say("READY")

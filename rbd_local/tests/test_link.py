@@ -4,7 +4,7 @@ import threading
 import time
 
 import pytest
-from rbd_testkit import wait_for
+from rbd_testkit import stays_unchanged, wait_for
 
 from rbd_local.link import (
     EM_STOP_SERVICE,
@@ -125,7 +125,8 @@ def test_reconnects_after_link_loss_and_bridge_restart(fake_bridge):
             assert wait_for(lambda: got["status"][-1:] == ["collision"])
             link.send_gesture("wiggle")
             assert restarted.wait_for(lambda: restarted.published_on(GESTURE_TOPIC) == [{"data": "wiggle"}])
-            time.sleep(0.3)
+            # "spin" was queued before "wiggle" on the one ordered connection: had it been sent late,
+            # it would have arrived first. wiggle's arrival is the proof; no waiting for nothing.
             assert {"data": "spin"} not in restarted.published_on(GESTURE_TOPIC)
             assert link.dropped_gestures >= 1
         finally:
@@ -163,18 +164,29 @@ def test_bad_arguments():
         link.send_gesture("")
 
 
-def test_retrying_does_not_pile_up_twisted_log_observers():
+def test_retrying_does_not_pile_up_twisted_log_observers(monkeypatch):
     from fake_bridge import FakeBridge
     from twisted.python import log
 
+    from rbd_local.link import connection
+
+    attempts = []
+    real = connection.open_client
+
+    def counted(*args, **kw):
+        attempts.append(1)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(connection, "open_client", counted)
     b = FakeBridge().start()
     port = b.port
     b.stop()
     link = RobotLink("127.0.0.1", port, retry_s=0.05, connect_timeout_s=0.1).start()
     try:
-        time.sleep(0.5)
+        assert wait_for(lambda: len(attempts) >= 3, 10.0), "no connection attempts"
         before = len(log.theLogPublisher.observers)
-        time.sleep(1.5)  # ~10 more failed attempts
+        n = len(attempts)
+        assert wait_for(lambda: len(attempts) >= n + 10, 20.0), "not 10 more attempts"
         assert len(log.theLogPublisher.observers) <= before
     finally:
         link.stop()
@@ -195,6 +207,7 @@ class SilentRelay:
         self.listener.listen(8)
         self.port = self.listener.getsockname()[1]
         self.sockets = []
+        self.swallowed = 0  # chunks dropped while silent
         threading.Thread(target=self._accept, daemon=True).start()
 
     def _accept(self):
@@ -224,11 +237,13 @@ class SilentRelay:
                     except OSError:
                         pass
                 return
-            if not self.silent.is_set():
-                try:
-                    dst.sendall(data)
-                except OSError:
-                    return
+            if self.silent.is_set():
+                self.swallowed += 1
+                continue
+            try:
+                dst.sendall(data)
+            except OSError:
+                return
 
     def close(self):
         self.listener.close()
@@ -246,7 +261,8 @@ def test_silent_link_is_dropped_by_keepalive_and_stale_estop_never_arrives(fake_
                      on_connection=got["conn"].append).start()
     try:
         assert link.wait_connected(30)
-        time.sleep(5.0)  # answered pings keep a quiet but healthy link up
+        # answered pings keep a quiet but healthy link up: six pings (5 s at one per second) on it
+        assert wait_for(lambda: link.keepalive.pings_sent >= 6, 20.0), "the keepalive sent no pings"
         assert link.connected and got["conn"] == [True]
         relay.silent.set()
         t0 = time.monotonic()
@@ -258,19 +274,21 @@ def test_silent_link_is_dropped_by_keepalive_and_stale_estop_never_arrives(fake_
         assert wait_for(lambda: got["conn"][-1:] == [False], timeout=10.0)  # the app is told
         relay.silent.clear()  # the WLAN is back: a fresh connection, the old request is gone
         assert link.wait_connected(30)
-        time.sleep(1.0)
+        # proof that the new connection delivers calls: a release, answered; the stale engage
+        # written into the silent connection would have come before it
+        ok, msg = link.em_stop(False, timeout=10.0)
+        assert ok, msg
+        assert (EM_STOP_SERVICE, {"data": False}) in fake_bridge.service_calls
         assert (EM_STOP_SERVICE, {"data": True}) not in fake_bridge.service_calls
     finally:
         link.stop()
         relay.close()
 
 
-def _assert_stays_connected(link, seconds, during):
-    """The link reports connected at every 50 ms for ``seconds`` (``during``: what is going on)."""
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < seconds:
-        assert link.connected, "a healthy link was dropped %.1f s into %s" % (time.monotonic() - t0, during)
-        time.sleep(0.05)
+def _assert_stays_connected(link, seconds, during, began):
+    """The link stays up (same connection) for ``seconds`` after ``began()`` proves ``during`` started."""
+    stays_unchanged(lambda: (link.connected, link.connect_count), began, hold=seconds, timeout=10.0,
+                    what="the link's connection", proof="the start of " + during)
 
 
 def test_a_stall_of_the_laptop_is_not_taken_for_a_silent_robot(fake_bridge):
@@ -284,9 +302,15 @@ def test_a_stall_of_the_laptop_is_not_taken_for_a_silent_robot(fake_bridge):
                      on_connection=got["conn"].append).start()
     try:
         assert link.wait_connected(30)
-        time.sleep(1.0)  # pings answered
-        reactor.callFromThread(time.sleep, 5.0)  # the reactor stalls for 2.5 keepalives
-        _assert_stays_connected(link, 8.0, "a stall of the laptop")
+        assert wait_for(lambda: link.keepalive.pings_sent >= 2 and link.keepalive.unanswered is None, 10.0)
+        stalled = threading.Event()
+
+        def stall():
+            stalled.set()
+            time.sleep(5.0)  # the reactor stalls for 2.5 keepalives
+
+        reactor.callFromThread(stall)
+        _assert_stays_connected(link, 8.0, "a stall of the laptop", stalled.is_set)
         assert got["conn"] == [True] and link.connect_count == 1
     finally:
         link.stop()
@@ -306,21 +330,20 @@ def test_a_stall_of_the_whole_process_ending_just_before_the_verdict_keeps_the_l
                      on_connection=got["conn"].append).start()
     try:
         assert link.wait_connected(30)
-        time.sleep(1.0)  # pings answered
-        assert link._unanswered is None
+        assert wait_for(lambda: link.keepalive.pings_sent >= 2 and link.keepalive.unanswered is None, 10.0)
         bridge_stalled = threading.Event()
 
         def stall_bridge():
             bridge_stalled.set()
-            while link._unanswered is None:  # a ping goes out and stays unanswered
+            while link.keepalive.unanswered is None:  # a ping goes out and stays unanswered
                 time.sleep(0.005)
-            sent = link._unanswered
+            sent = link.keepalive.unanswered
             reactor.callFromThread(time.sleep, max(0.0, sent + keepalive - 0.2 - time.monotonic()))
             time.sleep(max(0.0, sent + keepalive + 0.5 - time.monotonic()))
 
         fake_bridge._loop.call_soon_threadsafe(stall_bridge)
         assert bridge_stalled.wait(10)
-        _assert_stays_connected(link, keepalive + 3.0, "a stall of the whole process")
+        _assert_stays_connected(link, keepalive + 3.0, "a stall of the whole process", bridge_stalled.is_set)
         assert got["conn"] == [True] and link.connect_count == 1
     finally:
         link.stop()
@@ -333,8 +356,10 @@ def test_keepalive_off_keeps_a_silent_link_open(fake_bridge):
     try:
         assert link.wait_connected(30)
         relay.silent.set()
-        time.sleep(7.0)
-        assert link.connected
+        # proof the silence bites: the link's heartbeats (2 Hz) are being swallowed
+        n = relay.swallowed
+        stays_unchanged(lambda: (link.connected, link.connect_count), lambda: relay.swallowed > n + 2, hold=7.0,
+                        what="the link's connection", proof="heartbeats swallowed by the silent relay")
     finally:
         relay.silent.clear()
         link.stop()

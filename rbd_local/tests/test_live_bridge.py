@@ -97,9 +97,7 @@ def test_link_through_the_real_bridge(ros_bridge):
     try:
         assert link.wait_connected(20)
         # latched state arrives through the allow-listed subscriptions
-        deadline = time.monotonic() + 15
-        while time.monotonic() < deadline and not (got["status"] and got["state"] and got["moves"]):
-            time.sleep(0.05)
+        wait_for(lambda: got["status"] and got["state"] and got["moves"], 15.0)
         assert got["status"][:1] == ["idle"] and got["state"][:1] == ["WAITING_FOR_GESTURE"]
         assert got["moves"][:1] == [["walk: to (0.6, 0)", "walk: back"]]
         # a gesture published by the laptop arrives in ROS (retry: the bridge's advertise may lag)
@@ -112,9 +110,7 @@ def test_link_through_the_real_bridge(ros_bridge):
         # the e-stop reaches the controller and its answer comes back
         assert link.em_stop(True, timeout=10) == (True, "engaged")
         assert peer.wait(lambda x: x == "EMSTOP True", 5)
-        deadline = time.monotonic() + 10
-        while time.monotonic() < deadline and got["status"][-1:] != ["emergency"]:
-            time.sleep(0.05)
+        wait_for(lambda: got["status"][-1:] == ["emergency"], 10.0)
         assert got["status"][-1] == "emergency"
     finally:
         link.stop()
@@ -135,13 +131,15 @@ def test_gesture_reaches_rbd_gestrec_and_estop_reaches_rbd_controller(ros_system
         assert link.wait_connected(20)
         assert _wait_value(states, "EMERGENCY_STOP", 30), states  # power-up state, latched
         # While the e-stop holds, the controller does not take gestures: rbd_gestrec keeps ours.
-        deadline = time.monotonic() + 20
-        got = ""
-        while time.monotonic() < deadline and "walk" not in got:
+        last = {"got": ""}
+
+        def kept_walk():
             link.send_gesture("walk")
-            time.sleep(0.5)
-            got = ros_system.run(["rosservice", "call", "/rbd_gestrec/get_last_gesture"]).stdout
-        assert 'command: "walk"' in got, got
+            last["got"] = ros_system.run(["rosservice", "call", "/rbd_gestrec/get_last_gesture"]).stdout
+            return "walk" in last["got"]
+
+        wait_for(kept_walk, 20.0, step=0.5)
+        assert 'command: "walk"' in last["got"], last["got"]
         # release (GUI's second click) and engage again, through the bridge to the real controller
         ok, msg = link.em_stop(False, timeout=10)
         assert ok, msg
@@ -191,17 +189,10 @@ def test_tricks_and_the_robot_camera_through_the_real_bridge(ros_system, hand_ph
     try:
         assert link.wait_connected(20)
         want = {name: [s["name"] for s in steps] for name, steps in tricks.items()}
-        deadline = time.monotonic() + 30
-        got = None
-        while got != want and time.monotonic() < deadline:
-            # roslaunch sets the YAML's dict one leaf at a time: a read while it is still
-            # loading sees a part of the tricks (or none), so read until the load is complete
-            try:
-                got = link.get_tricks(5.0)
-            except ValueError:  # rbd_navigation still starting: its parameter is not set yet
-                pass
-            if got != want:
-                time.sleep(0.3)
+        # roslaunch sets the YAML's dict one leaf at a time: a read while it is still loading sees
+        # a part of the tricks (or none; ValueError while rbd_navigation starts), so read until
+        # the load is complete
+        got = wait_for(lambda: link.get_tricks(5.0) == want and want, 30.0, step=0.3, ignore=(ValueError,))
         assert got == want
     finally:
         link.stop()

@@ -26,6 +26,7 @@ import time
 
 import analysis  # tests/experiments is on the path (experiments.py runs these)
 
+from rbd_geometry.rotation import yaw_of, yaw_to_quat  # noqa: E402
 from rbd_testkit import wait_for
 
 HERE_NOTE = "issue 17"
@@ -75,7 +76,7 @@ class Watch:
 
     def _on_truth(self, msg):
         p, q, tw = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist.linear
-        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        yaw = yaw_of(q)
         c, s = math.cos(yaw), math.sin(yaw)  # the twist is in the body frame
         with self.lock:
             self.truth.append((time.monotonic(), p.x, p.y, yaw, math.hypot(tw.x, tw.y), c * tw.x - s * tw.y,
@@ -152,7 +153,7 @@ class Operator:
 
         goal = Pose()
         goal.position.x, goal.position.y = x, y
-        goal.orientation.z, goal.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
+        _x, _y, goal.orientation.z, goal.orientation.w = yaw_to_quat(yaw)
         rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)(pose=goal)
 
         def there():

@@ -37,17 +37,14 @@ from rbd_testkit import RosEnv, free_port  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from rbd_geometry.rotation import yaw_of, yaw_to_quat  # noqa: E402
+
 DPI = 80
 
 
 def log(msg):
     """One progress line."""
     print("[experiments] %s" % msg, flush=True)
-
-
-def yaw_of(q):
-    """Heading [rad] of a quaternion message."""
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
 # The kit's wait_for, polling at 50 Hz.
@@ -500,6 +497,7 @@ def exp_reaction(ctx):
     from std_srvs.srv import SetBool
 
     from rbd_bringup.demo_report import percentile, reaction_times
+    from rbd_msgs.msg import PosControllerStatus as Status
     from rbd_msgs.srv import SetPosition
 
     sys.path.insert(0, os.path.join(ROOT, "tools"))
@@ -528,12 +526,12 @@ def exp_reaction(ctx):
         trials = 2 if ctx.short else 10
         done = 0
         for i in range(trials):
-            if not wait_for(lambda: status["v"] == "idle" and monitor.state == "WAITING_FOR_GESTURE", 20.0):
+            if not wait_for(lambda: status["v"] == Status.IDLE and monitor.state == "WAITING_FOR_GESTURE", 20.0):
                 log("reaction trial %d: robot not idle after 20 s %s" % (i + 1, where()))
             x, y, yaw = monitor.pose
             goal = Pose()
             goal.position.x, goal.position.y = x + 1.5 * math.cos(yaw), y + 1.5 * math.sin(yaw)
-            goal.orientation.z, goal.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
+            _x, _y, goal.orientation.z, goal.orientation.w = yaw_to_quat(yaw)
             if not set_position(pose=goal).accepted:
                 raise RuntimeError("trial %d: goal refused %s" % (i + 1, where()))
             if not wait_for(lambda: monitor.commands and monitor.commands[-1][1] > 0.1, 10.0):
@@ -548,14 +546,14 @@ def exp_reaction(ctx):
             log("reaction trial %d: %s" % (i + 1, "stopped" if stopped else "NOT stopped"))
             done += int(stopped)
             # Back to the start of this trial (short way: no pre-rotation).
-            wait_for(lambda: monitor.state == "WAITING_FOR_GESTURE" and status["v"] == "idle", 10.0)
+            wait_for(lambda: monitor.state == "WAITING_FOR_GESTURE" and status["v"] == Status.IDLE, 10.0)
             back = Pose()
             back.position.x, back.position.y = goal.position.x - 1.5 * math.cos(yaw), goal.position.y - 1.5 * math.sin(
                 yaw)
             back.orientation = goal.orientation
             set_position(pose=back)
-            wait_for(lambda: status["v"] == "running", 3.0)
-            wait_for(lambda: status["v"] == "idle", 15.0)
+            wait_for(lambda: status["v"] == Status.RUNNING, 3.0)
+            wait_for(lambda: status["v"] == Status.IDLE, 15.0)
         time.sleep(0.3)
         with monitor.lock:
             times = reaction_times(monitor.onsets, monitor.commands)

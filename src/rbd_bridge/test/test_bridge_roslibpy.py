@@ -67,15 +67,14 @@ def call_raw(ros, frame, timeout=10):
 
 def keep_publishing(topic, make_msg, until, timeout=10.0, period=0.1):
     """Publish until the predicate holds (subscriptions connect asynchronously in ROS)."""
-    deadline = time.monotonic() + timeout
-    i = 0
-    while time.monotonic() < deadline:
-        topic.publish(roslibpy.Message(make_msg(i)))
-        i += 1
-        if until():
-            return True
-        time.sleep(period)
-    return False
+    sent = [0]
+
+    def publish_then_check():
+        topic.publish(roslibpy.Message(make_msg(sent[0])))
+        sent[0] += 1
+        return until()
+
+    return bool(wait_until(publish_then_check, timeout, period))
 
 
 def test_advertise_publish_subscribe_round_trip_through_ros(roslibpy_client):
@@ -96,10 +95,11 @@ def test_publish_without_advertise_infers_the_type(roslibpy_client):
     ros = roslibpy_client()
     inbox = Inbox()
     roslibpy.Topic(ros, "/echo/out", "std_msgs/String").subscribe(inbox)
-    deadline = time.monotonic() + 10
-    while {"data": "no advertise"} not in inbox.items and time.monotonic() < deadline:
+    def sent_and_echoed():
         ros.send_on_ready(roslibpy.Message({"op": "publish", "topic": "/echo/in", "msg": {"data": "no advertise"}}))
-        time.sleep(0.1)
+        return {"data": "no advertise"} in inbox.items
+
+    wait_until(sent_and_echoed, 10, 0.1)
     assert {"data": "no advertise"} in inbox.items, inbox.items[:3]
 
 

@@ -259,10 +259,11 @@ def test_topic_pubsub(roslibpy_client):
             done.set()
 
     listener.subscribe(receive)
-    deadline = time.monotonic() + 10
-    while not done.is_set() and time.monotonic() < deadline:
+    def published_and_heard():
         publisher.publish(roslibpy.Message({"data": "hello world"}))
-        time.sleep(0.1)
+        return done.is_set()
+
+    wait_until(published_and_heard, 10, 0.1)
     publisher.unadvertise()
     assert done.is_set() and all(m == {"data": "hello world"} for m in got[:3])
 

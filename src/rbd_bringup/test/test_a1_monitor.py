@@ -6,7 +6,7 @@ import time
 import lcm
 import pytest
 
-from rbd_bringup.a1_monitor import HighCmdMonitor, command_speed, command_velocity, stop_delay, yaw_of
+from rbd_bringup.a1_monitor import HighCmdMonitor, command_speed, command_velocity, stop_delay
 from rbd_sim import unitree_wire as wire
 from rbd_testkit import wait_for
 from rbd_wire_oracle import unitree as vendor
@@ -93,11 +93,3 @@ def test_stop_delay():
     assert stop_delay(s + [(0.5, 0.2)], 0.0, 1.0, 1e-6) is None  # moving again: not stopped
     assert stop_delay(s, 2.0, 3.0, 1e-6) is None  # no samples
     assert stop_delay([(0.0, 0.3), (0.1, 0.0), (0.2, 0.3), (0.3, 0.0)], 0.0, 1.0, 1e-6) == pytest.approx(0.3)
-
-
-def test_yaw():
-    class Q:
-        x = y = 0.0
-        z, w = 0.7071067811865476, 0.7071067811865476
-
-    assert yaw_of(Q) == pytest.approx(1.5707963, abs=1e-6)

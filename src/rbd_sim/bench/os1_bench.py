@@ -16,9 +16,9 @@ import time
 
 import numpy as np
 
+from rbd_geometry.rotation import rpy_to_matrix
 from rbd_sim import os1
-from rbd_sim.transforms import rpy_to_matrix
-from rbd_sim.world import load_world, resolve_world_path
+from rbd_sim.world_file import load_world, resolve_world_path
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 WORLDS = os.path.join(HERE, "..", "worlds")

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
+from rbd_geometry.rotation import rpy_to_matrix
 from rbd_sim.imu import STANDARD_GRAVITY, AccelerationEstimator, ImuModel
-from rbd_sim.transforms import rpy_to_matrix
 from rbd_sim.zed2 import Zed2Model
 
 

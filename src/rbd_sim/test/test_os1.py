@@ -7,9 +7,10 @@ import struct
 import numpy as np
 import pytest
 
+from rbd_geometry.rotation import rpy_to_matrix
 from rbd_sim import os1
-from rbd_sim.transforms import rpy_to_matrix
-from rbd_sim.world import Box, Cylinder, World
+from rbd_sim.shapes import Box, Cylinder
+from rbd_sim.world import World
 
 META = os1.load_metadata(os1.DEFAULT_METADATA)
 LEVEL = (np.eye(3), np.array([0.0, 0.0, 0.35]))
@@ -180,7 +181,7 @@ def test_motion_distortion_forward_and_turning():
 
 
 def test_mount_pose_of_a_calibration_file_entry():
-    from rbd_sim.transforms import mount_pose
+    from rbd_sim.mounts import mount_pose
 
     entry = {"parent": "base_link", "xyz": [-0.08, 0, 0.07], "rpy": [0, 0.1, 3]}
     assert mount_pose(entry, "os_sensor") == [-0.08, 0.0, 0.07, 0.0, 0.1, 3.0]

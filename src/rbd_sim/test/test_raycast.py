@@ -6,10 +6,12 @@ import os
 import numpy as np
 import pytest
 
+from rbd_geometry.rotation import rpy_to_matrix
 from rbd_sim import os1
 from rbd_sim.raycast import CEILING_ID, FIRST_PRIMITIVE_ID, FLOOR_ID, NO_HIT, Raycaster
-from rbd_sim.transforms import rpy_to_matrix
-from rbd_sim.world import Box, Cylinder, World, load_world
+from rbd_sim.shapes import Box, Cylinder
+from rbd_sim.world import World
+from rbd_sim.world_file import load_world
 
 WORLDS_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "worlds")
 

@@ -22,12 +22,13 @@ import time
 import customtkinter as ctk
 
 from rbd_local.gui import drain
+from rbd_local.robot_names import STATUS_COLLISION, STATUS_EMERGENCY, STATUS_IDLE, STATUS_RUNNING
 
 STATUS_COLOURS = {
-    "emergency": "#c62828",  # red
-    "collision": "#ef6c00",  # orange
-    "idle": "#1565c0",  # blue
-    "running": "#2e7d32",  # green
+    STATUS_EMERGENCY: "#c62828",  # red
+    STATUS_COLLISION: "#ef6c00",  # orange
+    STATUS_IDLE: "#1565c0",  # blue
+    STATUS_RUNNING: "#2e7d32",  # green
 }
 #: Active collision avoidance (issue 17): the main controller's avoidance states get their own
 #: label (the state) and colour over the position controller's status; the e-stop still wins.
@@ -197,7 +198,7 @@ class OperatorGui:
 
     def _show_status(self, status: str) -> None:
         self.status = status
-        if self.state in AVOIDANCE_COLOURS and status != "emergency":
+        if self.state in AVOIDANCE_COLOURS and status != STATUS_EMERGENCY:
             self.state_label.configure(text=self.state, fg_color=AVOIDANCE_COLOURS[self.state])
             return
         colour = STATUS_COLOURS.get(status, UNKNOWN_COLOUR)

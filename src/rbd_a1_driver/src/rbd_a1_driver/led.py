@@ -10,14 +10,16 @@ controller flag, lost signal) shows red whatever the status says: that is what t
 
 from typing import Tuple
 
+from rbd_msgs.msg import PosControllerStatus as Status
+
 RGB = Tuple[int, int, int]
 
 #: Status (``/rbd_pos_controller/status``) -> colour, the GUI's hex colours as bytes.
 STATUS_RGB = {
-    "emergency": (0xC6, 0x28, 0x28),  # red     #c62828
-    "collision": (0xEF, 0x6C, 0x00),  # orange  #ef6c00
-    "idle": (0x15, 0x65, 0xC0),  # blue    #1565c0
-    "running": (0x2E, 0x7D, 0x32),  # green   #2e7d32
+    Status.EMERGENCY: (0xC6, 0x28, 0x28),  # red     #c62828
+    Status.COLLISION: (0xEF, 0x6C, 0x00),  # orange  #ef6c00
+    Status.IDLE: (0x15, 0x65, 0xC0),  # blue    #1565c0
+    Status.RUNNING: (0x2E, 0x7D, 0x32),  # green   #2e7d32
 }
 UNKNOWN_RGB = (0x61, 0x61, 0x61)  # grey #616161: no status yet / unknown
 LED_COUNT = 4
@@ -34,7 +36,7 @@ def led_colour(status: str, estopped: bool) -> RGB:
         (r, g, b), 0..255.
     """
     if estopped:
-        return STATUS_RGB["emergency"]
+        return STATUS_RGB[Status.EMERGENCY]
     return STATUS_RGB.get(status, UNKNOWN_RGB)
 
 

@@ -6,8 +6,8 @@ packets are decoded with the robot side's description of the wire (``rbd_sim.uni
 mock A1's), not with the driver's own layout module. This module is ROS-free; the clock and the
 sink for the samples are the caller's.
 
-Also holds the small helpers the rbd_bringup rostests share (``yaw_of``, ``report_fault_result``);
-waiting comes from the test kit (``rbd_testkit.wait_for``).
+Also holds a small helper the rbd_bringup rostests share (``report_fault_result``); waiting comes
+from the test kit (``rbd_testkit.wait_for``), a yaw from ``rbd_geometry.rotation``.
 """
 
 import json
@@ -137,11 +137,6 @@ def stop_delay(samples: List[Sample], t0: float, t1: float, still: float) -> Opt
     if stop is None:
         return None
     return max(0.0, stop - t0)
-
-
-def yaw_of(q: object) -> float:
-    """Yaw [rad] of a quaternion with x, y, z, w attributes (geometry_msgs/Quaternion)."""
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
 def report_fault_result(result: Dict[str, object]) -> str:

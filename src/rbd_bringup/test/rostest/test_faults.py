@@ -34,6 +34,7 @@ from std_srvs.srv import SetBool
 
 import rbd_testkit
 from rbd_bringup import a1_monitor
+from rbd_geometry.rotation import yaw_of, yaw_to_quat
 from rbd_msgs.srv import PressRemote
 from rbd_testkit.ros import run_rostest
 from rbd_wire_oracle import unitree as vendor
@@ -174,7 +175,7 @@ class Monitor:
         p, q = msg.pose.pose.position, msg.pose.pose.orientation
         with self.lock:
             self.truth.append((time.monotonic(), speed_of_twist(msg.twist.twist)))
-            self.pose = (p.x, p.y, math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z)))
+            self.pose = (p.x, p.y, yaw_of(q))
             self.poses.append((time.monotonic(),) + self.pose)
 
     def on_state(self, msg):
@@ -678,7 +679,7 @@ class Faults(unittest.TestCase):
         m = self.m
         goal = Pose()
         goal.position.x, goal.position.y = x, y
-        goal.orientation.z, goal.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
+        _x, _y, goal.orientation.z, goal.orientation.w = yaw_to_quat(yaw)
         rospy.ServiceProxy("/rbd_pos_controller/set_position", SetPosition)(pose=goal)
 
         def there():

@@ -31,7 +31,7 @@ from test_fault_zed2_jump import Zed2JumpFault, Zed2Relay
 from visualization_msgs.msg import Marker
 
 import rbd_testkit
-from rbd_bringup.a1_monitor import yaw_of
+from rbd_geometry.rotation import yaw_of
 from rbd_testkit.ros import RosoutWatcher, run_rostest
 
 EXPECTED_NODES = [

@@ -1,6 +1,5 @@
 #!/usr/bin/env python3
 """rbd_lidar on the simulator: ground truth from rbd_sim, body poses through the driver."""
-import math
 import sys
 import threading
 import time
@@ -10,6 +9,7 @@ import rospy
 from nav_msgs.msg import Odometry
 from std_srvs.srv import SetBool, SetBoolResponse
 
+from rbd_geometry.rotation import quat_to_rpy
 from rbd_msgs.msg import CollisionState
 from rbd_msgs.srv import PlaceObstacle, SetBodyPose
 from rbd_testkit import wait_for
@@ -68,9 +68,7 @@ class SimLidarTest(unittest.TestCase):
         wait_for(clear, timeout, what="rbd_lidar reporting clear", abort=rospy.is_shutdown)
 
     def _pitch_roll(self) -> tuple:
-        q = self.gt.pose.pose.orientation
-        roll = math.atan2(2 * (q.w * q.x + q.y * q.z), 1 - 2 * (q.x * q.x + q.y * q.y))
-        pitch = math.asin(max(-1.0, min(1.0, 2 * (q.w * q.y - q.z * q.x))))
+        roll, pitch, _yaw = quat_to_rpy(self.gt.pose.pose.orientation)
         return roll, pitch
 
     def test_floor_in_every_body_pose(self) -> None:
@@ -165,14 +163,16 @@ class SimLidarTest(unittest.TestCase):
         x = self.gt.pose.pose.position.x
         y = self.gt.pose.pose.position.y
         t_floor = rospy.get_time()
-        time.sleep(1.0)
+        wait_for(lambda: sum(1 for t, _ in list(self.states) if t > t_floor) >= 10, 10.0,
+                 what="10 zone states of the floor alone", abort=rospy.is_shutdown)
         with self.lock:
             floor_only = [s for t, s in self.states if t > t_floor]
         self.assertGreater(len(floor_only), 5)
         self.assertEqual([list(s.points) for s in floor_only if s.collision], [], "floor alone tripped the zone")
         t0 = rospy.get_time()
         self.assertTrue(self.place(name="low", x=x + 0.75, y=y, radius=0.15, height=0.2, remove=False).success)
-        time.sleep(1.0)
+        wait_for(lambda: sum(1 for t, _ in list(self.states) if t > t0 + 0.25) >= 7, 10.0,
+                 what="7 zone states with the low obstacle", abort=rospy.is_shutdown)
         with self.lock:
             late = [s for t, s in self.states if t > t0 + 0.25]
         self.assertTrue(self.place(name="low", remove=True).success)

@@ -28,6 +28,8 @@ from rbd_testkit.ros import run_rostest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import synthetic_cloud  # noqa: E402
 
+from rbd_geometry.rotation import rpy_to_quat
+
 PERIOD = 0.1
 
 
@@ -133,6 +135,14 @@ class SyntheticLidarTest(unittest.TestCase):
                 return
         self.fail("state never settled to collision=%s in mode %s" % (collision, mode))
 
+    def stays_one_call(self, n_calls, n_states):
+        """After the first collision service call since ``n_calls``, no other for ``n_states`` more states."""
+        self.wait_for(lambda: self.calls[n_calls:], 5.0, "a collision service call")
+        n = len(self.states)
+        rbd_testkit.stays_unchanged(lambda: [d for _, d in self.calls[n_calls:]],
+                                    lambda: len(self.states) >= n + n_states, hold=0.0, timeout=10.0,
+                                    what="collision service calls", proof="%d more states" % n_states)
+
     def set_mode(self, mode):
         with self.lock:
             type(self).mode = mode
@@ -226,7 +236,8 @@ class SyntheticLidarTest(unittest.TestCase):
         self.assertGreater(st.points[CollisionState.FRONT], 5)
         self.assertLess(st.min_distance[CollisionState.FRONT], 0.35)
         self.assertEqual(st.speed_scale, 0.0)
-        time.sleep(1.5)
+        # one call while the person stays: proven over 15 more states (1.5 s of clouds), not a sleep
+        self.stays_one_call(n_calls, 15)
         with self.lock:
             after = [d for _, d in self.calls[n_calls:]]
             self.assertEqual(after, [True])
@@ -239,7 +250,7 @@ class SyntheticLidarTest(unittest.TestCase):
             clear_stamps = [s for s, m in self.published[n_pub:] if m == "clear"][:4]
         flags = [self.state_for(s).collision for s in clear_stamps]
         self.assertEqual(flags, [True, True, False, False])
-        time.sleep(1.0)
+        self.stays_one_call(n_calls, 10)
         with self.lock:
             self.assertEqual([d for _, d in self.calls[n_calls:]], [False])
 
@@ -323,8 +334,8 @@ class SyntheticLidarTest(unittest.TestCase):
         self.assertGreater(st.points[CollisionState.BACK], 5)
         odom = Odometry()
         odom.header.frame_id = "odom"
-        odom.pose.pose.orientation.y = math.sin(self.pitch / 2)
-        odom.pose.pose.orientation.w = math.cos(self.pitch / 2)
+        o = odom.pose.pose.orientation
+        o.x, o.y, o.z, o.w = rpy_to_quat(0.0, self.pitch, 0.0)
         type(self).odom = odom
         self.settle("tilted", False)
         type(self).odom = None

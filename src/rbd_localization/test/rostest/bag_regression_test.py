@@ -14,6 +14,7 @@ import rospy
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
 
+from rbd_geometry.rotation import yaw_of
 from rbd_testkit.ros import run_rostest
 
 
@@ -60,7 +61,7 @@ class BagRegressionTest(unittest.TestCase):
             self.assertIn("pose", last, "no /rbd_localization/pose")
             pose = last["pose"].pose
         q = pose.orientation
-        yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+        yaw = yaw_of(q)
         err = math.hypot(pose.position.x - final_x, pose.position.y - final_y)
         dyaw = abs(math.atan2(math.sin(yaw - final_yaw), math.cos(yaw - final_yaw)))
         rospy.loginfo("bag final error %.3f m %.2f deg", err, math.degrees(dyaw))

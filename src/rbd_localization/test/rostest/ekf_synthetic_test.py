@@ -18,6 +18,7 @@ from geometry_msgs.msg import PoseWithCovarianceStamped, TransformStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
 
+from rbd_geometry.rotation import yaw_to_quat
 from rbd_testkit import wait_for
 from rbd_testkit.ros import run_rostest
 
@@ -36,11 +37,6 @@ def truth(t):
     """Return the true (x, y, yaw) of base_link at t seconds after start."""
     yaw = W * t
     return V / W * math.sin(yaw), V / W * (1.0 - math.cos(yaw)), yaw
-
-
-def quat_yaw(yaw):
-    """Return (x, y, z, w) of a rotation about z."""
-    return 0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)
 
 
 class Feeder:
@@ -96,7 +92,7 @@ class Feeder:
         msg.header.frame_id = "map"
         msg.pose.pose.position.x = x + self.rng.gauss(0.0, 0.003)
         msg.pose.pose.position.y = y + self.rng.gauss(0.0, 0.003)
-        q = quat_yaw(yaw + self.rng.gauss(0.0, 0.002))
+        q = yaw_to_quat(yaw + self.rng.gauss(0.0, 0.002))
         msg.pose.pose.orientation.x, msg.pose.pose.orientation.y = q[0], q[1]
         msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = q[2], q[3]
         for i, var in zip((0, 7, 14, 21, 28, 35), (1e-4, 1e-4, 1e-4, 1e-5, 1e-5, 1e-5)):
@@ -119,7 +115,7 @@ class EkfSyntheticTest(unittest.TestCase):
         mount.header.frame_id = "base_link"
         mount.child_frame_id = "os_sensor"
         mount.transform.translation.z = 0.1
-        q = quat_yaw(MOUNT_YAW)
+        q = yaw_to_quat(MOUNT_YAW)
         mount.transform.rotation.z, mount.transform.rotation.w = q[2], q[3]
         imu_tf = TransformStamped()
         imu_tf.header.stamp = mount.header.stamp

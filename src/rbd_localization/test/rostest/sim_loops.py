@@ -23,12 +23,9 @@ import rospy
 from geometry_msgs.msg import PoseStamped, Twist
 from nav_msgs.msg import Odometry
 
+from rbd_geometry.rotation import yaw_of
+
 VX_MAX, WZ_MAX = 0.3, 0.6  # thesis saturations (0.3 m/s, 36 deg/s)
-
-
-def yaw_of(q):
-    """Return the yaw of a geometry_msgs quaternion."""
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
 
 
 def wrap(a):

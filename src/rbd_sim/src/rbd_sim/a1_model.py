@@ -31,9 +31,9 @@ import collections
 import math
 import random
 
+from rbd_geometry.rotation import rpy_to_quat, wrap_angle
 from rbd_sim import unitree_wire as wire
 from rbd_sim.a1_legs import FOOT_RAISE, Legs
-from rbd_sim.transforms import rpy_to_quat
 
 
 class A1Config:
@@ -93,11 +93,6 @@ def _toward(value: float, target: float, max_step: float) -> float:
 
 def _clamp(value: float, limit: float) -> float:
     return max(-limit, min(limit, value))
-
-
-def wrap_angle(a: float) -> float:
-    """Wrap an angle to [-pi, pi)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 class A1Model:

@@ -92,8 +92,8 @@ class Raycaster:
             translation: Sensor origin in the world [m].
             floor_z: Floor height [m]; None for no floor.
             ceiling_z: Ceiling height [m]; None for no ceiling.
-            boxes: :class:`rbd_sim.world.Box` objects.
-            cylinders: :class:`rbd_sim.world.Cylinder` objects.
+            boxes: :class:`rbd_sim.shapes.Box` objects.
+            cylinders: :class:`rbd_sim.shapes.Cylinder` objects.
             max_range: Distances beyond this are no hit [m].
             motion: None, or (velocity, yaw_rate, column_times): the sensor moves with velocity
                 (world frame [m/s]) and turns at yaw_rate about the world z axis [rad/s] while

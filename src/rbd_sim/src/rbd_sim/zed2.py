@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from rbd_sim.transforms import wrap_angle
+from rbd_geometry.rotation import wrap_angle
 
 
 class ZedPose:

@@ -14,6 +14,8 @@ import numpy as np
 import rospkg
 import rospy
 
+from rbd_testkit import wait_for
+
 # ouster-ros "original" point: offsets per INTERFACES.md section 1.
 DECODE = np.dtype(
     {
@@ -64,27 +66,24 @@ class Latest:
             self.msgs.append((time.monotonic(), msg))
             del self.msgs[: -self.keep]
 
-    def wait_new(self, after, timeout=20.0):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not rospy.is_shutdown():
+    def _first(self, keep, timeout, what):
+        def found():
             with self.lock:
-                for _t, m in self.msgs:
-                    if m.header.stamp > after:
-                        return m
-            time.sleep(0.02)
-        raise AssertionError("no message on %s after %s within %.0f s" % (self.sub.name, after.to_sec(), timeout))
+                return next((m for t, m in self.msgs if keep(t, m)), None)
+
+        m = wait_for(found, timeout, 0.02, abort=rospy.is_shutdown)
+        if m is None:
+            raise AssertionError("no message on %s %s within %.0f s" % (self.sub.name, what, timeout))
+        return m
+
+    def wait_new(self, after, timeout=20.0):
+        """First message stamped after ``after``."""
+        return self._first(lambda _t, m: m.header.stamp > after, timeout, "after %s" % after.to_sec())
 
     def wait_received(self, timeout=20.0):
         """First message received after this call (for headerless types)."""
         start = time.monotonic()
-        deadline = start + timeout
-        while time.monotonic() < deadline and not rospy.is_shutdown():
-            with self.lock:
-                for t, m in self.msgs:
-                    if t > start:
-                        return m
-            time.sleep(0.02)
-        raise AssertionError("no message on %s within %.0f s" % (self.sub.name, timeout))
+        return self._first(lambda t, _m: t > start, timeout, "received")
 
     def window(self, seconds):
         time.sleep(seconds)

@@ -4,7 +4,7 @@
 import rospy
 from nav_msgs.msg import Odometry
 
-from rbd_sim.transforms import rpy_to_quat
+from rbd_geometry.rotation import rpy_to_quat
 
 
 def main():

@@ -17,19 +17,13 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Bool
 
+from rbd_geometry.rotation import quat_to_rpy
 from rbd_msgs.srv import SetBodyPose
 from rbd_testkit import stays_unchanged, wait_for
 from rbd_testkit.ros import run_rostest
 
 PKG = "rbd_sim"
 RATE = 20.0  # cmd_vel rate of the test, like a controller [Hz]
-
-
-def rpy_from_quaternion(q):
-    roll = math.atan2(2 * (q.w * q.x + q.y * q.z), 1 - 2 * (q.x * q.x + q.y * q.y))
-    pitch = math.asin(max(-1.0, min(1.0, 2 * (q.w * q.y - q.z * q.x))))
-    yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-    return roll, pitch, yaw
 
 
 class GroundTruth:
@@ -39,13 +33,15 @@ class GroundTruth:
         self.lock = threading.Lock()
         self.pose = None
         self.frame = None
+        self.count = 0  # samples received: the proof that the simulation went on
         rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self._cb, queue_size=5)
 
     def _cb(self, msg):
         p = msg.pose.pose.position
         with self.lock:
-            self.pose = (p.x, p.y, p.z) + rpy_from_quaternion(msg.pose.pose.orientation)
+            self.pose = (p.x, p.y, p.z) + quat_to_rpy(msg.pose.pose.orientation)
             self.frame = (msg.header.frame_id, msg.child_frame_id)
+            self.count += 1
 
     def get(self):
         with self.lock:
@@ -123,11 +119,11 @@ class MockA1Behaviour(unittest.TestCase):
         self.fail("ground truth still moving after %.1f s" % timeout)
 
     def assert_still(self, duration, what):
-        start = self.gt.get()
-        time.sleep(duration)
-        end = self.gt.get()
-        self.assertLess(dist(start, end), 0.005, "%s: moved %.3f m" % (what, dist(start, end)))
-        self.assertLess(abs(end[5] - start[5]), 0.005, "%s: turned" % what)
+        """No motion for ``duration`` s of ground truth that keeps arriving (not just a sleep)."""
+        start, n = self.gt.get(), self.gt.count
+        stays_unchanged(lambda: dist(self.gt.get(), start) < 0.005 and abs(self.gt.get()[5] - start[5]) < 0.005,
+                        lambda: self.gt.count >= n + 5, hold=duration, what="%s: still" % what,
+                        proof="five new ground-truth samples")
 
     def test_frames(self):
         self.assertEqual(self.gt.frame, ("world", "base_link_gt"))
@@ -241,9 +237,10 @@ class MockA1Behaviour(unittest.TestCase):
         self.assertAlmostEqual(z, before[2] - 0.1, delta=0.01)
         self.assertLess(dist((x, y), before), 0.005, "body pose must not walk")
         res = call(float("nan"), 0.0, 0.0, 0.0)
-        self.assertFalse(res.success)
-        time.sleep(0.5)
-        self.assertAlmostEqual(self.gt.get()[3], 0.3, delta=0.02, msg="NaN body pose changed the body")
+        self.assertFalse(res.success)  # the driver answered: the request arrived
+        n = self.gt.count
+        stays_unchanged(lambda: abs(self.gt.get()[3] - 0.3) < 0.02, lambda: self.gt.count >= n + 5, hold=0.5,
+                        what="roll 0.3 after a NaN body pose", proof="five new ground-truth samples")
         self.assertTrue(call(0.0, 0.0, 0.0, 0.0).success)
         wait_for(lambda: posed(0.0, 0.0, 0.0), 30.0)
         self.assertAlmostEqual(self.gt.get()[3], 0.0, delta=0.02)

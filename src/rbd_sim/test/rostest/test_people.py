@@ -12,7 +12,8 @@ import rospy
 from sensor_msgs.msg import PointCloud2
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rbd_sim.world import load_world
+from rbd_sim.world_file import load_world
+from rbd_testkit import wait_for
 from rbd_testkit.ros import run_rostest
 
 
@@ -25,9 +26,7 @@ class TestPeople(unittest.TestCase):
         cls.markers = cc.Latest("/rbd_sim/obstacles", MarkerArray, keep=100)
         cls.clouds = cc.Latest("/ouster/points", PointCloud2, keep=10)
         cls.clouds.wait_new(rospy.Time(0), timeout=60.0)
-        deadline = rospy.Time.now() + rospy.Duration(20.0)
-        while not rospy.has_param("/rbd_sim/world_epoch") and rospy.Time.now() < deadline:
-            rospy.sleep(0.1)
+        wait_for(lambda: rospy.has_param("/rbd_sim/world_epoch"), 20.0, 0.1, what="/rbd_sim/world_epoch")
         cls.epoch = float(rospy.get_param("/rbd_sim/world_epoch"))
 
     def test_markers_follow_the_scripts(self):

@@ -16,7 +16,7 @@ import rospy
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import PointCloud2
 
-from rbd_sim.transforms import rpy_to_matrix, rpy_to_quat
+from rbd_geometry.rotation import rpy_to_matrix, rpy_to_quat
 from rbd_testkit.ros import run_rostest
 
 MOUNT = np.array([0.0, 0.0, 0.07])

@@ -1,0 +1,1 @@
+"""RoboDog's geometry helpers (ROS-free): see :mod:`rbd_geometry.rotation`."""
