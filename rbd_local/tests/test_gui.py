@@ -78,7 +78,7 @@ def test_state_colour_follows_published_status(app, status, colour):
     assert pump(app["root"], lambda: app["gui"].state_colour() == colour)
     assert app["gui"].state_label.cget("text") == status.upper()
     rendered = screen_pixel(app["gui"].state_label)
-    assert all(abs(a - b) <= 12 for a, b in zip(rendered, hex_rgb(colour), strict=False)), (rendered, colour)
+    assert all(abs(a - b) <= 12 for a, b in zip(rendered, hex_rgb(colour))), (rendered, colour)
 
 
 @pytest.mark.parametrize(
@@ -91,7 +91,7 @@ def test_avoidance_states_have_their_own_label_and_colour_but_the_estop_wins(app
     assert pump(app["root"], lambda: app["gui"].state_colour() == colour)
     assert app["gui"].state_label.cget("text") == state
     rendered = screen_pixel(app["gui"].state_label)
-    assert all(abs(a - b) <= 12 for a, b in zip(rendered, hex_rgb(colour), strict=False)), (rendered, colour)
+    assert all(abs(a - b) <= 12 for a, b in zip(rendered, hex_rgb(colour))), (rendered, colour)
     app["bridge"].push(STATUS_TOPIC, {"data": "emergency"})
     assert pump(app["root"], lambda: app["gui"].state_colour() == "#c62828")
     app["bridge"].push(STATE_TOPIC, {"data": "WAITING_FOR_GESTURE"})

@@ -118,7 +118,7 @@ def test_preflight_panel_latched_report_run_click_and_link_loss(window):
     # what the X server shows: the FAIL badge and the NOT READY line are red
     for widget in (panel.rows[1][0], panel.ready_label):
         shown = screen_pixel(widget)
-        assert max(abs(a - b) for a, b in zip(shown, hex_rgb(RED), strict=True)) < 30, shown
+        assert max(abs(a - b) for a, b in zip(shown, hex_rgb(RED))) < 30, shown
     save_screenshot(root)
 
     # the link goes down: the panel says so, keeps the last report and Run is off

@@ -104,7 +104,10 @@ def test_train_without_data_is_an_error(tmp_path):
 def test_entry_points_exist():
     import importlib
 
-    import tomllib
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python < 3.11
+        import tomli as tomllib
 
     meta = tomllib.loads(open(os.path.join(PKG_ROOT, "pyproject.toml")).read())
     scripts = meta["project"]["scripts"]

@@ -12,6 +12,7 @@ import os
 
 import numpy as np
 
+from rbd_local.compat import zip_strict
 from rbd_local.gestures import realclips
 from rbd_local.gestures.model import NONE, GestureModel
 from rbd_local.gestures.recognizer import GestureRecognizer
@@ -84,7 +85,7 @@ def load_clips(path: str) -> list[Clip]:
     """Read clips written by :func:`save_clips`."""
     with np.load(path, allow_pickle=False) as data:
         return [Clip(str(k), data["times%d" % i], data["keypoints%d" % i], str(c))
-                for i, (k, c) in enumerate(zip(data["kinds"], data["conditions"], strict=True))]
+                for i, (k, c) in enumerate(zip_strict(data["kinds"], data["conditions"]))]
 
 
 def cached_clips(cache_dir: str, key: str, make: object) -> list[Clip]:
@@ -115,7 +116,7 @@ def replay(model: GestureModel, clip: Clip, min_consecutive: int = 2, cooldown_s
     """
     rec = GestureRecognizer(model, threshold, min_consecutive, cooldown_s)
     fired, windows = [], []
-    for t, kp in zip(clip.times, clip.keypoints, strict=True):
+    for t, kp in zip_strict(clip.times, clip.keypoints):
         d = rec.update(float(t), None if not np.isfinite(kp[0, 0]) else kp)
         if d.label:
             windows.append(d.label)

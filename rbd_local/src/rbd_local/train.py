@@ -50,7 +50,7 @@ def evaluate(model: GestureModel, seed: int, per_gesture: int = 300, per_random:
     truth = np.concatenate([yg, np.full(len(pr) + len(pu), NONE)])
     pred = np.concatenate([dec_g, [model.decide(p)[0] for p in pr], [model.decide(p)[0] for p in pu]])
     conf = np.zeros((len(labels), len(labels)), dtype=int)
-    for t, p in zip(truth, pred, strict=False):
+    for t, p in zip(truth, pred):
         conf[labels.index(t), labels.index(p)] += 1
     return {
         "accuracy": float(np.mean(dec_g == yg)),
@@ -69,7 +69,7 @@ def format_confusion(confusion: np.ndarray, labels: list[str]) -> str:
     """Confusion matrix as a text table (rows: true class, columns: decision)."""
     width = max(len(x) for x in labels) + 2
     lines = ["true \\ decided".ljust(width + 4) + "".join(x.rjust(width) for x in labels)]
-    for name, row in zip(labels, confusion, strict=False):
+    for name, row in zip(labels, confusion):
         lines.append(name.ljust(width + 4) + "".join(str(v).rjust(width) for v in row))
     return "\n".join(lines)
 

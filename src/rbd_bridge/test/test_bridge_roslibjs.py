@@ -112,3 +112,10 @@ def test_roslibjs_examples(node_ready, ros_side, roslibpy_client):
 def test_roslibjs_png_compression(node_ready, open_bridge):
     """Issue 18 item 3: roslibjs's png decoding parses the pixels as JSON; the padding must be whitespace."""
     assert run_js(node_ready, "roslibjs_examples.js", open_bridge.url, "png")["png"] == "through a png"
+
+
+def test_roslibjs_service_readvertised(node_ready, open_bridge):
+    """roslibjs's service.test.js (issue 28): the first call after re-advertising reaches the new provider."""
+    first, second = run_js(node_ready, "roslibjs_examples.js", open_bridge.url, "service")["service"]
+    assert first == {"success": True, "message": "first provider"}
+    assert second == {"success": True, "message": "second provider"}

@@ -7,11 +7,16 @@ other end plays a ROS subscriber that reads (or does not).
 import socket
 import threading
 import time
+import types
 
 import pytest
 from rospy.exceptions import TransportTerminated
 
-from rbd_bridge.ros.fastpath import _Cork, _DirectConnection
+from rbd_bridge.ros.fastpath import _DirectConnection
+
+
+def _Cork():  # noqa: N802 (what FastPath keeps as its cork)
+    return types.SimpleNamespace(thread=None, pending=[])
 
 
 class FakeTransport:

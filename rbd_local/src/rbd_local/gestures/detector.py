@@ -1,5 +1,7 @@
 """MediaPipe Hands wrapper: an image in, 21 key points in pixels out."""
 
+from __future__ import annotations
+
 import numpy as np
 
 from rbd_local.gestures.hand import NUM_LANDMARKS
@@ -87,7 +89,7 @@ class HandDetector:
         """Release the MediaPipe graph."""
         self._hands.close()
 
-    def __enter__(self) -> "HandDetector":
+    def __enter__(self) -> HandDetector:
         """Context-manager entry."""
         return self
 

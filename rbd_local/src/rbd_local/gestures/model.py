@@ -32,6 +32,7 @@ import time
 
 import numpy as np
 
+from rbd_local.compat import zip_strict
 from rbd_local.gestures import features, fewshot
 
 FORMAT = "rbd_local.gesture_model"
@@ -135,7 +136,7 @@ class GestureModel:
         """
         proba = self.predict_proba(window)
         label, conf = self.decide(proba, threshold)
-        scores = {c: float(p) for c, p in zip(self.classes, proba, strict=True) if c != NONE}
+        scores = {c: float(p) for c, p in zip_strict(self.classes, proba) if c != NONE}
         if len(self.taught):
             t_label, t_conf, t_scores = self.taught.classify(window)
             scores.update(t_scores)
@@ -309,8 +310,8 @@ class GestureModel:
                 model.taught = fewshot.TaughtGestures(model.samples, float(data["taught_threshold"]), seed, per_kind)
                 windows = data["taught_windows"]
                 start = 0
-                for name, command, count in zip(data["taught_names"], data["taught_commands"],
-                                                data["taught_counts"], strict=True):
+                for name, command, count in zip_strict(data["taught_names"], data["taught_commands"],
+                                                       data["taught_counts"]):
                     model.taught.add(str(name), str(command), windows[start:start + int(count)])
                     start += int(count)
             return model

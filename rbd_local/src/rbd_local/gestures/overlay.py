@@ -1,5 +1,7 @@
 """The audience view: key points, skeleton, class and confidence drawn on the frame."""
 
+from __future__ import annotations
+
 import numpy as np
 
 from rbd_local.gestures.hand import HAND_CONNECTIONS

@@ -1,5 +1,7 @@
 """Frame -> key points -> window -> gesture -> command, with the overlay, for one video stream."""
 
+from __future__ import annotations
+
 import logging
 import time
 from typing import Callable

@@ -1,5 +1,7 @@
 """Sliding-window gesture recognition: key points per frame in, confident gestures out."""
 
+from __future__ import annotations
+
 import collections
 
 import numpy as np

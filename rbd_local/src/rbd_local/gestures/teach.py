@@ -18,6 +18,8 @@ GUI's Teach panel) and keeps the model file: saved after each change with the pr
 kept (:func:`restore_previous` undoes one step).
 """
 
+from __future__ import annotations
+
 import os
 import threading
 

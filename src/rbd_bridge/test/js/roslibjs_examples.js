@@ -1,6 +1,6 @@
 // roslibjs (npm "roslib", in Node) doing what roslibjs's own examples and tests do, against
 // rbd_bridge. Prints one JSON line with what each step saw; the pytest judges it.
-// Usage: node roslibjs_examples.js ws://127.0.0.1:PORT examples|png
+// Usage: node roslibjs_examples.js ws://127.0.0.1:PORT examples|png|service
 'use strict';
 const ROSLIB = require('roslib');
 
@@ -101,9 +101,32 @@ async function png() {
   inp.unadvertise();
 }
 
+// service.test.js of roslibjs: a service is advertised, called, unadvertised, and advertised
+// again under the same name by a new Service object; each call must reach the provider of
+// its time. roslib 1.4.1's unadvertise leaves the old object's request listener on `ros`
+// (later roslibjs releases remove it): it is removed here, so only the bridge is judged.
+async function service() {
+  const name = '/roslibjs_test_service';
+  const call = () => new Promise((resolve) => {
+    const client = new ROSLIB.Service({ ros: ros, name: name, serviceType: 'std_srvs/Trigger' });
+    client.callService(new ROSLIB.ServiceRequest({}), resolve, (err) => resolve('error: ' + err));
+  });
+  result.service = [];
+  for (const message of ['first provider', 'second provider']) {
+    const server = new ROSLIB.Service({ ros: ros, name: name, serviceType: 'std_srvs/Trigger' });
+    server.advertise((req, resp) => { resp.success = true; resp.message = message; return true; });
+    await sleep(300);
+    result.service.push(await call());
+    server.unadvertise();
+    ros.removeAllListeners(name);
+  }
+}
+
+const MODES = { png: [png], service: [service], examples: [pubsub, listener, params, fibonacci, checkTopics] };
+
 ros.on('connection', async () => {
   try {
-    for (const step of mode === 'png' ? [png] : [pubsub, listener, params, fibonacci, checkTopics]) {
+    for (const step of MODES[mode]) {
       await step();
     }
     console.log(JSON.stringify(result));

@@ -28,7 +28,6 @@ from typing import Dict, List, Optional, Tuple
 import numpy as np
 import rosgraph
 import rospy
-import tf2_ros
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
 from sensor_msgs.msg import Imu, PointCloud2
@@ -37,6 +36,19 @@ from tf2_msgs.msg import TFMessage
 
 from rbd_bringup import clock_probe, preflight
 from rbd_msgs.msg import CollisionState
+
+try:
+    import tf2_ros
+except ImportError as _exc:  # Melodic + Python 3: its tf2_py is built for Python 2 only
+    tf2_ros, TF2_MISSING = None, str(_exc)
+TF2_FIX = "build geometry2 from source in the workspace for Python 3 (README: Melodic)"
+
+
+def require_tf2() -> None:
+    """Stop with a FATAL naming the fix when tf2_ros does not import (the mounts are looked up in TF)."""
+    if tf2_ros is None:
+        rospy.logfatal("preflight: tf2_ros does not import (%s): %s", TF2_MISSING, TF2_FIX)
+        raise SystemExit(1)
 
 BRIDGE_NODE = "/rbd_bridge"
 TOPICS = {
@@ -221,6 +233,7 @@ class Collector:
         """Watch for ``duration`` seconds and return the observation."""
         obs = self.obs
         obs.duration = self.duration
+        require_tf2()
         if self.tap_lcm:
             for name in ("/rbd_a1_driver/lcm_url", "/rbd_sim/lcm_url"):
                 if rospy.has_param(name):

@@ -8,7 +8,7 @@ from typing import Any
 import rospy
 
 from rbd_bridge.core.rosapi import RosApi
-from rbd_bridge.ros.fastpath import FastPath
+from rbd_bridge.ros.fastpath import FastPath, rospy_unfit
 from rbd_bridge.ros.graph import RosParams, RosTypes, ThreadLocalMaster
 from rbd_bridge.ros.services import Services
 from rbd_bridge.ros.topics import Topics
@@ -29,7 +29,7 @@ class RosBackend:
         policy: The bridge's :class:`rbd_bridge.core.security.Policy` (rosapi filtering).
         service_timeout: Seconds a ROS caller waits for a client-hosted service.
         call_timeout: Default seconds for ``call_service`` without ``timeout`` (0 = none).
-        fast_path: Use :mod:`rbd_bridge.ros.fastpath` (patches rospy internals; faster).
+        fast_path: Use :mod:`rbd_bridge.ros.fastpath` (patches rospy internals; faster) if they fit.
         direct_reads: With the fast path: read subscribed connections in the event loop.
         fail_direct_reads: Test hook: every take-over fails (rospy's threads read).
         advertise_window: Seconds after advertise whose publishes reach subscribers still
@@ -52,7 +52,10 @@ class RosBackend:
         """Create the backend (rospy.init_node must have been called)."""
         master = ThreadLocalMaster(rospy.get_name())
         self.topics = Topics(loop, master, advertise_window, None, publisher_linger)
-        if fast_path:
+        unfit = fast_path and rospy_unfit()
+        if unfit:  # one line, then plain rospy
+            rospy.logwarn("rbd_bridge: ~rospy_fast_path off: rospy's internals differ (%s); plain rospy", unfit)
+        elif fast_path:
             self.topics.fast = FastPath(loop, self.topics.subs.get, direct_reads, fail_direct_reads)
         self.fast = self.topics.fast
         self.services = Services(loop, master, service_timeout, call_timeout)

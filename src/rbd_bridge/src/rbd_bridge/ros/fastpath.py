@@ -9,22 +9,23 @@ import collections
 import concurrent.futures
 import contextlib
 import functools
+import inspect
 import logging
 import socket
 import threading
+import types
 import warnings
 from typing import Any, Callable
 
 import rospy
 from rospy.exceptions import TransportTerminated
 from rospy.impl.tcpros_base import TCPROSTransport
-from rospy.topics import _PublisherImpl
 
 from rbd_bridge.core.fanout import TopicMessage, deliver, prepare, send_direct
 from rbd_bridge.core.tcpros import LoopReader
 from rbd_bridge.ros.msgconv import msg_to_dict
 
-__all__ = ["FastPath"]
+__all__ = ["FastPath", "rospy_unfit"]
 
 _log = logging.getLogger("rbd_bridge")
 _ADOPT_TIMEOUT = 5.0  # a ROS thread waits this long for the loop to take a connection [s]
@@ -33,9 +34,19 @@ _ADOPT_TIMEOUT = 5.0  # a ROS thread waits this long for the loop to take a conn
 _CORK_MESSAGES = 256
 
 
-class _Cork:
-    def __init__(self) -> None:
-        self.thread, self.pending = None, []  # whose writes are held; the connections holding some
+def rospy_unfit() -> str:
+    """'' if rospy's internals are those this module was written for, else what differs (checked at start)."""
+    try:  # the methods replaced or called (by arity) and the attributes of a connection that are read
+        from rospy.topics import _PublisherImpl, _SubscriberImpl
+
+        conn = TCPROSTransport(types.SimpleNamespace(direction=None), "rbd_bridge_probe")
+        methods = (conn.receive_loop, conn.set_cleanup_callback, _PublisherImpl.add_connection)
+        arity = [len(inspect.signature(m).parameters) for m in methods + (_SubscriberImpl.add_connection,)]
+        attrs = ("done", "socket", "header", "read_buff", "endpoint_id", "stat_bytes", "stat_num_msg", "close")
+        missing = [name for name in attrs if not hasattr(conn, name)]
+    except Exception as exc:  # whatever another rospy raises here
+        return "%s: %s" % (type(exc).__name__, exc)
+    return "" if arity == [1, 1, 2, 2] and not missing else "arities %s, missing %s" % (arity, missing)
 
 
 class _DirectConnection:
@@ -47,17 +58,13 @@ class _DirectConnection:
     """
 
     def __init__(self, connection: Any, queue_size: int, cork: Any = None) -> None:
-        self._connection = connection
-        self._cork = cork
+        self._connection, self._cork = connection, cork
         self._parts = None  # writes held by the cork (False: write through until uncork)
         self._queue_size = max(1, queue_size)
         self._cork_limit = min(self._queue_size, _CORK_MESSAGES)
         self._lock = threading.RLock()  # conn.close() calls _closed with it held
         self._wake = threading.Condition(self._lock)
-        self._backlog = collections.deque()
-        self._busy = False
-        self._thread = None
-        self.dropped = 0
+        self._backlog, self._busy, self._thread, self.dropped = collections.deque(), False, None, 0
         connection.set_cleanup_callback(self._closed)
 
     def __getattr__(self, name: str) -> Any:
@@ -193,11 +200,8 @@ class FastPath:
 
     def __init__(self, loop: Any, lookup: Callable[[str], Any], direct_reads: bool = True, fail: bool = False) -> None:
         """Nothing patched until publishers and subscribers are made through it."""
-        self.loop = loop
-        self.lookup = lookup
-        self.direct_reads = direct_reads
-        self.fail_direct_reads = fail
-        self._cork = _Cork()
+        self.loop, self.lookup, self.direct_reads, self.fail_direct_reads = loop, lookup, direct_reads, fail
+        self._cork = types.SimpleNamespace(thread=None, pending=[])  # whose writes are held; who holds some
         self._readers = {}  # rospy connection -> LoopReader (loop thread only)
         self.counters = collections.Counter(dict.fromkeys(self.COUNTERS, 0))
 
@@ -212,11 +216,11 @@ class FastPath:
             publisher = rospy.Publisher(topic, cls, queue_size=None, latch=latch, subscriber_listener=listener)
         impl = publisher.impl
         if not getattr(impl, "_rbd_direct", False):  # one impl per topic in this process
-            cork = self._cork
+            cork, original = self._cork, impl.add_connection
 
             def add_connection(connection: Any) -> Any:
                 with window.lock:
-                    return _PublisherImpl.add_connection(impl, _DirectConnection(connection, queue_size, cork))
+                    return original(_DirectConnection(connection, queue_size, cork))
 
             impl.add_connection = add_connection
             impl._rbd_direct = True

@@ -30,15 +30,8 @@ class _Hosted:
     """A service that a WebSocket client provides to ROS (registered with it)."""
 
     def __init__(self, services: Any, name: str, type_name: str, cls: Any, session: Any) -> None:
-        self.services = services
-        self.name = name
-        self.type = type_name
-        self.cls = cls
-        self.session = session
-        self.pending = {}
-        self.lock = threading.Lock()
-        self.closed = False
-        self.false_logged = False
+        self.services, self.name, self.type, self.cls, self.session = services, name, type_name, cls, session
+        self.pending, self.lock, self.closed, self.false_logged = {}, threading.Lock(), False, False
         self.server = rospy.Service(name, cls, self.handle)
 
     def handle(self, request: Any) -> Any:
@@ -96,17 +89,11 @@ class Services:
     """
 
     def __init__(self, loop: Any, master: Any, service_timeout: float = 10.0, call_timeout: float = 30.0) -> None:
-        self.loop = loop
-        self.master = master
+        self.loop, self.master, self.service_timeout, self.call_timeout = loop, master, service_timeout, call_timeout
         self.rosapi = None  # (the backend's RosApi, which needs service_type)
-        self.service_timeout = service_timeout
-        self.call_timeout = call_timeout
         self.pool = concurrent.futures.ThreadPoolExecutor(max_workers=8, thread_name_prefix="rbd_bridge_call")
-        self.hosted = {}
-        self.ids = itertools.count(1)
-        self._proxies = {}
-        self._proxy_lock = threading.Lock()
-        self._types = {}
+        self.hosted, self.ids, self._types = {}, itertools.count(1), {}
+        self._proxies, self._proxy_lock = {}, threading.Lock()  # service -> (type, persistent proxy, lock)
 
     def call_service(
         self, session: Any, service: str, args: Any, timeout: Optional[float], done: Callable[..., Any]
@@ -213,6 +200,10 @@ class Services:
             del self.hosted[hosted.name]
         self._types.pop(hosted.name, None)
         hosted.close(reason)
+        with self._proxy_lock:  # rospy keeps serving a persistent connection after shutdown:
+            entry = self._proxies.pop(hosted.name, None)  # drop it, or a re-advertised service's
+        if entry is not None:  # first call reaches the old provider
+            entry[1].close()
 
     def unadvertise_service(self, session: Any, service: str) -> None:
         """Stop serving service for session."""
