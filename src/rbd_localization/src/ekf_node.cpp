@@ -1,10 +1,12 @@
 #include "rbd_localization/ekf_node.h"
 
 #include <std_msgs/String.h>
+#include <tf2_eigen/tf2_eigen.h>
 
 #include <algorithm>
 #include <cmath>
 
+#include "rbd_localization/effective_config.h"
 #include "rbd_localization/geometry.h"
 #include "rbd_localization/node_main.h"
 #include "rbd_localization/run_node.h"
@@ -12,24 +14,6 @@
 namespace rbd_localization {
 
 namespace {
-
-Eigen::Isometry3d toEigen(const geometry_msgs::Transform& t) {
-  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  out.linear() = Eigen::Quaterniond(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z)
-                     .normalized()
-                     .toRotationMatrix();
-  out.translation() = Eigen::Vector3d(t.translation.x, t.translation.y, t.translation.z);
-  return out;
-}
-
-geometry_msgs::Quaternion toQuaternionMsg(const Eigen::Quaterniond& q) {
-  geometry_msgs::Quaternion m;
-  m.x = q.x();
-  m.y = q.y();
-  m.z = q.z();
-  m.w = q.w();
-  return m;
-}
 
 bool anyOf(const std::array<bool, STATE_SIZE>& v, int first, int count) {
   for (int i = first; i < first + count; ++i) {
@@ -223,13 +207,13 @@ bool EkfNode::lookup(const std::string& target, const std::string& source, const
         params_.transform_timeout > 0.0
             ? tf_buffer_->lookupTransform(target, source, stamp, ros::Duration(params_.transform_timeout))
             : tf_buffer_->lookupTransform(target, source, stamp);
-    *out = toEigen(ts.transform);
+    *out = tf2::transformToEigen(ts);
     return true;
   } catch (const tf2::TransformException& ex) {
     if (!stamp.isZero()) {
       // Fall back to the latest transform (static or slowly changing frames).
       try {
-        *out = toEigen(tf_buffer_->lookupTransform(target, source, ros::Time(0)).transform);
+        *out = tf2::transformToEigen(tf_buffer_->lookupTransform(target, source, ros::Time(0)));
         return true;
       } catch (const tf2::TransformException&) {
       }
@@ -490,7 +474,7 @@ void EkfNode::publish() {
   odom.pose.pose.position.x = x(StateMemberX);
   odom.pose.pose.position.y = x(StateMemberY);
   odom.pose.pose.position.z = x(StateMemberZ);
-  odom.pose.pose.orientation = toQuaternionMsg(q);
+  odom.pose.pose.orientation = tf2::toMsg(q);
   odom.twist.twist.linear.x = x(StateMemberVx);
   odom.twist.twist.linear.y = x(StateMemberVy);
   odom.twist.twist.linear.z = x(StateMemberVz);
@@ -528,7 +512,7 @@ void EkfNode::publish() {
     tf.transform.translation.x = x(StateMemberX);
     tf.transform.translation.y = x(StateMemberY);
     tf.transform.translation.z = x(StateMemberZ);
-    tf.transform.rotation = toQuaternionMsg(q);
+    tf.transform.rotation = tf2::toMsg(q);
   } else {
     // world_frame == map_frame: publish map -> odom so that map -> base_link is the estimate.
     Eigen::Isometry3d odom_from_base;
@@ -542,7 +526,7 @@ void EkfNode::publish() {
     tf.transform.translation.x = map_from_odom.translation().x();
     tf.transform.translation.y = map_from_odom.translation().y();
     tf.transform.translation.z = map_from_odom.translation().z();
-    tf.transform.rotation = toQuaternionMsg(Eigen::Quaterniond(map_from_odom.linear()));
+    tf.transform.rotation = tf2::toMsg(Eigen::Quaterniond(map_from_odom.linear()));
   }
   last_published_stamp_ = t;
   tf_broadcaster_.sendTransform(tf);

@@ -36,7 +36,7 @@ from std_msgs.msg import Bool, String
 
 import rbd_testkit
 from rbd_msgs.srv import SetBodyPose
-from rbd_testkit.ros import run_rostest
+from rbd_testkit.ros import RosoutWatcher, run_rostest
 from rbd_wire_oracle import unitree as vendor
 
 PKG = "rbd_a1_driver"
@@ -123,7 +123,9 @@ class DriverWire(unittest.TestCase):
         cls.logger = subprocess.Popen(["lcm-logger", "-q", "-f", "--flush-interval=50", "-l", cls.url,
                                        "-c", "LCM_High_.*|" + REFERENCE, cls.log_path], start_new_session=True)
         cls.reference = subprocess.Popen([sys.executable, "-c", REFERENCE_SENDER, cls.url], start_new_session=True)
-        time.sleep(0.5)
+        # The logger is up and recording once the reference sender's packets are in its file.
+        wait_for(lambda: any(ch == REFERENCE for _, ch, _ in read_log(cls.log_path)), 30.0,
+                 what="lcm-logger recording the reference sender", ignore=(OSError,))
         cls.lc = lcm.LCM(cls.url)
         cls.lc.subscribe(HIGH_CMD, cls._on_cmd)
         cls.pub = rospy.Publisher("/cmd_vel", Twist, queue_size=5)
@@ -135,6 +137,7 @@ class DriverWire(unittest.TestCase):
         rospy.Subscriber("/diagnostics", DiagnosticArray, cls.diag.append)
         rospy.Subscriber("/joint_states", JointState, cls.joints.append)
         rospy.Subscriber("/rbd_a1_driver/remote_estop_held", Bool, lambda m: cls.remote_held.append(m.data))
+        cls.rosout = RosoutWatcher()  # the driver's log lines prove that an e-stop flag reached it
         for target in (cls._rx, cls._tx, cls._controller):
             th = threading.Thread(target=target)
             th.daemon = True
@@ -143,17 +146,13 @@ class DriverWire(unittest.TestCase):
         cls.driver_started = time.time()
         cls.driver = subprocess.Popen(["roslaunch", "rbd_a1_driver", "rbd_a1_driver.launch", "lcm_url:=" + cls.url,
                                        "send_rate:=%d" % SEND_RATE], start_new_session=True)
-        cls.driver_registered = None
-        deadline = time.monotonic() + 120.0
-        while cls.driver_registered is None and time.monotonic() < deadline:
-            try:
-                master.lookupNode("/rbd_a1_driver")
-                cls.driver_registered = time.time()
-            except (rosgraph.MasterError, OSError):
-                time.sleep(0.01)
-        assert cls.driver_registered is not None, "rbd_a1_driver did not register within 120 s"
+        master_lookup = functools.partial(master.lookupNode, "/rbd_a1_driver")
+        rbd_testkit.wait_for(master_lookup, 120.0, step=0.01, what="rbd_a1_driver registered with the master",
+                             ignore=(rosgraph.MasterError, OSError))
+        cls.driver_registered = time.time()
         rospy.wait_for_message("/rbd_a1_driver/odom", Odometry, timeout=60.0)
         wait_for(lambda: cls.pub.get_num_connections() > 0, 30.0)
+        cls.rosout.wait_connected("/rbd_a1_driver")
 
     @classmethod
     def tearDownClass(cls):
@@ -225,10 +224,24 @@ class DriverWire(unittest.TestCase):
         self.assertTrue(wait_for(lambda: self.leds() != [(0xC6, 0x28, 0x28)] * 4, 5.0),
                         "the driver still holds an e-stop from before: LEDs %s" % self.leds())
 
+    def flag_taken(self, value):
+        """Set the stand-in controller's flag and wait until the driver logs that it took it.
+
+        The driver logs a change of the flag ("e-stop ENGAGED" / "e-stop released"), so ``value``
+        must differ from the flag the driver holds.
+        """
+        mark = self.rosout.mark()
+        self.set_estop(value)
+        self.rosout.wait_for("e-stop ENGAGED" if value else "e-stop released", node="/rbd_a1_driver", since=mark,
+                             timeout=30.0)
+
+    def operator_release(self):
+        """The operator's release: the controller's flag goes true (engaged), then false."""
+        self.flag_taken(True)
+        self.flag_taken(False)
+
     def release_remote(self):
-        DriverWire.estop_value = True
-        time.sleep(0.3)
-        DriverWire.estop_value = False
+        self.operator_release()
         return wait_for(lambda: self.diag_value("remote_estop") == "ready", 30.0)
 
     def last(self):
@@ -270,13 +283,11 @@ class DriverWire(unittest.TestCase):
 
     def drive_until(self, msg, predicate, timeout=5.0):
         """Publish ``msg`` at 20 Hz until the last HighCmd satisfies ``predicate`` (True) or ``timeout``."""
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not rospy.is_shutdown():
+        def published_and_seen():
             self.pub.publish(msg)
-            time.sleep(0.05)
-            if predicate(self.last()):
-                return True
-        return False
+            return predicate(self.last())
+
+        return bool(wait_for(published_and_seen, timeout, step=0.05))
 
     def walks(self, timeout=5.0):
         """cmd_vel 0.3 m/s until a HighCmd carries it (True) or ``timeout`` s pass."""
@@ -286,13 +297,16 @@ class DriverWire(unittest.TestCase):
         self.assertTrue(self.walks(), msg)
 
     def events_until(self, t_wall, timeout=10.0):
-        """Every event of the LCM log once it holds the reference sender's packets up to ``t_wall``."""
-        deadline = time.monotonic() + timeout
-        while True:
-            events = read_log(self.log_path)
-            if any(ch == REFERENCE and t >= t_wall for t, ch, _ in events[-200:]) or time.monotonic() > deadline:
-                return events
-            time.sleep(0.05)
+        """Every event of the LCM log once it holds the reference sender's packets up to ``t_wall``
+        (after ``timeout``: the log as it is)."""
+        events = []
+
+        def recorded():
+            events[:] = read_log(self.log_path)
+            return any(ch == REFERENCE and t >= t_wall for t, ch, _ in events[-200:])
+
+        wait_for(recorded, timeout, step=0.05)
+        return events
 
     # ---- HighCmd on the wire ----------------------------------------------------------------------
     def test_every_packet_is_a_vendor_high_cmd(self):
@@ -319,11 +333,18 @@ class DriverWire(unittest.TestCase):
         self.walk()
         t0 = time.time()
         self.pub.publish(twist(0.31))  # the last one, recognisable on the wire
-        time.sleep(1.0)
-        cmds = [(t, vendor.unpack(vendor.HIGH_CMD, d)) for t, ch, d in self.events_until(time.time())
-                if ch == HIGH_CMD and t > t0]
-        t_last = next(t for t, c in cmds if abs(c["velocity"][0] - 0.31) < 1e-6)
-        t_zero = next(t for t, c in cmds if t > t_last and still(c))
+        cmds = []
+
+        def zero_and_after():
+            """The HighCmds since t0 once the log holds the 0.31 one, a zero one after it and 0.5 s more."""
+            cmds[:] = [(t, vendor.unpack(vendor.HIGH_CMD, d)) for t, ch, d in read_log(self.log_path)
+                       if ch == HIGH_CMD and t > t0]
+            t_last = next((t for t, c in cmds if abs(c["velocity"][0] - 0.31) < 1e-6), None)
+            t_zero = t_last and next((t for t, c in cmds if t > t_last and still(c)), None)
+            return t_zero and cmds[-1][0] > t_zero + 0.5 and (t_last, t_zero)
+
+        t_last, t_zero = wait_for(zero_and_after, 10.0, step=0.1,
+                                  what="the 0.31 m/s HighCmd, a zero one and 0.5 s after it")
         rospy.loginfo("MEASURED zero velocity %.3f s after the last cmd_vel reached the driver", t_zero - t_last)
         self.assertGreater(t_zero - t_last, 0.2)
         self.assertLess(t_zero - t_last, 0.32)
@@ -500,9 +521,7 @@ class DriverWire(unittest.TestCase):
         self.assertEqual(self.fresh_diag().level, DiagnosticStatus.WARN)
         self.assertEqual(self.diag_value("remote_estop"), "engaged")
         # Releases while the combination is held are void; so is a plain periodic false.
-        DriverWire.estop_value = True
-        time.sleep(0.3)
-        DriverWire.estop_value = False
+        self.operator_release()
         t0 = time.monotonic()
         self.send(twist(0.3), 0.5)
         self.assert_still_since(t0, "released while the buttons are held")
@@ -512,10 +531,7 @@ class DriverWire(unittest.TestCase):
         self.send(twist(0.3), 0.5)
         self.assert_still_since(t0, "released without the operator")
         self.assertEqual(self.fresh_diag().level, DiagnosticStatus.WARN)
-        # The operator's release: the controller's flag goes true (engaged), then false.
-        DriverWire.estop_value = True
-        time.sleep(0.3)
-        DriverWire.estop_value = False
+        self.operator_release()
         self.assertTrue(wait_for(lambda: self.diag_value("remote_estop") == "ready", 30.0))
         self.walk("no motion after the operator's release")
 
@@ -528,7 +544,9 @@ class DriverWire(unittest.TestCase):
         t0 = time.time()
         os.kill(pid, signal.SIGSTOP)
         try:
-            time.sleep(0.4)
+            # Stopped for 0.4 s of a running machine: until the logger holds the reference sender's
+            # packets up to then (a stall of the whole machine does not count).
+            self.events_until(t0 + 0.4)
         finally:
             os.kill(pid, signal.SIGCONT)
         t1 = time.time()
@@ -554,7 +572,7 @@ class DriverWire(unittest.TestCase):
         os.kill(pid, signal.SIGSTOP)
         try:
             self.press(True)  # the test's HighState sender goes on while the driver is stopped
-            time.sleep(0.3)
+            self.events_until(t_stop + 0.3)  # 0.3 s of a running machine (see the test above)
         finally:
             os.kill(pid, signal.SIGCONT)
         t_cont = time.time()

@@ -49,6 +49,13 @@ inline bool isAngleMember(int index) {
   return index == StateMemberRoll || index == StateMemberPitch || index == StateMemberYaw;
 }
 
+/// robot_localization's name of a state member ("x" ... "az"), as in its configuration vectors.
+inline const char* stateMemberName(int index) {
+  static const char* const kNames[STATE_SIZE] = {"x",  "y",     "z",      "roll", "pitch", "yaw", "vx", "vy",
+                                                 "vz", "vroll", "vpitch", "vyaw", "ax",    "ay",  "az"};
+  return index >= 0 && index < STATE_SIZE ? kNames[index] : "?";
+}
+
 /// Wraps an angle to [-pi, pi).
 double wrapAngle(double angle);
 

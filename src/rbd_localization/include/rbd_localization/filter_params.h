@@ -7,11 +7,11 @@
 
 #include <XmlRpcValue.h>
 
-#include <array>
 #include <string>
 #include <vector>
 
 #include "rbd_localization/filter_common.h"
+#include "rbd_localization/sensor_params.h"
 
 // Declared only: ros/node_handle.h pulls in most of roscpp, and this header is included by the
 // measurement conversions and the parser's tests, which never need it (build time, issue 19).
@@ -20,39 +20,6 @@ class NodeHandle;
 }  // namespace ros
 
 namespace rbd_localization {
-
-enum class SensorType { kImu, kPose, kOdom, kTwist };
-
-/// "imu", "pose", "odom" or "twist".
-const char* sensorTypeName(SensorType t);
-
-/// One configured input (imuN, poseN, odomN or twistN).
-struct SensorConfig {
-  SensorType type = SensorType::kPose;
-  std::string name;   ///< e.g. "imu0" (parameter prefix)
-  std::string topic;  ///< value of the imuN/poseN/... parameter
-  /// The 15 booleans of `<name>_config`, with the members this message type cannot carry cleared.
-  std::array<bool, STATE_SIZE> update_vector{};
-  bool differential = false;
-  bool relative = false;
-  bool nodelay = false;
-  int queue_size = 1;
-  /// Gates in standard deviations (r_l default: max double, i.e. never reject).
-  double pose_rejection_threshold = 0.0;
-  double twist_rejection_threshold = 0.0;
-  double linear_acceleration_rejection_threshold = 0.0;
-  bool remove_gravitational_acceleration = false;
-  /// RoboDog extension (`<name>_frame_is_world`): treat the message frame as world_frame
-  /// instead of transforming through TF (for a camera whose own "map" drifts like odometry).
-  bool frame_is_world = false;
-  /// RoboDog extension (`<name>_differential_noise`, 6 standard deviations x y z roll pitch yaw):
-  /// with `_differential`, the velocity covariance is built from the sensor's per-sample white
-  /// noise plus the growth of its reported covariance between the two poses, instead of r_l's
-  /// sum of both covariances (which, for a tracker reporting its accumulated drift, makes the
-  /// velocities uselessly uncertain and lets jumps through the gate).
-  bool has_differential_noise = false;
-  std::array<double, 6> differential_noise{};
-};
 
 /// Everything the node reads at startup.
 struct FilterParams {
@@ -107,12 +74,6 @@ bool loadFilterParams(const ros::NodeHandle& pnh, FilterParams* params, std::vec
 
 /// Parses a 15x15 matrix from a flat list of 225 numbers (row-major) or 15 (the diagonal).
 bool parseStateMatrix(const std::vector<double>& values, StateMatrix* out, std::string* error);
-
-/// The parameters as the filter uses them, as JSON (r_l's key names; matrices as 225 numbers
-/// row-major; also valid YAML), with the start-up warnings. q and p0 are the matrices the filter
-/// holds.
-std::string effectiveConfigJson(const FilterParams& params, const StateMatrix& q, const StateMatrix& p0,
-                                const std::vector<std::string>& warnings);
 
 }  // namespace rbd_localization
 
