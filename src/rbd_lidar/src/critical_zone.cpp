@@ -13,18 +13,11 @@ namespace {
 // Four uint32 lanes (GCC/Clang vector extension).
 typedef uint32_t V4u __attribute__((vector_size(16)));
 
-constexpr double kTwoPi = 2.0 * M_PI;
 // Margins of the candidate table: it covers the exact zone enlarged by kPad, and stays valid while
 // the attitude moves less than kMaxTilt (kPad absorbs the resulting shift within a few metres).
 constexpr double kPad = 0.04;
 constexpr double kMaxTilt = 0.25 * M_PI / 180.0;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-double wrapAngle(double a) {
-  a = std::fmod(a + M_PI, kTwoPi);
-  if (a < 0) a += kTwoPi;
-  return a - M_PI;
-}
 
 // Shrinks [lo, hi) (ranges in m) to the ranges where a * r + b < c.
 void limit(double a, double b, double c, double* lo, double* hi) {
@@ -38,145 +31,6 @@ void limit(double a, double b, double c, double* lo, double* hi) {
 }
 
 }  // namespace
-
-BeamModel BeamModel::fromOuster(const std::vector<double>& altitude_deg,
-                                const std::vector<double>& azimuth_deg, const std::vector<int>& pixel_shift,
-                                int shift_columns, int columns, bool destaggered, double beam_origin_mm,
-                                double lidar_z_mm) {
-  BeamModel m;
-  m.columns = columns;
-  m.direction = -1;
-  m.beam_origin = beam_origin_mm * 1e-3;
-  m.lidar_z = lidar_z_mm * 1e-3;
-  const double deg = M_PI / 180.0;
-  for (size_t u = 0; u < altitude_deg.size(); ++u) {
-    m.altitude.push_back(altitude_deg[u] * deg);
-    const double az = u < azimuth_deg.size() ? azimuth_deg[u] * deg : 0.0;
-    double shift = 0.0;
-    if (destaggered && u < pixel_shift.size() && shift_columns > 0) {
-      shift = static_cast<double>(pixel_shift[u]) * columns / shift_columns;
-    }
-    // Encoder angle 2*pi*(1 - c_staggered/W), beam offset -az, os_lidar -> os_sensor turns by pi;
-    // a destaggered column c holds the staggered column c - shift.
-    m.azimuth0.push_back(wrapAngle(M_PI - az + kTwoPi * shift / columns));
-  }
-  return m;
-}
-
-bool BeamModel::valid(std::string* why) const {
-  std::string reason;
-  if (altitude.empty()) {
-    reason = "no beams";
-  } else if (azimuth0.size() != altitude.size()) {
-    reason = "beam azimuth count differs from beam altitude count";
-  } else if (columns <= 0 || columns > 65536) {
-    reason = "column count out of range";
-  } else if (direction != 1 && direction != -1) {
-    reason = "direction must be +1 or -1";
-  } else {
-    for (size_t u = 0; u < altitude.size(); ++u) {
-      if (!std::isfinite(altitude[u]) || !std::isfinite(azimuth0[u]) || std::fabs(altitude[u]) >= M_PI / 2) {
-        reason = "beam angle not finite or |altitude| >= 90 deg";
-        break;
-      }
-    }
-  }
-  if (reason.empty() && (!std::isfinite(beam_origin) || !std::isfinite(lidar_z)))
-    reason = "offsets not finite";
-  if (why) *why = reason;
-  return reason.empty();
-}
-
-void BeamModel::ray(size_t row, size_t col, Eigen::Vector3d* d, Eigen::Vector3d* o) const {
-  const double a = azimuth0[row] + direction * kTwoPi * static_cast<double>(col) / columns;
-  const double ca = std::cos(a), sa = std::sin(a);
-  const double cp = std::cos(altitude[row]), sp = std::sin(altitude[row]);
-  *d = Eigen::Vector3d(ca * cp, sa * cp, sp);
-  *o = Eigen::Vector3d(beam_origin * ca * (1 - cp), beam_origin * sa * (1 - cp), lidar_z - beam_origin * sp);
-}
-
-bool BeamModel::anglesFromPoint(const Eigen::Vector3d& p, double range, double lidar_z, double beam_origin,
-                                double* altitude, double* azimuth) {
-  if (!p.allFinite() || !std::isfinite(range) || range <= beam_origin + 0.05) return false;
-  // p_z = (r - n) sin(alt) + lidar_z, exactly; the horizontal n-term is < 1.2 mm and ignored.
-  const double s = (p.z() - lidar_z) / (range - beam_origin);
-  if (s <= -1.0 || s >= 1.0 || std::hypot(p.x(), p.y()) < 1e-6) return false;
-  *altitude = std::asin(s);
-  *azimuth = std::atan2(p.y(), p.x());
-  return true;
-}
-
-SensorPose SensorPose::fromBody(double roll, double pitch, const Eigen::Matrix3d& mount_rotation,
-                                const Eigen::Vector3d& mount_translation, double base_height) {
-  const Eigen::Matrix3d body =
-      (Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
-          .toRotationMatrix();
-  SensorPose pose;
-  pose.level_from_sensor = body * mount_rotation;
-  pose.height = base_height + (body * mount_translation).z();
-  return pose;
-}
-
-bool SensorPose::levelFromGravity(const Eigen::Vector3d& accel, double heading_yaw,
-                                  Eigen::Matrix3d* rotation) {
-  if (!accel.allFinite() || accel.norm() < 1.0) return false;
-  const Eigen::Matrix3d tilt =
-      Eigen::Quaterniond::FromTwoVectors(accel.normalized(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  // FromTwoVectors adds no rotation about z beyond the tilt; keep the sensor's own x as heading.
-  const Eigen::Vector3d x = tilt * Eigen::Vector3d::UnitX();
-  const double yaw = std::atan2(x.y(), x.x());
-  *rotation = Eigen::AngleAxisd(heading_yaw - yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * tilt;
-  return true;
-}
-
-ZoneParams grownZone(const ZoneParams& base, double vx, double vy, double wz, const MotionParams& motion) {
-  ZoneParams z = base;
-  if (!std::isfinite(vx) || !std::isfinite(vy) || !std::isfinite(wz)) {
-    vx = vy = 0.0;
-    wz = 0.0;
-  }
-  const double t = std::max(0.0, motion.reaction_time);
-  const double cap = std::max(0.0, motion.max_growth);
-  const double turn = std::fabs(wz) * std::max(0.0, motion.rotation_lever) * t;
-  z.front += std::min(cap, std::max(0.0, vx) * t + turn);
-  z.back += std::min(cap, std::max(0.0, -vx) * t + turn);
-  z.left += std::min(cap, std::max(0.0, vy) * t + turn);
-  z.right += std::min(cap, std::max(0.0, -vy) * t + turn);
-  return z;
-}
-
-ZoneParams ZoneHold::apply(const ZoneParams& base, const ZoneParams& grown, bool moving, bool latched,
-                           bool enabled) {
-  holding_ = false;
-  const double b[4] = {base.front, base.back, base.left, base.right};
-  const double g[4] = {grown.front, grown.back, grown.left, grown.right};
-  if (!enabled || !latched || moving) {
-    for (int i = 0; i < 4; ++i) growth_[i] = std::max(0.0, g[i] - b[i]);
-    return grown;
-  }
-  ZoneParams z = grown;
-  double* sides[4] = {&z.front, &z.back, &z.left, &z.right};
-  for (int i = 0; i < 4; ++i) {
-    if (b[i] + growth_[i] > g[i]) {
-      *sides[i] = b[i] + growth_[i];
-      holding_ = true;
-    }
-  }
-  return z;
-}
-
-ZoneParams zoneAroundOrigin(const ZoneParams& zone, double dx, double dy, bool* clamped) {
-  ZoneParams z = zone;
-  if (clamped) *clamped = false;
-  if (!std::isfinite(dx) || !std::isfinite(dy)) return z;
-  const double sides[4] = {zone.front - dx, zone.back + dx, zone.left - dy, zone.right + dy};
-  double* out[4] = {&z.front, &z.back, &z.left, &z.right};
-  for (int i = 0; i < 4; ++i) {
-    if (sides[i] < 0.0 && clamped) *clamped = true;
-    *out[i] = std::max(0.0, sides[i]);
-  }
-  return z;
-}
 
 CriticalZone::CriticalZone()
     : corners_(cornerAzimuths(zone_)), table_rotation_(Eigen::Matrix3d::Identity()) {}
@@ -214,29 +68,9 @@ bool CriticalZone::configure(const BeamModel& beams, const ZoneParams& zone, con
     if (error) *error = "blind zone, height band or sensor pose not finite";
     return false;
   }
-  const bool beams_changed = beams.columns != beams_.columns || beams.direction != beams_.direction ||
-                             beams.altitude != beams_.altitude || beams.azimuth0 != beams_.azimuth0 ||
-                             beams.beam_origin != beams_.beam_origin || beams.lidar_z != beams_.lidar_z;
-  if (beams_changed) {
+  if (beams != beams_) {
     beams_ = beams;
-    const size_t rows = beams_.rows(), cols = static_cast<size_t>(beams_.columns);
-    cos_alt_.resize(rows);
-    sin_alt_.resize(rows);
-    cos_az0_.resize(rows);
-    sin_az0_.resize(rows);
-    for (size_t u = 0; u < rows; ++u) {
-      cos_alt_[u] = std::cos(beams_.altitude[u]);
-      sin_alt_[u] = std::sin(beams_.altitude[u]);
-      cos_az0_[u] = std::cos(beams_.azimuth0[u]);
-      sin_az0_[u] = std::sin(beams_.azimuth0[u]);
-    }
-    cos_col_.resize(cols);
-    sin_col_.resize(cols);
-    for (size_t c = 0; c < cols; ++c) {
-      const double a = beams_.direction * kTwoPi * static_cast<double>(c) / static_cast<double>(cols);
-      cos_col_[c] = std::cos(a);
-      sin_col_[c] = std::sin(a);
-    }
+    trig_.build(beams_);
     table_valid_ = false;
   }
   zone_ = zone;
@@ -275,10 +109,10 @@ void CriticalZone::buildTable() {
                right = table_extent_[3];
   const double blind_mm = std::max(1.0, std::ceil(table_blind_ * 1000.0 - 1e-9));
   for (size_t u = 0; u < rows; ++u) {
-    const double cp = cos_alt_[u], sp = sin_alt_[u];
+    const double cp = trig_.cos_alt[u], sp = trig_.sin_alt[u];
     for (size_t c = 0; c < cols; ++c) {
-      const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];
-      const double sa = sin_az0_[u] * cos_col_[c] + cos_az0_[u] * sin_col_[c];
+      double ca, sa;
+      trig_.azimuth(u, c, &ca, &sa);
       const Eigen::Vector3d d = rot * Eigen::Vector3d(ca * cp, sa * cp, sp);
       const Eigen::Vector3d o =
           rot * Eigen::Vector3d(n * ca * (1 - cp), n * sa * (1 - cp), beams_.lidar_z - n * sp);
@@ -310,13 +144,7 @@ void CriticalZone::buildTable() {
 
 Eigen::Vector3d CriticalZone::sensorPoint(uint32_t index, uint32_t range_mm) const {
   const size_t cols = static_cast<size_t>(beams_.columns);
-  const size_t u = index / cols, c = index % cols;
-  const double cp = cos_alt_[u], sp = sin_alt_[u];
-  const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];
-  const double sa = sin_az0_[u] * cos_col_[c] + cos_az0_[u] * sin_col_[c];
-  const double n = beams_.beam_origin, r = range_mm * 1e-3;
-  return Eigen::Vector3d(r * ca * cp + n * ca * (1 - cp), r * sa * cp + n * sa * (1 - cp),
-                         r * sp + beams_.lidar_z - n * sp);
+  return trig_.point(beams_, index / cols, index % cols, range_mm * 1e-3);
 }
 
 Eigen::Vector3d CriticalZone::levelPoint(uint32_t index, uint32_t range_mm) const {
@@ -364,7 +192,7 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
   float* cand_cc = sb.cos_col.data();
   float* cand_sc = sb.sin_col.data();
   size_t* row_first = sb.row_first.data();
-  const double *cos_col = cos_col_.data(), *sin_col = sin_col_.data();
+  const double *cos_col = trig_.cos_col.data(), *sin_col = trig_.sin_col.data();
 
   // Pass 1: candidates from the table (one subtract-and-compare per pixel), valid-return count.
   const Interval* table = table_.data();
@@ -458,9 +286,10 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
   for (size_t u = 0; u < rows; ++u) {
     const size_t k0 = row_first[u], k1 = row_first[u + 1];
     if (k0 == k1) continue;
-    const double a = cos_az0_[u], b = sin_az0_[u];
-    const float cp = static_cast<float>(cos_alt_[u] * 1e-3), sp = static_cast<float>(sin_alt_[u] * 1e-3);
-    const float o1 = static_cast<float>(n * (1 - cos_alt_[u])), o2 = static_cast<float>(lz - n * sin_alt_[u]);
+    const double a = trig_.cos_az0[u], b = trig_.sin_az0[u];
+    const double cos_alt = trig_.cos_alt[u], sin_alt = trig_.sin_alt[u];
+    const float cp = static_cast<float>(cos_alt * 1e-3), sp = static_cast<float>(sin_alt * 1e-3);
+    const float o1 = static_cast<float>(n * (1 - cos_alt)), o2 = static_cast<float>(lz - n * sin_alt);
     const float px = static_cast<float>(R(0, 0) * a + R(0, 1) * b),
                 qx = static_cast<float>(R(0, 1) * a - R(0, 0) * b);
     const float py = static_cast<float>(R(1, 0) * a + R(1, 1) * b),
@@ -574,132 +403,6 @@ void CriticalZone::evaluateStrided(const uint8_t* range_bytes, size_t stride, Zo
     std::nth_element(lambdas.begin(), lambdas.begin() + j, lambdas.end());
     res.speed_scale = lambdas[j];
   }
-}
-
-bool CriticalZone::estimateHeight(const uint8_t* range_bytes, size_t stride, double max_distance,
-                                  double quantile, size_t column_step, size_t min_samples,
-                                  double* height) const {
-  if (!table_valid_) return false;
-  const size_t rows = beams_.rows(), cols = static_cast<size_t>(beams_.columns);
-  const Eigen::Matrix3d& R = pose_.level_from_sensor;
-  const double n = beams_.beam_origin, lz = beams_.lidar_z;
-  thread_local std::vector<double> sample_buffer;
-  std::vector<double>& samples = sample_buffer;
-  samples.clear();
-  const size_t step = std::max<size_t>(1, column_step);
-  const double tilt = std::hypot(R(2, 0), R(2, 1));
-  for (size_t u = 0; u < rows; ++u) {
-    const double cp = cos_alt_[u], sp = sin_alt_[u];
-    // Only clearly downward rays (> 5 deg below the horizon in the level frame): skip rows that
-    // have none without touching their data.
-    if (R(2, 2) * sp - tilt * cp > -0.087) continue;
-    for (size_t c = u % step; c < cols; c += step) {
-      const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];
-      const double sa = sin_az0_[u] * cos_col_[c] + cos_az0_[u] * sin_col_[c];
-      const double dz = R(2, 0) * ca * cp + R(2, 1) * sa * cp + R(2, 2) * sp;
-      if (dz > -0.087) continue;
-      uint32_t r;
-      std::memcpy(&r, range_bytes + (u * cols + c) * stride, sizeof(r));
-      if (r == 0) continue;
-      const double rm = r * 1e-3, horiz = rm * cp + n * (1 - cp);
-      const double sx = ca * horiz, sy = sa * horiz, sz = rm * sp + lz - n * sp;
-      const double x = R(0, 0) * sx + R(0, 1) * sy + R(0, 2) * sz;
-      const double y = R(1, 0) * sx + R(1, 1) * sy + R(1, 2) * sz;
-      if (x * x + y * y > max_distance * max_distance) continue;
-      samples.push_back(-(R(2, 0) * sx + R(2, 1) * sy + R(2, 2) * sz));
-    }
-  }
-  if (samples.size() < std::max<size_t>(1, min_samples)) return false;
-  const size_t k = std::min(samples.size() - 1, static_cast<size_t>(quantile * (samples.size() - 1)));
-  std::nth_element(samples.begin(), samples.begin() + k, samples.end());
-  *height = samples[k];
-  return true;
-}
-
-bool CriticalZone::estimateFloor(const uint8_t* range_bytes, size_t stride, double max_distance,
-                                 double max_tilt, size_t column_step, size_t min_samples,
-                                 SensorPose* pose) const {
-  if (!table_valid_ || !pose) return false;
-  const size_t rows = beams_.rows(), cols = static_cast<size_t>(beams_.columns);
-  const Eigen::Matrix3d& R = pose_.level_from_sensor;
-  const double n = beams_.beam_origin, lz = beams_.lidar_z, h0 = pose_.height;
-  const double slope = std::tan(std::max(0.0, max_tilt));
-  thread_local std::vector<Eigen::Vector3d> point_buffer;
-  std::vector<Eigen::Vector3d>& pts = point_buffer;
-  pts.clear();
-  const size_t step = std::max<size_t>(1, column_step);
-  // Prior-level points of rays that may reach the floor (below the horizon by more than the
-  // tolerated tilt error allows upwards).
-  const double tilt = std::hypot(R(2, 0), R(2, 1));
-  const double min_dz = -std::sin(std::min(0.2, 0.5 * max_tilt));
-  for (size_t u = 0; u < rows; ++u) {
-    const double cp = cos_alt_[u], sp = sin_alt_[u];
-    if (R(2, 2) * sp - tilt * cp > 0.0) continue;
-    for (size_t c = u % step; c < cols; c += step) {
-      uint32_t r;
-      std::memcpy(&r, range_bytes + (u * cols + c) * stride, sizeof(r));
-      if (r == 0) continue;
-      const double ca = cos_az0_[u] * cos_col_[c] - sin_az0_[u] * sin_col_[c];
-      const double sa = sin_az0_[u] * cos_col_[c] + cos_az0_[u] * sin_col_[c];
-      const double dz = R(2, 0) * ca * cp + R(2, 1) * sa * cp + R(2, 2) * sp;
-      if (dz > min_dz) continue;
-      const double rm = r * 1e-3, horiz = rm * cp + n * (1 - cp);
-      const Eigen::Vector3d sp3(ca * horiz, sa * horiz, rm * sp + lz - n * sp);
-      Eigen::Vector3d p = R * sp3;
-      p.z() += h0;
-      const double d2 = p.x() * p.x() + p.y() * p.y();
-      if (d2 > max_distance * max_distance) continue;
-      if (std::fabs(p.z()) > 0.05 + slope * std::sqrt(d2)) continue;
-      pts.push_back(p);
-    }
-  }
-  // Plane z = a x + b y + c, refitted with shrinking bands around the previous fit.
-  double a = 0, b = 0, cc = 0;
-  // The first fit uses only returns within 1.5 m (walls are rarely that close); later fits use all.
-  const double slopes[5] = {slope, 0.5 * slope, 0.06, 0.02, 0.02};
-  const double offsets[5] = {0.05, 0.04, 0.03, 0.03, 0.03};
-  size_t used = 0;
-  for (int it = 0; it < 5; ++it) {
-    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-    used = 0;
-    for (const Eigen::Vector3d& p : pts) {
-      const double d = std::sqrt(p.x() * p.x() + p.y() * p.y());
-      if (it == 0 && d > 1.5) continue;
-      if (std::fabs(p.z() - (a * p.x() + b * p.y() + cc)) > offsets[it] + slopes[it] * d) continue;
-      const Eigen::Vector3d q(p.x(), p.y(), 1.0);
-      A += q * q.transpose();
-      rhs += q * p.z();
-      ++used;
-    }
-    if (used < std::max<size_t>(3, min_samples)) return false;
-    const Eigen::Vector3d sol = A.ldlt().solve(rhs);
-    if (!sol.allFinite()) return false;
-    a = sol.x();
-    b = sol.y();
-    cc = sol.z();
-  }
-  const Eigen::Vector3d normal = Eigen::Vector3d(-a, -b, 1.0).normalized();
-  if (std::acos(std::min(1.0, normal.z())) > max_tilt) return false;
-  const Eigen::Matrix3d correction =
-      Eigen::Quaterniond::FromTwoVectors(normal, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  pose->level_from_sensor = correction * R;
-  // Sensor origin (0, 0, h0) in the prior level frame; its distance to the plane.
-  pose->height = (h0 - cc) * normal.z();
-  return std::isfinite(pose->height) && pose->height > 0.0;
-}
-
-bool CollisionLatch::update(bool occupied) {
-  if (occupied) {
-    collision_ = true;
-    clear_run_ = 0;
-  } else if (collision_) {
-    if (++clear_run_ >= clear_scans_) {
-      collision_ = false;
-      clear_run_ = 0;
-    }
-  }
-  return collision_;
 }
 
 }  // namespace rbd_lidar

@@ -9,6 +9,9 @@
 #include <sensor_msgs/Imu.h>
 #include <std_msgs/Float32.h>
 #include <std_srvs/SetBool.h>
+#include <tf2/LinearMath/Matrix3x3.h>
+#include <tf2/LinearMath/Quaternion.h>
+#include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/transform_listener.h>
 #include <visualization_msgs/Marker.h>
 
@@ -21,6 +24,8 @@
 
 #include "rbd_lidar/os1_beams.h"
 #include "rbd_lidar/scan_pipeline.h"
+#include "rbd_lidar/zone_growth.h"
+#include "rbd_lidar/zone_marker.h"
 
 namespace rbd_lidar {
 
@@ -155,14 +160,13 @@ class LidarNode {
 
   void odomCb(const nav_msgs::Odometry& o) {
     const auto& q = o.pose.pose.orientation;
-    const Eigen::Quaterniond quat(q.w, q.x, q.y, q.z);
-    if (!std::isfinite(quat.norm()) || quat.norm() < 0.5 || !std::isfinite(o.pose.pose.position.z)) {
+    const tf2::Quaternion quat(q.x, q.y, q.z, q.w);
+    if (!std::isfinite(quat.length()) || quat.length() < 0.5 || !std::isfinite(o.pose.pose.position.z)) {
       ROS_WARN_THROTTLE(5.0, "rbd_lidar: odom orientation invalid; ignoring it");
       return;
     }
-    const Eigen::Matrix3d r = quat.normalized().toRotationMatrix();
-    odom_roll_ = std::atan2(r(2, 1), r(2, 2));
-    odom_pitch_ = -std::asin(std::max(-1.0, std::min(1.0, r(2, 0))));
+    double yaw;
+    tf2::Matrix3x3(quat.normalized()).getRPY(odom_roll_, odom_pitch_, yaw);
     odom_z_ = o.pose.pose.position.z;
     odom_time_ = ros::Time::now();
   }
@@ -189,10 +193,10 @@ class LidarNode {
     if (mount_from_tf_ && !mount_found_ && !frame.empty()) {
       try {
         const auto tf = tf_buffer_.lookupTransform(base_frame_, frame, ros::Time(0));
-        const auto& r = tf.transform.rotation;
-        mount_r_ = Eigen::Quaterniond(r.w, r.x, r.y, r.z).normalized().toRotationMatrix();
-        mount_t_ = Eigen::Vector3d(tf.transform.translation.x, tf.transform.translation.y,
-                                   tf.transform.translation.z);
+        Eigen::Quaterniond r;
+        tf2::fromMsg(tf.transform.rotation, r);
+        mount_r_ = r.normalized().toRotationMatrix();
+        mount_t_ = tf2::transformToEigen(tf).translation();
         mount_found_ = true;
         ROS_INFO("rbd_lidar: mount %s -> %s from TF: (%.3f %.3f %.3f) m", base_frame_.c_str(), frame.c_str(),
                  mount_t_.x(), mount_t_.y(), mount_t_.z());
@@ -341,42 +345,7 @@ class LidarNode {
   void publishMarker(const std_msgs::Header& header, const ZoneParams& z, const SensorPose& pose) {
     if (marker_pub_.getNumSubscribers() == 0 && marker_sent_) return;
     marker_sent_ = true;
-    visualization_msgs::Marker m;
-    m.header = header;
-    m.ns = "rbd_lidar_zone";
-    m.id = 0;
-    m.type = visualization_msgs::Marker::LINE_LIST;
-    m.action = visualization_msgs::Marker::ADD;
-    m.pose.orientation.w = 1.0;
-    m.scale.x = 0.01;
-    m.color.r = 1.0;
-    m.color.a = 0.9;
-    const double xs[2] = {z.front, -z.back}, ys[2] = {z.left, -z.right};
-    const double hs[2] = {z.floor_clearance, std::min(z.max_height, pose.height + 0.3)};
-    // Box corners in the level frame, drawn in the cloud frame.
-    auto corner = [&](int i, int j, int k) {
-      const Eigen::Vector3d level(xs[i], ys[j], hs[k] - pose.height);
-      const Eigen::Vector3d s = pose.level_from_sensor.transpose() * level;
-      geometry_msgs::Point p;
-      p.x = s.x();
-      p.y = s.y();
-      p.z = s.z();
-      return p;
-    };
-    for (int k = 0; k < 2; ++k) {  // top and bottom rectangles
-      const int order[5][2] = {{0, 0}, {0, 1}, {1, 1}, {1, 0}, {0, 0}};
-      for (int e = 0; e < 4; ++e) {
-        m.points.push_back(corner(order[e][0], order[e][1], k));
-        m.points.push_back(corner(order[e + 1][0], order[e + 1][1], k));
-      }
-    }
-    for (int i = 0; i < 2; ++i) {
-      for (int j = 0; j < 2; ++j) {  // vertical edges
-        m.points.push_back(corner(i, j, 0));
-        m.points.push_back(corner(i, j, 1));
-      }
-    }
-    marker_pub_.publish(m);
+    marker_pub_.publish(zoneMarker(header, z, pose));
   }
 
   // Calls the controller's collision service when the state changes; tolerates its absence

@@ -5,6 +5,8 @@
 #include <cstring>
 #include <limits>
 
+#include "rbd_lidar/floor_fit.h"
+
 namespace rbd_lidar {
 
 namespace {
@@ -308,16 +310,16 @@ CloudError ScanPipeline::process(const sensor_msgs::PointCloud2& cloud, Outputs*
     height_measured_ = false;
     if (params_.floor_from_cloud) {
       SensorPose floor = pose_;
-      if (zone_.estimateFloor(range_bytes, stride, 3.0, params_.floor_max_tilt,
-                              std::max<size_t>(1, cloud.width / 64), 50, &floor)) {
+      if (estimateFloor(zone_, range_bytes, stride, 3.0, params_.floor_max_tilt,
+                        std::max<size_t>(1, cloud.width / 64), 50, &floor)) {
         const double tol = std::max(0.0, params_.floor_height_tolerance);
         floor.height = std::min(pose_.height + tol, std::max(pose_.height - tol, floor.height));
         std::string ignored;
         if (zone_.configure(model_, zone_params_, floor, &ignored)) height_measured_ = true;
       } else {
         double h;
-        if (zone_.estimateHeight(range_bytes, stride, 3.0, 0.8, std::max<size_t>(1, cloud.width / 128), 50,
-                                 &h) &&
+        if (estimateHeight(zone_, range_bytes, stride, 3.0, 0.8, std::max<size_t>(1, cloud.width / 128), 50,
+                           &h) &&
             std::isfinite(h)) {
           const double tol = std::max(0.0, params_.floor_height_tolerance);
           zone_.setHeight(std::min(pose_.height + tol, std::max(pose_.height - tol, h)));

@@ -7,7 +7,10 @@
 #include <limits>
 #include <vector>
 
+#include "rbd_lidar/collision_latch.h"
 #include "rbd_lidar/critical_zone.h"
+#include "rbd_lidar/floor_fit.h"
+#include "rbd_lidar/zone_growth.h"
 
 using rbd_lidar::BeamModel;
 using rbd_lidar::CollisionLatch;
@@ -372,6 +375,51 @@ TEST(CriticalZone, FloorNeverTriggersInTiltedPoses) {
     EXPECT_GE(with_person.counts[rbd_lidar::FRONT], 20u) << "pitch " << ps.pitch;
   }
   EXPECT_TRUE(wrong_triggers);
+}
+
+// The floor measured from the returns (floor_fit.h): with a prior attitude 4 deg and a height
+// 6 cm off, the plane fit recovers the true vertical and height despite a wall-like obstacle;
+// estimateHeight with the true attitude finds the height; nothing without a configured zone,
+// too few returns, or a correction beyond max_tilt.
+TEST(FloorFit, RecoversThePoseFromTheFloor) {
+  const BeamModel m = os1(1024);
+  const Eigen::Vector3d mount_t(0.0, 0.0, 0.10);
+  const SensorPose truth = SensorPose::fromBody(0.03, 4 * kDeg, Eigen::Matrix3d::Identity(), mount_t, 0.22);
+  SensorPose prior = SensorPose::fromBody(0.0, 0.0, Eigen::Matrix3d::Identity(), mount_t, 0.28);
+  std::vector<uint32_t> img(32 * 1024, 0);
+  for (size_t u = 0; u < 32; ++u) {
+    for (size_t c = 0; c < 1024; ++c) {
+      uint32_t r = rangeTo(m, truth, u, c, 2, 0.0);
+      if (r > 0) r += static_cast<uint32_t>(((u * 7 + c * 13) % 21)) - 10u;  // +-10 mm
+      // A wall 1.2 m ahead over +-30 deg hides the floor beyond it.
+      const uint32_t wall =
+          std::fabs(pixelAzimuth(m, truth, u, c)) < 30 * kDeg ? rangeTo(m, truth, u, c, 0, 1.2) : 0;
+      if (wall > 0 && (r == 0 || wall < r)) r = wall;
+      img[u * 1024 + c] = r;
+    }
+  }
+  const uint8_t* bytes = reinterpret_cast<const uint8_t*>(img.data());
+  CriticalZone unconfigured;
+  SensorPose fitted = prior;
+  double h = 0.0;
+  EXPECT_FALSE(rbd_lidar::estimateFloor(unconfigured, bytes, 4, 3.0, 0.35, 1, 50, &fitted));
+  EXPECT_FALSE(rbd_lidar::estimateHeight(unconfigured, bytes, 4, 3.0, 0.8, 1, 50, &h));
+
+  CriticalZone zone;
+  ASSERT_TRUE(zone.configure(m, ZoneParams(), prior, nullptr));
+  ASSERT_GT((prior.level_from_sensor.row(2) - truth.level_from_sensor.row(2)).norm(), 0.06);
+  ASSERT_TRUE(rbd_lidar::estimateFloor(zone, bytes, 4, 3.0, 0.35, 4, 50, &fitted));
+  EXPECT_LT((fitted.level_from_sensor.row(2) - truth.level_from_sensor.row(2)).norm(), 0.3 * kDeg);
+  EXPECT_NEAR(fitted.height, truth.height, 0.01);
+  // A correction larger than max_tilt is refused.
+  EXPECT_FALSE(rbd_lidar::estimateFloor(zone, bytes, 4, 3.0, 2 * kDeg, 4, 50, &fitted));
+  // Too few returns.
+  EXPECT_FALSE(rbd_lidar::estimateFloor(zone, bytes, 4, 3.0, 0.35, 4, 1000000, &fitted));
+
+  prior.level_from_sensor = truth.level_from_sensor;
+  ASSERT_TRUE(zone.configure(m, ZoneParams(), prior, nullptr));
+  ASSERT_TRUE(rbd_lidar::estimateHeight(zone, bytes, 4, 3.0, 0.8, 4, 50, &h));
+  EXPECT_NEAR(h, truth.height, 0.015);
 }
 
 TEST(SensorPose, LevelFromGravity) {

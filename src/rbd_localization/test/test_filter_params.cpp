@@ -5,9 +5,11 @@
 // them (every matrix entry through a string stream; 225 entries row-major).
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "rbd_localization/effective_config.h"
 #include "rbd_localization/filter_params.h"
 
 using namespace rbd_localization;  // NOLINT: StateMember* enumerators
@@ -512,4 +514,27 @@ TEST(FilterParams, HonouredExtrasAreRead) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
+}
+
+// ~effective_config (effective_config.h): the parsed values read back through a JSON parser, and a
+// key that is not UTF-8 (XmlRpc strings are bytes) ends up in the warnings without an exception.
+TEST(EffectiveConfig, JsonHoldsTheParsedValuesAndSurvivesNonUtf8) {
+  XmlRpcValue ns = minimal();
+  ns["frequency"] = num(42.5);
+  ns["bad\xff key"] = boolean(true);  // unknown, listed in the warnings
+  const Parsed p = parse(ns);
+  ASSERT_TRUE(p.ok) << p.error;
+  StateMatrix q = p.params.process_noise_covariance;
+  q(0, 1) = 0.25;
+  std::string text;
+  ASSERT_NO_THROW(text = effectiveConfigJson(p.params, q, p.params.initial_estimate_covariance, p.warnings));
+  const nlohmann::json j = nlohmann::json::parse(text);
+  EXPECT_EQ(j["frequency"].get<double>(), 42.5);
+  EXPECT_EQ(j["process_noise_covariance"].size(), 225u);
+  EXPECT_EQ(j["process_noise_covariance"][1].get<double>(), 0.25);  // row-major
+  ASSERT_EQ(j["sensors"].size(), p.params.sensors.size());
+  EXPECT_EQ(j["sensors"][0]["name"].get<std::string>(), p.params.sensors[0].name);
+  EXPECT_EQ(j["sensors"][0]["config"].size(), static_cast<size_t>(STATE_SIZE));
+  ASSERT_EQ(j["warnings"].size(), p.warnings.size());
+  EXPECT_NE(j["warnings"].back().get<std::string>().find("unknown parameters"), std::string::npos);
 }

@@ -1,4 +1,8 @@
-// ROS-free critical-zone model of rbd_lidar (thesis §3.3.2, extended).
+// ROS-free critical-zone test of rbd_lidar (thesis §3.3.2, extended): which points of a range
+// image are critical. The parts it is built from have their own headers: beam_model.h (ray
+// geometry), sensor_pose.h (attitude and height), zone_params.h (zone size), zone_growth.h
+// (velocity-aware growth and its hold); floor_fit.h measures the pose from the floor and
+// collision_latch.h turns occupied scans into the collision state.
 //
 // The zone is a box around the LiDAR in a gravity-aligned "level" frame whose x axis is the
 // robot's heading: a point is critical when its perpendicular distance to the LiDAR, in the
@@ -20,111 +24,11 @@
 #include <string>
 #include <vector>
 
+#include "rbd_lidar/beam_model.h"
+#include "rbd_lidar/sensor_pose.h"
+#include "rbd_lidar/zone_params.h"
+
 namespace rbd_lidar {
-
-// Side indices, the same order as rbd_msgs/CollisionState.
-enum Side : uint8_t { FRONT = 0, LEFT = 1, BACK = 2, RIGHT = 3 };
-
-// Geometry of the beams of an organised (rows x columns) range image, in the sensor frame
-// (os_sensor). For pixel (u, c) the beam azimuth is azimuth0[u] + direction * 2*pi*c/columns and
-// its elevation altitude[u]; the point is p = r*d + n*((cos a, sin a, 0) - d) + (0, 0, lidar_z)
-// with d the unit ray and n the lidar-origin-to-beam-origin distance (ouster-sdk xyzlut model;
-// using the beam instead of the encoder azimuth in the n-term changes p by < 1.2 mm).
-struct BeamModel {
-  std::vector<double> altitude;  // per row [rad], positive up, row 0 = top beam
-  std::vector<double> azimuth0;  // per row: azimuth of column 0 in the sensor frame [rad]
-  int columns = 0;
-  int direction = -1;             // +1: azimuth grows with the column, -1: it falls (Ouster)
-  double beam_origin = 0.015806;  // lidar_origin_to_beam_origin [m]
-  double lidar_z = 0.03618;       // os_sensor -> os_lidar height [m]
-
-  // From Ouster metadata: altitude/azimuth in degrees, pixel shifts as in the metadata for
-  // shift_columns columns (scaled to `columns`), destaggered = the cloud is destaggered.
-  static BeamModel fromOuster(const std::vector<double>& altitude_deg, const std::vector<double>& azimuth_deg,
-                              const std::vector<int>& pixel_shift, int shift_columns, int columns,
-                              bool destaggered, double beam_origin_mm, double lidar_z_mm);
-
-  size_t rows() const { return altitude.size(); }
-  bool valid(std::string* why) const;
-  // Unit ray d and offset o in the sensor frame: p = r * d + o.
-  void ray(size_t row, size_t col, Eigen::Vector3d* d, Eigen::Vector3d* o) const;
-  // Replace the angles of row `row` by the ones measured from one point (sensor-frame xyz [m]
-  // and range [m]) at column `col`. Returns false if the point is unusable.
-  static bool anglesFromPoint(const Eigen::Vector3d& p, double range, double lidar_z, double beam_origin,
-                              double* altitude, double* azimuth);
-};
-
-// Zone sizes and filters. Distances are perpendicular distances from the LiDAR [m].
-struct ZoneParams {
-  double front = 0.70;
-  double back = 0.55;
-  double left = 0.35;
-  double right = 0.35;
-  double slowdown_front = 0.50;  // width of the slowdown band outside the stop zone, per side [m]
-  double slowdown_back = 0.30;
-  double slowdown_left = 0.20;
-  double slowdown_right = 0.20;
-  double blind_zone = 0.30;       // ranges below this are ignored [m]
-  double floor_clearance = 0.10;  // points lower than this above the floor are ignored [m]
-  double max_height = 2.0;        // points higher than this above the floor are ignored [m]
-  unsigned point_threshold = 5;   // this many critical points make a collision
-};
-
-// Pose of the sensor relative to the floor.
-struct SensorPose {
-  Eigen::Matrix3d level_from_sensor = Eigen::Matrix3d::Identity();  // rotation sensor -> level frame
-  double height = 0.38;                                             // sensor origin above the floor [m]
-
-  // Body roll/pitch [rad] (base_link w.r.t. gravity), the mount base_link -> sensor and the height
-  // of base_link above the floor [m].
-  static SensorPose fromBody(double roll, double pitch, const Eigen::Matrix3d& mount_rotation,
-                             const Eigen::Vector3d& mount_translation, double base_height);
-  // Sensor tilt from the specific force measured by an IMU fixed to the sensor (axes parallel to
-  // the sensor frame, as the Ouster's internal IMU): the rotation taking `accel` to +z, followed
-  // by `heading_yaw` (yaw of the sensor x axis relative to the robot's heading, e.g. the mount yaw).
-  // Returns false (and leaves *rotation) for a non-finite or near-zero vector.
-  static bool levelFromGravity(const Eigen::Vector3d& accel, double heading_yaw, Eigen::Matrix3d* rotation);
-};
-
-// Velocity-aware growth of the stop zone.
-struct MotionParams {
-  double reaction_time = 0.7;    // each side grows by the commanded speed towards it times this [s]
-  double rotation_lever = 0.30;  // turning at w grows every side by |w| * lever * reaction_time [m]
-  double max_growth = 0.50;      // growth cap per side [m]
-};
-
-// The stop zone grown for the commanded body velocity (vx, vy [m/s], wz [rad/s]).
-ZoneParams grownZone(const ZoneParams& base, double vx, double vy, double wz, const MotionParams& motion);
-
-// Keeps a stopped motion's growth until its collision is released. A collision latched while the
-// robot moved was found in the zone grown for that motion; once the robot stands still the zone
-// shrinks back to its rest size, and an obstacle between the two sizes would release the latch
-// at once: the robot resumes, grows the zone, stops again (stop-and-go towards a bag on the path,
-// never standing long enough to be judged blocked). While the latch holds and no motion is
-// commanded, every side keeps at least the growth of the last motion commanded during the latched
-// period (on top of the rest zone as it is now: a reconfigured zone still takes effect); a new
-// motion (stepping back, a detour) replaces the held growth with its own.
-class ZoneHold {
- public:
-  // The zone to check this scan: `grown` (the rest zone `base` grown for the current command), or
-  // while `latched` and not `moving`, `base` plus per side the larger of the current and the held
-  // growth. `enabled` false: always `grown`.
-  ZoneParams apply(const ZoneParams& base, const ZoneParams& grown, bool moving, bool latched,
-                   bool enabled = true);
-  // Whether the last apply() returned a zone larger than `grown` on some side.
-  bool holding() const { return holding_; }
-
- private:
-  std::array<double, 4> growth_{{0.0, 0.0, 0.0, 0.0}};  // front, back, left, right [m]
-  bool holding_ = false;
-};
-
-// A zone whose distances are measured from a point fixed to the body (the zone origin) instead of
-// from the LiDAR, expressed around the LiDAR: (dx, dy) [m] is the LiDAR's position relative to the
-// zone origin in the level frame (x = heading). Front/left shrink and back/right grow by the
-// offset, never below 0. *clamped (optional) tells whether a side had to be clamped (the LiDAR
-// sits outside the zone). Non-finite offsets leave the zone unchanged.
-ZoneParams zoneAroundOrigin(const ZoneParams& zone, double dx, double dy, bool* clamped = nullptr);
 
 struct ZoneResult {
   std::array<uint32_t, 4> counts{{0, 0, 0, 0}};  // critical points per side
@@ -155,21 +59,6 @@ class CriticalZone {
   // e.g. the `range` field of an organised PointCloud2 with row_step = width * point_step.
   void evaluateStrided(const uint8_t* range_bytes, size_t stride, ZoneResult* out) const;
 
-  // Sensor height above the floor measured from the returns themselves: with the configured
-  // attitude, downward rays that end within `max_distance` horizontally give "sensor height if
-  // this return is on the floor"; the floor is the lowest surface, so a high quantile of these
-  // (`quantile`, e.g. 0.8) is the estimate. Rows are sampled every `column_step` columns. Returns
-  // false if fewer than `min_samples` such returns exist. Strided source as evaluateStrided.
-  bool estimateHeight(const uint8_t* range_bytes, size_t stride, double max_distance, double quantile,
-                      size_t column_step, size_t min_samples, double* height) const;
-  // Floor plane measured from the returns themselves (the configured attitude is only a prior):
-  // downward returns within `max_distance` horizontally whose height lies within a band around the
-  // prior floor that widens with distance by `max_tilt` (tolerating that much attitude error) are
-  // fitted with a least-squares plane; two more fits with shrinking bands reject obstacles. On
-  // success *pose is the corrected sensor pose (floor plane = z 0) and true is returned; false if
-  // fewer than `min_samples` returns support the plane or the correction exceeds `max_tilt`.
-  bool estimateFloor(const uint8_t* range_bytes, size_t stride, double max_distance, double max_tilt,
-                     size_t column_step, size_t min_samples, SensorPose* pose) const;
   // Change only the sensor height (cheap; the candidate table does not depend on it).
   void setHeight(double height) { pose_.height = height; }
 
@@ -187,6 +76,10 @@ class CriticalZone {
   size_t columns() const { return static_cast<size_t>(beams_.columns); }
   const ZoneParams& zone() const { return zone_; }
   const SensorPose& pose() const { return pose_; }
+  const BeamModel& beams() const { return beams_; }
+  const BeamTrig& trig() const { return trig_; }
+  // Whether configure() has succeeded (the model is usable).
+  bool configured() const { return table_valid_; }
   size_t tableBuilds() const { return builds_; }
 
  private:
@@ -214,31 +107,9 @@ class CriticalZone {
   double table_blind_ = -1.0;
   bool table_valid_ = false;
   std::vector<Interval> table_;
-  // Per-pixel trigonometry split into per-row and per-column tables.
-  std::vector<double> cos_alt_, sin_alt_, cos_az0_, sin_az0_, cos_col_, sin_col_;
+  BeamTrig trig_;
   std::ostream* debug_ = nullptr;
   size_t builds_ = 0;
-};
-
-// Hysteresis: collision as soon as a scan is occupied; clear only after `clear_scans`
-// consecutive clear scans. Starts in collision (nothing has been seen yet).
-class CollisionLatch {
- public:
-  explicit CollisionLatch(unsigned clear_scans = 3) : clear_scans_(clear_scans) {}
-  void setClearScans(unsigned n) { clear_scans_ = n; }
-  // One valid scan; returns the collision state.
-  bool update(bool occupied);
-  // Invalid or stale input: collision, and the clear count starts again.
-  void fail() {
-    collision_ = true;
-    clear_run_ = 0;
-  }
-  bool collision() const { return collision_; }
-
- private:
-  unsigned clear_scans_;
-  unsigned clear_run_ = 0;
-  bool collision_ = true;
 };
 
 }  // namespace rbd_lidar

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "rbd_lidar/collision_latch.h"
 #include "rbd_lidar/critical_zone.h"
 
 namespace rbd_lidar {
