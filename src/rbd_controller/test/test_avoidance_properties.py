@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 from rbd_controller.arena import Arena, default_arena
 from rbd_controller.blocking import CLEAR, MOVING, STATIC, UNKNOWN, BlockClassifier, near_fraction
 from rbd_controller.core import MainController, Ports
+from rbd_controller.detour import GridMap
 from rbd_controller.dodge import ApproachDetector, dodge_target
 from rbd_controller.escape import ZoneReading, clear_by_margin, occupied_sides, plan_escape
 from rbd_controller.fsm import State
@@ -43,6 +44,14 @@ reading = st.builds(ZoneReading, st.lists(st.integers(-3, 50), min_size=4, max_s
                     st.sampled_from(["", "malformed cloud"]))
 pose = st.tuples(small, small, st.floats(-7.0, 7.0))
 side = st.integers(0, 3)
+_half = np.zeros((20, 20), dtype=bool)
+_half[:, 10:] = True
+GRIDS = [  # an empty map, one never explored, one all free and known, one half occupied
+    GridMap(np.zeros((0, 0), dtype=bool), (0.0, 0.0), 0.05, known=np.zeros((0, 0), dtype=bool)),
+    GridMap(np.zeros((20, 20), dtype=bool), (-0.5, -0.5), 0.05, known=np.zeros((20, 20), dtype=bool)),
+    GridMap(np.zeros((20, 20), dtype=bool), (-0.5, -0.5), 0.05, known=np.ones((20, 20), dtype=bool)),
+    GridMap(_half, (0.0, -0.5), 0.05, known=np.ones((20, 20), dtype=bool)),
+]
 
 
 @st.composite
@@ -99,14 +108,16 @@ def test_near_fraction_is_a_fraction(a, b, radius):
 
 @FUZZ
 @given(st.lists(st.tuples(st.sampled_from(["pose", "zone", "blocking", "scan", "classify", "remember", "forget",
-                                           "arena"]),
-                          pose, reading, scan, st.tuples(coord, coord, coord)), max_size=15))
+                                           "arena", "map"]),
+                          pose, reading, scan, st.tuples(coord, coord, coord), st.sampled_from(GRIDS)), max_size=15))
 def test_perception_never_raises_and_keeps_its_outputs_finite(steps):
     p = Perception(AvoidParams(static_after=0.5))
     t = 0.0
-    for kind, good_pose, zone, pts, raw_pose in steps:
+    for kind, good_pose, zone, pts, raw_pose, grid in steps:
         t += 0.1
-        if kind == "pose":
+        if kind == "map":
+            p.on_map(grid)
+        elif kind == "pose":
             p.on_pose(t, *raw_pose)
             p.on_pose(t, *good_pose)
         elif kind == "zone":
