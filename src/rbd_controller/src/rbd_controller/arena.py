@@ -77,7 +77,12 @@ class Arena:
         return best
 
     def segment_inside(self, a: Point, b: Point, step: float = 0.02) -> bool:
-        """True if the straight motion from a to b stays inside (sampled every ``step`` m)."""
+        """True if the straight motion from a to b stays inside (sampled every ``step`` m); False if not finite."""
+        if not all(math.isfinite(v) for v in tuple(a) + tuple(b)):
+            return False
+        x0, y0, x1, y1 = self.bounds()
+        if math.hypot(b[0] - a[0], b[1] - a[1]) > math.hypot(x1 - x0, y1 - y0):
+            return False  # longer than the arena is wide
         n = max(2, int(math.ceil(math.hypot(b[0] - a[0], b[1] - a[1]) / step)) + 1)
         u = np.linspace(0.0, 1.0, n)
         xy = np.stack([a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1])], axis=1)
@@ -88,8 +93,13 @@ class Arena:
 
         ``margin`` is kept to the edges; 0 if start itself is outside.
         """
-        if not self.contains(*start):
+        if not self.contains(*start) or not all(math.isfinite(v) for v in direction) or not distance > 0.0:
             return 0.0
+        norm = math.hypot(direction[0], direction[1])
+        if norm < 1e-9:
+            return 0.0
+        x0, y0, x1, y1 = self.bounds()
+        distance = min(distance, math.hypot(x1 - x0, y1 - y0) / norm)  # beyond that it is outside anyway
         d = 0.0
         while d + step <= distance + 1e-9:
             x, y = start[0] + (d + step) * direction[0], start[1] + (d + step) * direction[1]

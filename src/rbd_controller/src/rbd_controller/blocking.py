@@ -35,6 +35,8 @@ MOVING = "moving"
 #: A stop counts as the known static obstacle when at least this fraction of the points of every scan of
 #: the last map_confirm lies on it.
 KNOWN_FRACTION = 0.9
+#: Coordinates beyond this are no measurement (they would overflow the cell hashing) [m].
+MAX_COORD = 1e6
 
 
 def near_fraction(points: np.ndarray, reference: np.ndarray, radius: float) -> float:
@@ -113,7 +115,7 @@ class BlockClassifier:
     def update(self, t: float, points: Sequence[Point]) -> None:
         """Add one scan's blocking points (map frame) received at time t [s]."""
         arr = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        arr = arr[np.all(np.isfinite(arr), axis=1)]
+        arr = arr[np.all(np.isfinite(arr) & (np.abs(arr) < MAX_COORD), axis=1)]  # NaN/inf/absurd: no point
         if len(arr):  # thin to one point per 5 cm cell: thousands of critical points become tens
             arr = (np.unique(np.floor(arr / CELL).astype(np.int64), axis=0) + 0.5) * CELL
         if self.scans and t < self.scans[-1][0]:

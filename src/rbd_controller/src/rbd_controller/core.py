@@ -1,9 +1,10 @@
-"""Main controller: routes the FSM's states to behaviours, takes the stop inputs. ROS-free.
+"""Main controller: routes the FSM's states to behaviours and stops the robot on a fault. ROS-free.
 
-The node calls the stop inputs from its service and subscriber callbacks and tick() from one loop
-thread. Each FSM state belongs to one behaviour, which owns its own state, sets it up in
-``on_enter`` and runs it in ``tick``: :class:`~rbd_controller.tricks.Tricks` (waiting, generating,
-executing), :class:`~rbd_controller.stops.Stops` (e-stop, collision, operator lost, blocked),
+The node calls the stop inputs (the stops behaviour's, bound here) from its service and subscriber
+callbacks and tick() from one loop thread. Each FSM state belongs to one behaviour, which owns
+its own state, sets it up in ``on_enter`` and runs it in ``tick``:
+:class:`~rbd_controller.tricks.Tricks` (waiting, generating, executing),
+:class:`~rbd_controller.stops.Stops` (e-stop, collision, operator lost, blocked),
 :class:`~rbd_controller.avoidance.Avoidance` (escaping, avoiding; issue 17) and
 :class:`~rbd_controller.dodging.Dodging`. What they share is in
 :class:`~rbd_controller.context.Context`; this file only routes.

@@ -96,6 +96,8 @@ def dodge_target(
     Returns:
         (target, summary) or (None, reason) when no step of at least 5 cm is possible.
     """
+    if not all(math.isfinite(v) for v in tuple(pose) + tuple(home) + (step, max_offset)):
+        return None, "pose, home or limits not finite"
     x, y, yaw = pose
     bx, by = TOWARDS[OPPOSITE[approached_side]]
     c, s = math.cos(yaw), math.sin(yaw)

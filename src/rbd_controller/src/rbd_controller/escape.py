@@ -118,6 +118,8 @@ def plan_escape(
     """
     if not reading.valid:
         return None, "zone reading stale or invalid"
+    if not all(math.isfinite(v) for v in pose):
+        return None, "robot pose not finite: %r" % (pose,)
     blocking = occupied_sides(reading, zone, threshold, margin)
     if not blocking:
         return None, "zone already clear by %.2f m" % margin

@@ -12,7 +12,7 @@ from typing import List, Sequence, Tuple
 import numpy as np
 
 from rbd_controller.arena import Arena, default_arena
-from rbd_controller.blocking import STATIC, BlockClassifier
+from rbd_controller.blocking import MAX_COORD, STATIC, BlockClassifier
 from rbd_controller.detour import GridMap
 from rbd_controller.dodge import ApproachDetector
 from rbd_controller.escape import ZoneReading
@@ -126,6 +126,12 @@ class AvoidParams:
         self.home_tolerance = float(home_tolerance)
 
 
+def _measured(points: Sequence[Point]) -> np.ndarray:
+    """The points (N x 2) that can be measurements: finite and within MAX_COORD (NaN/inf are dropped)."""
+    arr = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    return arr[np.all(np.isfinite(arr) & (np.abs(arr) < MAX_COORD), axis=1)]
+
+
 class Perception:
     """Latest pose, zone reading, blocking points, obstacles and map (thread-safe).
 
@@ -201,7 +207,7 @@ class Perception:
         obstacle is assumed to extend ``shadow_depth`` further along the ray from the robot (a
         box seen by its face is that deep; a wall, deeper than that anyway).
         """
-        arr = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        arr = _measured(points)
         with self.lock:
             self.classifier.update(now, arr)
             if len(arr):
@@ -221,7 +227,7 @@ class Perception:
 
     def on_scan_points(self, now: float, points: Sequence[Point]) -> None:
         """Obstacle points of one scan (the central ring), map frame."""
-        arr = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        arr = _measured(points)
         with self.lock:
             self._scan.append((now, arr))
             while self._scan and self._scan[0][0] < now - self.scan_memory:
