@@ -236,3 +236,17 @@ def test_walls_build_the_same_configuration_space_as_stamping_or_more():
         stamped = np.zeros((h, w), dtype=bool)
         stamped[cells[ok, 0], cells[ok, 1]] = True
         assert stamped.any() and not (stamped & ~sides).any(), k
+
+
+def test_the_sim_strolls_box_detour_with_any_final_heading_is_sound():
+    # The scene of the box experiment (stroll, box 0.5 m ahead, after the escape): with the goal's own
+    # heading the robot cannot turn there (the zone's back corners sweep the box); the detour ends facing
+    # the way it walked (the trick pose is re-sent afterwards). Its last centimetres were once a
+    # move-and-turn segment checked as a straight walk.
+    pts = box(-0.06, -0.01, 0.2, step=0.01)
+    planner = LatticePlanner(ZONE, origin=(-0.08, 0.0))
+    start = (0.96, 0.0, -3.13)
+    plan = planner.plan(start, (-1.0, -0.03, -3.13), points=pts, any_heading=True)
+    assert plan.ok, plan
+    assert plan.poses[-1][:2] == (-1.0, -0.03)
+    assert_sound(plan, start, pts, origin=(-0.08, 0.0))

@@ -183,7 +183,8 @@ class Avoidance(Behaviour):
             if inside:
                 self.give_up(epoch, "goal blocked: the stop zone at the goal would hold %d obstacle points" % inside)
                 return None
-        plan = self.planner.plan(start, goal, p.grid, points, arena)
+        # The trick pose is sent again after the detour and turns to its own heading there.
+        plan = self.planner.plan(start, goal, p.grid, points, arena, any_heading=True)
         with ctx.lock:
             if ctx.fsm.epoch != epoch:
                 return None
@@ -274,7 +275,7 @@ class Avoidance(Behaviour):
             if fresh:
                 ctx.goal.sending()
         if replan:
-            new = self.planner.plan(start, goal_pose, p.grid, points, arena)
+            new = self.planner.plan(start, goal_pose, p.grid, points, arena, any_heading=True)
             with ctx.lock:
                 if ctx.fsm.epoch != epoch:
                     return

@@ -132,6 +132,7 @@ class LatticePlanner:
         self.speed = float(speed)
         self.max_vx = float(max_vx)
         self.max_seconds = float(max_seconds)
+        self._any_heading = False
         self._deadline = math.inf
         self.origin = (float(origin[0]), float(origin[1]))
         if not all(math.isfinite(v) and abs(v) < 1.0 for v in self.origin):
@@ -195,7 +196,7 @@ class LatticePlanner:
     # ------------------------------------------------------------------ entry
     def plan(self, start: Sequence[float], goal: Sequence[float], grid: Optional[GridMap] = None,
              points: Sequence[Sequence[float]] = (), arena: Optional[Arena] = None,
-             age: float = 0.0) -> LatticePlan:
+             age: float = 0.0, any_heading: bool = False) -> LatticePlan:
         """Plan from the start pose to the goal pose (map frame); never raises.
 
         Args:
@@ -205,11 +206,14 @@ class LatticePlanner:
             points: obstacle points [m].
             arena: the robot's centre stays inside (None: no limit).
             age: age of the newest cloud the points come from [s]: grows the zone like speed x age.
+            any_heading: the goal's position with any heading (the path ends facing the way it walked;
+                the trick pose re-sent afterwards turns to its own heading).
 
         Returns:
             A LatticePlan; ``ok`` False with the reason when no speed gives a free start, goal and path.
         """
         t0 = time.process_time()
+        self._any_heading = bool(any_heading)
         try:
             plan = self._plan(start, goal, grid, points, arena, age)
         except (ArithmeticError, IndexError, MemoryError, TypeError, ValueError) as err:
@@ -241,7 +245,11 @@ class LatticePlanner:
         spaces = [CSpace(window, obstacles, self.zone_for(v, age), self.bin, self.headings, arena, self.resolution,
                          self._kernels, exact, self.turn_zone_for(v, age), self._walk_zones(v, age)) for v in speeds]
         slowest = spaces[-1]
-        if not slowest.free_pose(goal):
+        if self._any_heading:
+            free = [h for h in np.arange(self.headings) * self.bin if slowest.free_pose((goal[0], goal[1], h))]
+            if not free:
+                return LatticePlan(False, [], 0.0, direct, "goal blocked: an obstacle in the zone at the goal")
+        elif not slowest.free_pose(goal):
             return LatticePlan(False, [], 0.0, direct, "goal blocked: an obstacle in the zone at the goal pose")
         if not slowest.free_pose(start):
             return LatticePlan(False, [], 0.0, direct, "start inside the zone even at %.2f m/s" % speeds[-1])
@@ -434,8 +442,11 @@ class LatticePlanner:
               goal: Pose) -> Optional[Tuple[List[Pose], List[float]]]:
         """Turn on the spot towards the goal, walk straight, turn to the goal's heading: free or None."""
         dist = math.hypot(goal[0] - pose[0], goal[1] - pose[1])
-        if dist < 0.05:
-            path = [pose, goal]
+        if self._any_heading:
+            face = math.atan2(goal[1] - pose[1], goal[0] - pose[0]) if dist >= 0.05 else pose[2]
+            goal = (goal[0], goal[1], face)
+        if dist < 0.05:  # walk the last centimetres, then turn on the spot (what the follower does)
+            path = [pose, (goal[0], goal[1], pose[2]), goal]
         else:
             face = math.atan2(goal[1] - pose[1], goal[0] - pose[0])
             path = [pose, (pose[0], pose[1], face), (goal[0], goal[1], face), goal]
@@ -633,7 +644,9 @@ class CSpace:
                     return False
                 continue
             s = sample_path([a, b], step=0.02, angle_step=0.01)
-            if not self._lookup(s[:, 0], s[:, 1], s[:, 2], self.walk_zone(0.0) if self.walk_zone is not None else None):
+            curvature = wrap(b[2] - a[2]) / math.hypot(b[0] - a[0], b[1] - a[1])
+            if not self._lookup(s[:, 0], s[:, 1], s[:, 2],
+                                self.walk_zone(curvature) if self.walk_zone is not None else None):
                 return False
         return True
 
