@@ -27,7 +27,7 @@ def box(cx, cy, half, step=0.02):
     return np.array(out)
 
 
-def assert_sound(plan, start, points):
+def assert_sound(plan, start, points, origin=(0.0, 0.0)):
     """Every motion keeps its own zone (rest zone grown for its speed and turn) free of every point."""
     path = [tuple(start)] + list(plan.poses)
     assert len(plan.zones) == len(plan.poses) == len(plan.speeds)
@@ -36,22 +36,37 @@ def assert_sound(plan, start, points):
         # The zone of each motion is at least rbd_lidar's for walking straight at that speed.
         walking = math.hypot(b[0] - a[0], b[1] - a[1]) >= 1e-9  # else a turn on the spot
         floor = grown_zone(ZONE, plan.speeds[i] if walking else 0.0, 0.0, 0.0, ZoneGrowth())
+        floor = (floor[0] + origin[0], floor[1] + origin[1], floor[2] - origin[0], floor[3] - origin[1])
         assert all(z >= f - 1e-9 for z, f in zip(zone, floor)), (zone, floor)
         assert swept_hits([a, b], zone, points) == 0, (i, a, b, zone)
 
 
 def test_grown_zone_is_rbd_lidars_rule():
-    # The numbers of rbd_lidar's gtest (critical_zone_test "grown zone"): 0.3 m/s forward, 0.7 s.
+    # The cases of rbd_lidar's gtest (test_critical_zone.cpp, VelocityAwareGrowth), 0.7 s reaction.
     g = ZoneGrowth(reaction_time=0.7, rotation_lever=0.3, max_growth=0.5)
     assert np.allclose(grown_zone(ZONE, 0.3, 0.0, 0.0, g), (0.91, 0.35, 0.55, 0.35))
-    assert np.allclose(grown_zone(ZONE, 0.0, -0.12, 0.0, g), (0.70, 0.35, 0.55, 0.434))
-    turn = 0.6 * 0.3 * 0.7
-    assert np.allclose(grown_zone(ZONE, 0.0, 0.0, -0.6, g), [z + turn for z in ZONE])
+    assert np.allclose(grown_zone(ZONE, -0.2, 0.12, 0.0, g), (0.70, 0.35 + 0.084, 0.55 + 0.14, 0.35))
+    assert np.allclose(grown_zone(ZONE, 0.0, 0.0, 0.628, g)[3], 0.35 + 0.628 * 0.3 * 0.7)
+    assert np.allclose(grown_zone(ZONE, 0.0, 0.0, -0.6, g), [z + 0.6 * 0.3 * 0.7 for z in ZONE])
     assert np.allclose(grown_zone(ZONE, 5.0, 0.0, 0.0, g), (1.20, 0.35, 0.55, 0.35))  # capped at max_growth
     assert grown_zone(ZONE, math.nan, 0.0, 0.0, g) == ZONE
     # A late cloud: the growth time is reaction + age.
     assert np.allclose(grown_zone(ZONE, 0.3, 0.0, 0.0, g, age=0.3), (1.0, 0.35, 0.55, 0.35))
     assert grown_zone(ZONE, 0.3, 0.0, 0.0, ZoneGrowth(enabled=False)) == ZONE
+
+
+def test_zone_origin_behind_base_link_moves_the_footprint():
+    # rbd_lidar measures from collision_zone, 0.08 m behind base_link: 0.08 m less in front, more behind.
+    shifted = LatticePlanner(ZONE, origin=(-0.08, 0.0)).turn_zone_for(0.06)
+    plain = LatticePlanner(ZONE).turn_zone_for(0.06)
+    assert np.allclose(np.subtract(shifted, plain), (-0.08, 0.0, 0.08, 0.0))
+    # The robot 0.77 m (base_link) behind the box face: inside the zone measured from base_link,
+    # 0.85 m from the zone's origin (the escape's margin) and free to leave.
+    pts = box(0.0, 0.0, 0.2)
+    assert not LatticePlanner(ZONE).plan((-0.97, 0.0, 0.0), (1.2, 0.0, 0.0), points=pts).ok
+    plan = LatticePlanner(ZONE, origin=(-0.08, 0.0)).plan((-0.97, 0.0, 0.0), (1.2, 0.0, 0.0), points=pts)
+    assert plan.ok
+    assert_sound(plan, (-0.97, 0.0, 0.0), pts, origin=(-0.08, 0.0))
 
 
 def test_box_ahead_the_detour_keeps_the_swept_zone_free():
@@ -199,3 +214,39 @@ def test_empty_scene_is_turn_walk_turn():
     plan = PLANNER.plan((0.0, 0.0, 0.0), (2.0, 0.0, math.pi / 2))
     assert plan.ok and plan.poses == [(2.0, 0.0, 0.0), (2.0, 0.0, math.pi / 2)] and plan.speeds[0] == 0.3
     assert points_in_zone((0.0, 0.0, 0.0), ZONE, np.zeros((0, 2))) == 0
+
+
+def test_walls_build_the_same_configuration_space_as_stamping_or_more():
+    # Many obstacle cells switch the grid's build from stamping the rectangle on each cell to dilating
+    # by its two sides; the second must flag every cell the first does (the exact check clears the rest).
+    from rbd_controller.lattice import CSpace
+
+    walls = np.concatenate([np.stack([np.full(200, -1.5), np.linspace(-1.5, 1.5, 200)], 1),
+                            np.stack([np.linspace(-1.5, 1.5, 200), np.full(200, 1.2)], 1)])
+    planner = LatticePlanner(ZONE)
+    window = planner._window((-1.0, 0.0, 0.0), (1.0, 0.0, 0.0))
+    space = CSpace(window, planner._obstacles(window, None, walls), planner.zone_for(0.3), planner.bin,
+                   planner.headings, None, planner.resolution)
+    h, w = space.blocked.shape[1:]
+    for k in range(0, planner.headings, 7):
+        sides = np.zeros((h, w), dtype=bool)
+        space._build_by_sides(k, sides)
+        cells = (space._occ[:, None, :] - space._kernel(k)[None, :, :]).reshape(-1, 2)
+        ok = (cells[:, 0] >= 0) & (cells[:, 0] < h) & (cells[:, 1] >= 0) & (cells[:, 1] < w)
+        stamped = np.zeros((h, w), dtype=bool)
+        stamped[cells[ok, 0], cells[ok, 1]] = True
+        assert stamped.any() and not (stamped & ~sides).any(), k
+
+
+def test_the_sim_strolls_box_detour_with_any_final_heading_is_sound():
+    # The scene of the box experiment (stroll, box 0.5 m ahead, after the escape): with the goal's own
+    # heading the robot cannot turn there (the zone's back corners sweep the box); the detour ends facing
+    # the way it walked (the trick pose is re-sent afterwards). Its last centimetres were once a
+    # move-and-turn segment checked as a straight walk.
+    pts = box(-0.06, -0.01, 0.2, step=0.01)
+    planner = LatticePlanner(ZONE, origin=(-0.08, 0.0))
+    start = (0.96, 0.0, -3.13)
+    plan = planner.plan(start, (-1.0, -0.03, -3.13), points=pts, any_heading=True)
+    assert plan.ok, plan
+    assert plan.poses[-1][:2] == (-1.0, -0.03)
+    assert_sound(plan, start, pts, origin=(-0.08, 0.0))

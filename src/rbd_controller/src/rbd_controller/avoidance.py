@@ -10,7 +10,9 @@ modules (escape, lattice, arena); this one only sequences them.
 """
 
 import math
-from typing import Any, Optional
+from typing import Any, Optional, Tuple
+
+import numpy as np
 
 from rbd_controller.context import Behaviour, Context
 from rbd_controller.escape import clear_by_margin, plan_escape
@@ -160,9 +162,9 @@ class Avoidance(Behaviour):
                 return
         self._drive_detour(self.plan, now, epoch)
 
-    def set_zone_growth(self, growth: ZoneGrowth) -> None:
-        """rbd_lidar's velocity-aware growth parameters for the planner's footprint (the node reads them)."""
-        self.planner = LatticePlanner(self.ctx.avoid.zone, growth)
+    def set_zone_growth(self, growth: ZoneGrowth, origin: Tuple[float, float] = (0.0, 0.0)) -> None:
+        """rbd_lidar's growth parameters and its zone's origin in base_link for the planner (the node reads them)."""
+        self.planner = LatticePlanner(self.ctx.avoid.zone, growth, origin=origin)
 
     def _plan_detour(self, now: float, epoch: int) -> Optional[LatticePlan]:
         """Plan to the blocked pose; None (after DETOUR_DONE or a give-up) when there is nothing to drive."""
@@ -181,10 +183,17 @@ class Avoidance(Behaviour):
             if inside:
                 self.give_up(epoch, "goal blocked: the stop zone at the goal would hold %d obstacle points" % inside)
                 return None
-        plan = self.planner.plan(start, goal, p.grid, points, arena)
+        # The trick pose is sent again after the detour and turns to its own heading there.
+        plan = self.planner.plan(start, goal, p.grid, points, arena, any_heading=True)
         with ctx.lock:
             if ctx.fsm.epoch != epoch:
                 return None
+            if not plan.ok:
+                pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+                near = float(np.min(np.hypot(pts[:, 0] - start[0], pts[:, 1] - start[1]))) if len(pts) else math.inf
+                ctx.ports.log("warn", "no detour from (%.2f, %.2f, %.2f) to (%.2f, %.2f, %.2f): %s (%d points, nearest "
+                              "%.2f m, map %s)" % (tuple(start[:3]) + tuple(goal[:3]) + (
+                                  plan.reason, len(pts), near, "yes" if p.grid is not None else "no")))
             if not self._accept(plan, epoch):
                 return None
             self.plan, self.plan_start, self.detour = plan, (start[0], start[1]), None
@@ -266,7 +275,7 @@ class Avoidance(Behaviour):
             if fresh:
                 ctx.goal.sending()
         if replan:
-            new = self.planner.plan(start, goal_pose, p.grid, points, arena)
+            new = self.planner.plan(start, goal_pose, p.grid, points, arena, any_heading=True)
             with ctx.lock:
                 if ctx.fsm.epoch != epoch:
                     return

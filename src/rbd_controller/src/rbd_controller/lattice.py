@@ -107,7 +107,10 @@ class LatticePlanner:
         headings: heading bins.
         step: length of one forward motion [m].
         window_margin: the search window extends this far beyond start and goal [m].
-        max_expansions: the search gives up after this many expansions (per speed tried).
+        max_expansions: the search gives up after this many expansions.
+        max_seconds: ... or after this much CPU time [s].
+        origin: (x, y) of the point the zone is measured from in the robot's frame [m] (rbd_lidar's
+            ~zone_frame: collision_zone, 0.08 m behind base_link on the A1); the poses are base_link's.
 
     Raises:
         ValueError: a value out of range.
@@ -116,7 +119,8 @@ class LatticePlanner:
     def __init__(self, zone: Sequence[float] = (0.70, 0.35, 0.55, 0.35), growth: Optional[ZoneGrowth] = None,
                  speed: float = 0.3, max_vx: float = 0.3, max_wz: float = math.radians(36.0), margin: float = 0.0,
                  min_speed: float = 0.06, resolution: float = 0.04, headings: int = 48, step: float = 0.2,
-                 window_margin: float = 2.0, max_expansions: int = 6000) -> None:
+                 window_margin: float = 2.0, max_expansions: int = 6000,
+                 origin: Sequence[float] = (0.0, 0.0), max_seconds: float = 5.0) -> None:
         if len(zone) != 4 or not all(math.isfinite(z) and z >= 0 for z in zone):
             raise ValueError("zone needs 4 finite sides >= 0, got %r" % (zone,))
         if not (0 < min_speed <= speed <= max_vx and 0 < max_wz and 0 <= margin and 0 < resolution <= 0.2
@@ -127,6 +131,12 @@ class LatticePlanner:
         self.growth = growth if growth is not None else ZoneGrowth()
         self.speed = float(speed)
         self.max_vx = float(max_vx)
+        self.max_seconds = float(max_seconds)
+        self._any_heading = False
+        self._deadline = math.inf
+        self.origin = (float(origin[0]), float(origin[1]))
+        if not all(math.isfinite(v) and abs(v) < 1.0 for v in self.origin):
+            raise ValueError("origin must be finite and within 1 m of the robot, got %r" % (origin,))
         self.max_wz = float(max_wz)
         self._kernels = {}  # type: Dict[Tuple[Tuple[float, ...], int], np.ndarray]
         self._prims = {}  # type: Dict[float, List[Any]]
@@ -153,7 +163,12 @@ class LatticePlanner:
 
     def turn_zone_for(self, speed: float, age: float = 0.0) -> Tuple[float, float, float, float]:
         """The rectangle kept free while turning on the spot at the follower's turn rate for speed."""
-        return motion_zone(self.zone, 0.0, self.turn_rate(speed), self.growth, self.margin, age)
+        return self._shift(motion_zone(self.zone, 0.0, self.turn_rate(speed), self.growth, self.margin, age))
+
+    def _shift(self, zone: Sequence[float]) -> Tuple[float, float, float, float]:
+        """A zone measured from origin as limits around the robot's own frame."""
+        ox, oy = self.origin
+        return (zone[0] + ox, zone[1] + oy, zone[2] - ox, zone[3] - oy)
 
     def walk_zone_for(self, speed: float, curvature: float, age: float = 0.0) -> Tuple[float, float, float, float]:
         """The rectangle kept free walking at speed on a curvature [1/m].
@@ -161,7 +176,7 @@ class LatticePlanner:
         The yaw rate is speed x curvature plus STEER_ALLOWANCE of the turn rate (the follower's corrections).
         """
         wz = min(self.turn_rate(speed), speed * abs(curvature) + STEER_ALLOWANCE * self.turn_rate(speed))
-        return motion_zone(self.zone, speed, wz, self.growth, self.margin, age)
+        return self._shift(motion_zone(self.zone, speed, wz, self.growth, self.margin, age))
 
     def _walk_zones(self, speed: float, age: float) -> Callable[[float], Sequence[float]]:
         cache = {}  # type: Dict[float, Tuple[float, float, float, float]]
@@ -176,12 +191,12 @@ class LatticePlanner:
 
     def zone_for(self, speed: float, age: float = 0.0) -> Tuple[float, float, float, float]:
         """The rectangle kept free for a path walked at speed (grown as rbd_lidar would, + margin)."""
-        return motion_zone(self.zone, speed, self.turn_rate(speed), self.growth, self.margin, age)
+        return self._shift(motion_zone(self.zone, speed, self.turn_rate(speed), self.growth, self.margin, age))
 
     # ------------------------------------------------------------------ entry
     def plan(self, start: Sequence[float], goal: Sequence[float], grid: Optional[GridMap] = None,
              points: Sequence[Sequence[float]] = (), arena: Optional[Arena] = None,
-             age: float = 0.0) -> LatticePlan:
+             age: float = 0.0, any_heading: bool = False) -> LatticePlan:
         """Plan from the start pose to the goal pose (map frame); never raises.
 
         Args:
@@ -191,11 +206,14 @@ class LatticePlanner:
             points: obstacle points [m].
             arena: the robot's centre stays inside (None: no limit).
             age: age of the newest cloud the points come from [s]: grows the zone like speed x age.
+            any_heading: the goal's position with any heading (the path ends facing the way it walked;
+                the trick pose re-sent afterwards turns to its own heading).
 
         Returns:
             A LatticePlan; ``ok`` False with the reason when no speed gives a free start, goal and path.
         """
         t0 = time.process_time()
+        self._any_heading = bool(any_heading)
         try:
             plan = self._plan(start, goal, grid, points, arena, age)
         except (ArithmeticError, IndexError, MemoryError, TypeError, ValueError) as err:
@@ -222,11 +240,16 @@ class LatticePlanner:
         window = self._window(start, goal)
         obstacles = self._obstacles(window, grid, pts)
         exact = self._exact_points(window, grid, pts)
+        self._deadline = time.process_time() + self.max_seconds
         speeds = self.speeds()
         spaces = [CSpace(window, obstacles, self.zone_for(v, age), self.bin, self.headings, arena, self.resolution,
                          self._kernels, exact, self.turn_zone_for(v, age), self._walk_zones(v, age)) for v in speeds]
         slowest = spaces[-1]
-        if not slowest.free_pose(goal):
+        if self._any_heading:
+            free = [h for h in np.arange(self.headings) * self.bin if slowest.free_pose((goal[0], goal[1], h))]
+            if not free:
+                return LatticePlan(False, [], 0.0, direct, "goal blocked: an obstacle in the zone at the goal")
+        elif not slowest.free_pose(goal):
             return LatticePlan(False, [], 0.0, direct, "goal blocked: an obstacle in the zone at the goal pose")
         if not slowest.free_pose(start):
             return LatticePlan(False, [], 0.0, direct, "start inside the zone even at %.2f m/s" % speeds[-1])
@@ -278,8 +301,16 @@ class LatticePlanner:
         return obstacles
 
     def _exact_points(self, window: Window, grid: Optional[GridMap], pts: np.ndarray) -> np.ndarray:
-        """The obstacles as points: the scan points, and each occupied map cell's centre and corners."""
-        out = [pts.reshape(-1, 2)]
+        """The obstacles as points: the scan points, and each occupied map cell's centre and corners.
+
+        Only those in the window, rounded to 5 mm and deduplicated (a scan holds thousands of points
+        on the walls around; the exact check's cost grows with them).
+        """
+        x0, y0, w, h = window
+        pts = pts.reshape(-1, 2)
+        inside = (pts[:, 0] >= x0) & (pts[:, 0] <= x0 + w * self.resolution) & (pts[:, 1] >= y0) & (
+            pts[:, 1] <= y0 + h * self.resolution)
+        out = [np.unique(np.round(pts[inside] / 0.005), axis=0) * 0.005]
         if grid is not None and grid.occupied.ndim == 2 and grid.occupied.size:
             x0, y0, w, h = window
             r, c = np.nonzero(grid.occupied)
@@ -363,7 +394,7 @@ class LatticePlanner:
         heap = [(heur(first[0], first[1]), 0.0, len(nodes) - 1, first)]
         closed = set()
         expanded = 0
-        while heap and expanded < self.max_expansions:
+        while heap and expanded < self.max_expansions and time.process_time() < self._deadline:
             _, g, idx, (x, y, k) = heapq.heappop(heap)
             key = (int(math.floor(x / cres)), int(math.floor(y / cres)), k)
             if key in closed:
@@ -411,8 +442,11 @@ class LatticePlanner:
               goal: Pose) -> Optional[Tuple[List[Pose], List[float]]]:
         """Turn on the spot towards the goal, walk straight, turn to the goal's heading: free or None."""
         dist = math.hypot(goal[0] - pose[0], goal[1] - pose[1])
-        if dist < 0.05:
-            path = [pose, goal]
+        if self._any_heading:
+            face = math.atan2(goal[1] - pose[1], goal[0] - pose[0]) if dist >= 0.05 else pose[2]
+            goal = (goal[0], goal[1], face)
+        if dist < 0.05:  # walk the last centimetres, then turn on the spot (what the follower does)
+            path = [pose, (goal[0], goal[1], pose[2]), goal]
         else:
             face = math.atan2(goal[1] - pose[1], goal[0] - pose[0])
             path = [pose, (pose[0], pose[1], face), (goal[0], goal[1], face), goal]
@@ -481,11 +515,43 @@ class CSpace:
         h, w = layer.shape
         if len(self._occ):
             kernel = self._kernel(k)
-            cells = (self._occ[:, None, :] - kernel[None, :, :]).reshape(-1, 2)
-            ok = (cells[:, 0] >= 0) & (cells[:, 0] < h) & (cells[:, 1] >= 0) & (cells[:, 1] < w)
-            layer[cells[ok, 0], cells[ok, 1]] = True
+            if len(self._occ) * len(kernel) <= 300000:  # few obstacle cells: stamp the rectangle on each
+                cells = (self._occ[:, None, :] - kernel[None, :, :]).reshape(-1, 2)
+                ok = (cells[:, 0] >= 0) & (cells[:, 0] < h) & (cells[:, 1] >= 0) & (cells[:, 1] < w)
+                layer[cells[ok, 0], cells[ok, 1]] = True
+            else:  # walls: dilate by the rectangle's two sides in turn (Minkowski sum), then by a cell
+                self._build_by_sides(k, layer)
         layer |= self.outside
         self._built[k] = True
+
+    def _build_by_sides(self, k: int, layer: np.ndarray) -> None:
+        res = self.res
+        grow = 1.5 * res
+        f, left, b, right = (z + grow for z in self.zone)
+        for frac in np.linspace(-0.5, 0.5, 5):
+            th = (k + frac) * self.bin
+            c, s = math.cos(th), math.sin(th)
+            u = np.linspace(-b, f, max(2, int(math.ceil((f + b) / (0.5 * res))) + 1))
+            v = np.linspace(-right, left, max(2, int(math.ceil((left + right) / (0.5 * res))) + 1))
+            # The robot at p holds an obstacle at o when o - p lies in the rectangle: p in o - R.
+            side_u = set(zip(np.rint(-u * s / res).astype(int).tolist(), np.rint(-u * c / res).astype(int).tolist()))
+            side_v = set(zip(np.rint(-v * c / res).astype(int).tolist(), np.rint(v * s / res).astype(int).tolist()))
+            # Padded: an obstacle's first shift may leave the window and the second bring it back.
+            pad = int(math.ceil(max(f, b, left, right) / res)) + 2
+            src = np.pad(self.obstacles, pad)
+            tmp = np.zeros_like(src)
+            for dr, dc in side_u:
+                _shift_or(tmp, src, dr, dc)
+            full = np.zeros_like(src)
+            for dr, dc in side_v:
+                _shift_or(full, tmp, dr, dc)
+            layer |= full[pad:-pad, pad:-pad]
+        # Rounding each side's offsets on its own: the sum may be a cell off.
+        grown = layer.copy()
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                _shift_or(grown, layer, dr, dc)
+        layer[...] = grown
 
     def _kernel(self, k: int) -> np.ndarray:
         key = (self.zone, self.res, self.headings, k)
@@ -537,6 +603,12 @@ class CSpace:
         pts = self.points
         if not len(pts):
             return True
+        reach = math.hypot(max(zone[0], zone[2]), max(zone[1], zone[3])) + EXACT_MARGIN
+        near = ((pts[:, 0] > xs.min() - reach) & (pts[:, 0] < xs.max() + reach) & (pts[:, 1] > ys.min() - reach)
+                & (pts[:, 1] < ys.max() + reach))
+        pts = pts[near]
+        if not len(pts):
+            return True
         f, left, b, right = (z + EXACT_MARGIN for z in zone)
         c, s = np.cos(hs)[:, None], np.sin(hs)[:, None]
         dx, dy = pts[None, :, 0] - xs[:, None], pts[None, :, 1] - ys[:, None]
@@ -572,7 +644,9 @@ class CSpace:
                     return False
                 continue
             s = sample_path([a, b], step=0.02, angle_step=0.01)
-            if not self._lookup(s[:, 0], s[:, 1], s[:, 2], self.walk_zone(0.0) if self.walk_zone is not None else None):
+            curvature = wrap(b[2] - a[2]) / math.hypot(b[0] - a[0], b[1] - a[1])
+            if not self._lookup(s[:, 0], s[:, 1], s[:, 2],
+                                self.walk_zone(curvature) if self.walk_zone is not None else None):
                 return False
         return True
 
@@ -678,3 +752,12 @@ def _segment(p: Sequence[float], a: Sequence[float], b: Sequence[float]) -> Tupl
     len2 = dx * dx + dy * dy
     u = 0.0 if len2 <= 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2))
     return u, math.hypot(a[0] + u * dx - p[0], a[1] + u * dy - p[1])
+
+
+def _shift_or(out: np.ndarray, src: np.ndarray, dr: int, dc: int) -> None:
+    """out[r, c] |= src[r - dr, c - dc] where both are inside."""
+    h, w = src.shape
+    if abs(dr) >= h or abs(dc) >= w:
+        return
+    out[max(0, dr):h + min(0, dr), max(0, dc):w + min(0, dc)] |= src[max(0, -dr):h - max(0, dr),
+                                                                     max(0, -dc):w - max(0, dc)]
