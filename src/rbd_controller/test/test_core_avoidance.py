@@ -477,7 +477,7 @@ def test_a_person_crossing_during_the_detour_is_waited_for_at_once():
         w.step()
         assert w.ctl.state not in (State.BLOCKED, State.ESCAPING), (i, states(w)[-4:])
         held += w.ctl.state == State.COLLISION_DETECTED
-    assert held >= 5 and all(g[1] == "normal" for g in w.goals[n:])
+    assert held >= 5 and all(g[1] in ("normal", "path") for g in w.goals[n:])  # no escape (guarded) motion
     del w.obstacles["person"]
     assert w.run_until(lambda: w.ctl.state == State.WAITING_FOR_GESTURE, 60.0), (states(w), w.logs[-5:])
     assert w.min_clearance > 0.25
