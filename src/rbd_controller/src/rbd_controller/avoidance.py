@@ -1,27 +1,21 @@
 """The avoidance behaviour (issue 17): escape from a static blocker, then detour to the blocked pose. ROS-free.
 
 ESCAPING sends guarded goals (the position controller gates them per zone side) until the zone
-is clear by a margin; AVOIDING plans a detour to the blocked trick pose in SE(2) with the stop
-zone as footprint (:mod:`rbd_controller.lattice`) and has the position controller follow it
-continuously (:meth:`Avoidance._drive_detour`, follow_path) under the normal collision rules. Without progress for
+is clear by a margin; AVOIDING plans a detour to the blocked trick pose and drives it
+(:meth:`Avoidance._drive_detour`) under the normal collision rules. Without progress for
 ~avoid_timeout, or when the goal is blocked or the detour too long, it gives up: the blocked
 pose is dropped (or the trick heads home) and the trick goes on. The decisions are in ROS-free
-modules (escape, lattice, arena); this one only sequences them.
+modules (escape, detour, arena); this one only sequences them.
 """
 
 import math
-from typing import Any, Optional, Tuple
-
-import numpy as np
+from typing import Any, Optional
 
 from rbd_controller.context import Behaviour, Context
+from rbd_controller.detour import DetourPlanner, Plan
 from rbd_controller.escape import clear_by_margin, plan_escape
-from rbd_controller.footprint import ZoneGrowth
 from rbd_controller.fsm import Event, State
-from rbd_controller.lattice import LatticePlan, LatticePlanner, progress_index, remaining_clear, speed_ahead
 
-#: The rest of a followed detour is checked against the scan this often [s].
-REPLAN_CHECK = 0.5
 #: Stops after which AVOIDING goes on with its detour instead of planning a new one.
 RESUMED_FROM = (State.COLLISION_DETECTED, State.EMERGENCY_STOP, State.OPERATOR_LOST)
 
@@ -39,12 +33,10 @@ class Avoidance(Behaviour):
     def __init__(self, ctx: Context, tricks: Any) -> None:
         super().__init__(ctx)
         self.tricks = tricks
-        self.planner = LatticePlanner(ctx.avoid.zone)
-        self.plan = None  # type: Optional[LatticePlan]  # the detour being followed
+        self.planner = DetourPlanner(inflation=ctx.avoid.inflation, clearance=ctx.avoid.clearance)
+        self.plan = None  # type: Optional[Plan]  # the detour being driven
         self.plan_start = None  # type: Optional[Tuple[float, float]]
-        self.detour = None  # type: Optional[float]  # the speed limit the path was last sent with (None: not sent)
-        self._progress = 0  # index of the plan's next pose
-        self._checked_at = 0.0
+        self.detour = None  # type: Optional[List[Tuple[Any, str]]]  # its poses still to drive
         self._attempts = 0
         self._retry_at = 0.0
 
@@ -162,137 +154,71 @@ class Avoidance(Behaviour):
                 return
         self._drive_detour(self.plan, now, epoch)
 
-    def set_zone_growth(self, growth: ZoneGrowth, origin: Tuple[float, float] = (0.0, 0.0)) -> None:
-        """rbd_lidar's growth parameters and its zone's origin in base_link for the planner (the node reads them)."""
-        self.planner = LatticePlanner(self.ctx.avoid.zone, growth, origin=origin)
-
-    def _plan_detour(self, now: float, epoch: int) -> Optional[LatticePlan]:
+    def _plan_detour(self, now: float, epoch: int) -> Optional[Plan]:
         """Plan to the blocked pose; None (after DETOUR_DONE or a give-up) when there is nothing to drive."""
         ctx = self.ctx
         p = ctx.perception
+        a = ctx.avoid
         with ctx.lock:
             goal_pose = self.tricks.blocked_pose()
             if goal_pose is None or p.pose is None:
                 ctx.fire_if(epoch, Event.DETOUR_DONE)
                 return None
             start = p.pose
-            goal = ctx.ports.pose_xy(goal_pose)
+            goal = ctx.ports.pose_xy(goal_pose)[:2]
             arena = p.ensure_arena(ctx.home or (start[0], start[1]))
             points = ctx.known_obstacles()
             inside = ctx.goal_blocked(goal_pose, points)
             if inside:
                 self.give_up(epoch, "goal blocked: the stop zone at the goal would hold %d obstacle points" % inside)
                 return None
-        # The trick pose is sent again after the detour and turns to its own heading there.
-        plan = self.planner.plan(start, goal, p.grid, points, arena, any_heading=True)
+        plan = self.planner.plan((start[0], start[1]), goal, p.grid, points, arena)
         with ctx.lock:
             if ctx.fsm.epoch != epoch:
                 return None
             if not plan.ok:
-                pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-                near = float(np.min(np.hypot(pts[:, 0] - start[0], pts[:, 1] - start[1]))) if len(pts) else math.inf
-                ctx.ports.log("warn", "no detour from (%.2f, %.2f, %.2f) to (%.2f, %.2f, %.2f): %s (%d points, nearest "
-                              "%.2f m, map %s)" % (tuple(start[:3]) + tuple(goal[:3]) + (
-                                  plan.reason, len(pts), near, "yes" if p.grid is not None else "no")))
-            if not self._accept(plan, epoch):
+                self.give_up(epoch, plan.reason)
+                return None
+            limit = a.max_detour_factor * max(plan.direct, 0.5)
+            if plan.length > limit:
+                self.give_up(epoch, "detour %.2f m > %.1f x the direct %.2f m" % (
+                    plan.length, a.max_detour_factor, plan.direct))
                 return None
             self.plan, self.plan_start, self.detour = plan, (start[0], start[1]), None
-            self._progress = 0
-            self._checked_at = now
             p.remember_static()  # going around it: a stop at it is not classified from scratch
-            ctx.ports.log("info", "detour to (%.2f, %.2f): %r in %.2f s" % (goal[0], goal[1], plan, plan.seconds))
-            self._publish_plan(start, plan)
+            ctx.ports.log("info", "detour to (%.2f, %.2f): %r" % (goal[0], goal[1], plan))
+            ctx.ports.publish_avoidance({"event": "plan", "detail": plan.reason,
+                                         "plan": [self.plan_start] + list(plan.waypoints)})
             return plan
 
-    def _accept(self, plan: LatticePlan, epoch: int) -> bool:
-        """Caller holds the lock. Give up on a failed or too long plan."""
-        a = self.ctx.avoid
-        if not plan.ok:
-            self.give_up(epoch, plan.reason)
-            return False
-        limit = a.max_detour_factor * max(plan.direct, 0.5)
-        if plan.length > limit:
-            self.give_up(epoch, "detour %.2f m > %.1f x the direct %.2f m" % (plan.length, a.max_detour_factor,
-                                                                             plan.direct))
-            return False
-        return True
-
-    def _publish_plan(self, start: Any, plan: LatticePlan) -> None:
-        self.ctx.ports.publish_avoidance({"event": "plan", "detail": plan.reason,
-                                          "plan": [(start[0], start[1])] + [p[:2] for p in plan.poses],
-                                          "poses": [tuple(start[:3])] + list(plan.poses), "speeds": list(plan.speeds),
-                                          "zones": [list(z) for z in plan.zones]})
-
-    def _drive_detour(self, plan: LatticePlan, now: float, epoch: int) -> None:
-        """Follow the plan continuously (follow_path); speed-limit and replan on the way; DETOUR_DONE at its end.
-
-        The path goes to the position controller once; it is sent again (replacing the running one, no
-        stop) when the speed limit of the poses ahead changes (slow near the obstacle, fast away from
-        it), and replanned from where the robot is when the scan puts a known obstacle into the swept
-        zone of what is left of it (checked every REPLAN_CHECK s). After a stop that cleared by itself
-        the rest of the path is sent again.
-        """
+    def _drive_detour(self, plan: Plan, now: float, epoch: int) -> None:
+        """Drive the plan pose by pose (turn towards the next waypoint at each); DETOUR_DONE at its end."""
         ctx = self.ctx
-        p = ctx.perception
-        replan = False
         with ctx.lock:
             if ctx.fsm.epoch != epoch:
                 return
-            pose = p.pose
-            if pose is None:
+            if self.detour is None:
+                points = [self.plan_start] + list(plan.waypoints)
+                self.detour = []
+                for i, (x, y) in enumerate(points[1:-1], start=1):
+                    nx, ny = points[i + 1]
+                    self.detour.append((ctx.ports.make_pose(x, y, math.atan2(ny - y, nx - x)), "detour %d" % i))
+            goal = ctx.goal.result(now, self.tricks.pose_timeout)
+            if goal == "active":
                 return
-            progress = progress_index(plan, pose, self._progress)
-            if progress > self._progress:
-                ctx.episode.progressed()  # a pose of the detour passed
-            self._progress = progress
-            remaining = plan.poses[self._progress:]
-            speed = speed_ahead(plan, self._progress)
-            if self.detour is not None:
-                goal = ctx.goal.result(now, self.tricks.pose_timeout)
-                if goal == "failed":
-                    self.give_up(epoch, "detour not followed to its end")
-                    return
-                if goal == "done" or goal == "none":
-                    end = plan.poses[-1]
-                    if math.hypot(pose[0] - end[0], pose[1] - end[1]) <= 0.1:
-                        ctx.episode.progressed()
-                        ctx.ports.log("info", "detour done: continuing the trick")
-                        ctx.fire_if(epoch, Event.DETOUR_DONE)
-                        return
-                    self.detour = None  # stopped short of the end (a refusal raced a release): send the rest
-                elif goal == "active":
-                    if now - self._checked_at >= REPLAN_CHECK:
-                        self._checked_at = now
-                        points = ctx.known_obstacles()
-                        replan = not remaining_clear(plan, self._progress, pose, points, ctx.avoid.point_threshold)
-                    if not replan and abs(speed - self.detour) < 1e-9:
-                        return
-            start = pose
-            goal_pose = plan.poses[-1]
-            arena = p.ensure_arena(ctx.home or (start[0], start[1]))
-            points = ctx.known_obstacles() if replan else None
-            fresh = self.detour is None
-            if fresh:
-                ctx.goal.sending()
-        if replan:
-            new = self.planner.plan(start, goal_pose, p.grid, points, arena, any_heading=True)
-            with ctx.lock:
-                if ctx.fsm.epoch != epoch:
-                    return
-                if not new.ok:
-                    # Keep following: rbd_lidar still stops the robot if the scan really closes the way
-                    # (and the stop re-enters the avoidance); try again later.
-                    ctx.ports.log("warn", "the scan changed, no new plan (%s): following the old one" % new.reason)
-                    self._checked_at = now + 3.0 * REPLAN_CHECK
-                    return
-                if not self._accept(new, epoch):
-                    return
-                ctx.ports.log("info", "the scan changed: replanned %r" % new)
-                self.plan, plan = new, new
-                self._progress = 0
-                self._publish_plan(start, new)
-                remaining, speed = new.poses, speed_ahead(new, 0)
-        accepted, message = ctx.ports.follow_path(list(remaining), speed)
+            if goal == "failed":
+                self.give_up(epoch, "detour pose not reached")
+                return
+            if goal == "done" and self.detour:
+                self.detour.pop(0)
+                ctx.episode.progressed()
+            if not self.detour:
+                ctx.ports.log("info", "detour done: continuing the trick")
+                ctx.fire_if(epoch, Event.DETOUR_DONE)
+                return
+            pose, name = self.detour[0]
+            ctx.goal.sending()
+        accepted, message = ctx.ports.set_position(pose)
         with ctx.lock:
             if ctx.fsm.epoch != epoch:
                 return
@@ -300,10 +226,7 @@ class Avoidance(Behaviour):
                 # A refusal can race with a stop being released; try again, then give up.
                 self._attempts += 1
                 if self._attempts >= 4:
-                    self.give_up(epoch, "position controller refused the detour: %s" % message)
-                self.detour = None
+                    self.give_up(epoch, "position controller refused %s: %s" % (name, message))
                 return
-            self.detour = speed
-            if fresh:
-                ctx.goal.sent_at = now
+            ctx.goal.sent_at = now
             ctx.publish()
