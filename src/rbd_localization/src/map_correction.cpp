@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "rbd_localization/filter_common.h"
 #include "rbd_localization/geometry.h"
@@ -12,7 +13,7 @@ MapCorrection::MapCorrection() : MapCorrection(Params()) {}
 
 MapCorrection::MapCorrection(const Params& params)
     : params_(params),
-      map_(params.map),
+      map_(new OccupancyMap(params.map)),
       matcher_(params.matcher),
       map_from_odom_(Eigen::Isometry2d::Identity()) {}
 
@@ -28,8 +29,59 @@ const char* MapCorrection::statusName(Status s) {
       return "rejected (jump)";
     case Status::kRejectedEmpty:
       return "rejected (too few points)";
+    case Status::kSearched:
+      return "searched the start pose";
   }
   return "?";
+}
+
+void MapCorrection::setReference(std::unique_ptr<OccupancyMap> reference, const Eigen::Isometry2d& home) {
+  map_ = std::move(reference);
+  map_->setGrow(false);
+  // Only structure: cells occupied but not (yet) static when saved are unknown here.
+  for (int cy = 0; cy < map_->height(); ++cy) {
+    for (int cx = 0; cx < map_->width(); ++cx) {
+      if (map_->occupied(cx, cy) && !map_->isStatic(cx, cy, 0.0)) {
+        map_->setCell(cx, cy, 0.0f, std::numeric_limits<float>::quiet_NaN());
+      }
+    }
+  }
+  map_->updateDistanceField();
+  map_from_odom_ = home;  // odometry starts at identity where the robot starts: near home
+  localization_mode_ = true;
+  mapping_ = false;
+  localized_ = false;
+  searched_ = false;
+}
+
+bool MapCorrection::fitOk(const ScanMatcher::Result& m, std::string* reason) const {
+  if (m.inliers < params_.min_inliers || m.inlier_ratio < params_.min_inlier_ratio ||
+      m.rms > params_.max_rms || m.min_translation_information < params_.min_translation_information) {
+    *reason = "inliers " + std::to_string(m.inliers) + " ratio " + std::to_string(m.inlier_ratio) + " rms " +
+              std::to_string(m.rms) + " info " + std::to_string(m.min_translation_information);
+    return false;
+  }
+  return true;
+}
+
+MapCorrection::Update MapCorrection::searchStart(double time, const Points2d& points,
+                                                 const Eigen::Isometry2d& odom_from_base,
+                                                 const Eigen::Isometry2d& prior) {
+  Update u;
+  u.match = matcher_.search(*map_, points, prior, params_.search_translation, params_.search_rotation);
+  if (!fitOk(u.match, &u.reason)) {
+    u.status = Status::kRejectedFit;
+    u.reason = "start search: " + u.reason;
+  } else {
+    map_from_odom_ = u.match.pose * odom_from_base.inverse();  // a jump: not localized yet
+    searched_ = true;
+    good_matches_ = 0;
+    failed_matches_ = 0;
+    last_accept_time_ = time;
+    u.status = Status::kSearched;
+  }
+  u.map_from_odom = map_from_odom_;
+  return u;
 }
 
 MapCorrection::Update MapCorrection::processScan(double time, const Points2d& points,
@@ -47,15 +99,42 @@ MapCorrection::Update MapCorrection::processScan(double time, const Points2d& po
   }
   const Eigen::Isometry2d prior = map_from_odom_ * odom_from_base;
 
+  if (localization_mode_ && !localized_) {
+    // Find the start (search), then follow the matches fully until they agree scan after scan.
+    if (!searched_) return searchStart(time, points, odom_from_base, prior);
+    u.match = matcher_.match(*map_, points, prior);
+    if (!fitOk(u.match, &u.reason)) {
+      u.status = Status::kRejectedFit;
+      good_matches_ = 0;
+      if (++failed_matches_ >= 10) searched_ = false;  // lost: search again
+      return u;
+    }
+    const double moved = (u.match.pose.translation() - prior.translation()).norm();
+    const double turned = std::fabs(wrapAngle(yawOf(u.match.pose) - yawOf(prior)));
+    map_from_odom_ = u.match.pose * odom_from_base.inverse();
+    last_accept_time_ = time;
+    failed_matches_ = 0;
+    good_matches_ = (moved < params_.localized_translation && turned < params_.localized_rotation)
+                        ? good_matches_ + 1
+                        : 0;
+    if (good_matches_ >= params_.localized_scans) localized_ = true;
+    u.status = Status::kAccepted;
+    u.map_from_odom = map_from_odom_;
+    return u;
+  }
+
+  OccupancyMap::Insert full;
+  full.time = mapTime(time);
   if (mapping_) {
-    map_.insertScan(prior, points, 1.0);
+    map_->insertScan(prior, points, full);
     ++mapping_scans_;
     u.status = Status::kMapping;
     u.map_changed = true;
     if (time - start_time_ >= params_.initial_mapping_duration &&
         mapping_scans_ >= params_.initial_mapping_min_scans) {
       mapping_ = false;
-      map_.updateDistanceField();
+      localized_ = true;
+      map_->updateDistanceField();
       last_accept_time_ = time;
       last_map_update_time_ = time;
       last_map_update_pose_ = prior;
@@ -63,13 +142,10 @@ MapCorrection::Update MapCorrection::processScan(double time, const Points2d& po
     return u;
   }
 
-  u.match = matcher_.match(map_, points, prior);
+  u.match = matcher_.match(*map_, points, prior);
   const ScanMatcher::Result& m = u.match;
-  if (m.inliers < params_.min_inliers || m.inlier_ratio < params_.min_inlier_ratio ||
-      m.rms > params_.max_rms || m.min_translation_information < params_.min_translation_information) {
+  if (!fitOk(m, &u.reason)) {
     u.status = Status::kRejectedFit;
-    u.reason = "inliers " + std::to_string(m.inliers) + " ratio " + std::to_string(m.inlier_ratio) + " rms " +
-               std::to_string(m.rms) + " info " + std::to_string(m.min_translation_information);
     return u;
   }
   const Eigen::Vector2d dt_vec = m.pose.translation() - prior.translation();
@@ -97,18 +173,42 @@ MapCorrection::Update MapCorrection::processScan(double time, const Points2d& po
   u.status = Status::kAccepted;
   u.map_from_odom = map_from_odom_;
 
+  if (localization_mode_) return u;  // the loaded map is the reference: never rewritten
+
   // Slow refinement from the matched pose (people walking through get cleared again by misses).
   const Eigen::Isometry2d moved = last_map_update_pose_.inverse() * m.pose;
+  bool refined = false;
   if (time - last_map_update_time_ >= params_.map_update_interval &&
       (moved.translation().norm() >= params_.map_update_min_translation ||
        std::fabs(yawOf(moved)) >= params_.map_update_min_rotation)) {
     last_map_update_pose_ = m.pose;
-    map_.insertScan(m.pose, points, params_.map_update_weight);
-    map_.updateDistanceField();
+    OccupancyMap::Insert how = full;
+    how.weight = params_.map_update_weight;
+    map_->insertScan(m.pose, points, how);
+    map_->updateDistanceField();
     last_map_update_time_ = time;
     u.map_changed = true;
+    refined = true;
   }
+  // Standing (not moved enough for a refinement since the last one): standing updates.
+  const bool standing = !refined && moved.translation().norm() < params_.map_update_min_translation &&
+                        std::fabs(yawOf(moved)) < params_.map_update_min_rotation;
+  if (standing && standingUpdate(time, m.pose, points, full)) u.map_changed = true;
   return u;
+}
+
+bool MapCorrection::standingUpdate(double time, const Eigen::Isometry2d& pose, const Points2d& points,
+                                   const OccupancyMap::Insert& base) {
+  // Standing updates (also while the robot stands): cells people stood on become free once they
+  // left, structure they hid is added; a cell is saved as a wall only once it is static.
+  if (params_.clear_interval <= 0.0 || time - last_clear_time_ < params_.clear_interval) return false;
+  last_clear_time_ = time;
+  OccupancyMap::Insert how = base;
+  how.weight = params_.clear_weight;
+  how.end_margin = params_.clear_end_margin;
+  how.min_incidence = params_.clear_min_incidence;
+  if (map_->insertScan(pose, points, how)) map_->updateDistanceField();
+  return true;
 }
 
 }  // namespace rbd_localization

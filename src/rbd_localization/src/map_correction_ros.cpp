@@ -4,6 +4,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <std_msgs/Bool.h>
 
 #include <cmath>
 #include <ctime>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "rbd_localization/geometry.h"
+#include "rbd_localization/map_io.h"
 #include "rbd_localization/node_main.h"
 #include "rbd_localization/run_node.h"
 #include "rbd_localization/scan_slice.h"
@@ -65,6 +67,12 @@ bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams
   pnh.param("slice_z_min", n->slice_z_min, n->slice_z_min);
   pnh.param("slice_z_max", n->slice_z_max, n->slice_z_max);
   pnh.param("slice_bins", n->slice_bins, n->slice_bins);
+  pnh.param<std::string>("map_file", n->map_file, n->map_file);
+  pnh.param("home_x", n->home_x, n->home_x);
+  pnh.param("home_y", n->home_y, n->home_y);
+  pnh.param("home_yaw", n->home_yaw, n->home_yaw);
+  pnh.param<std::string>("map_save_dir", n->map_save_dir, n->map_save_dir);
+  pnh.param<std::string>("map_save_name", n->map_save_name, n->map_save_name);
   if (n->input != "scan" && n->input != "points") {
     *error = "input must be 'scan' or 'points'";
     return false;
@@ -92,6 +100,17 @@ bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams
   pnh.param("max_correction_step_rotation", c->max_correction_step_rotation, c->max_correction_step_rotation);
   pnh.param("resolution", c->map.resolution, c->map.resolution);
   pnh.param("map_size", c->map.size, c->map.size);
+  pnh.param("map_max_size", c->map.max_size, c->map.max_size);
+  pnh.param("static_time", c->map.static_time, c->map.static_time);
+  pnh.param("clear_interval", c->clear_interval, c->clear_interval);
+  pnh.param("clear_weight", c->clear_weight, c->clear_weight);
+  pnh.param("clear_end_margin", c->clear_end_margin, c->clear_end_margin);
+  pnh.param("clear_min_incidence", c->clear_min_incidence, c->clear_min_incidence);
+  pnh.param("search_translation", c->search_translation, c->search_translation);
+  pnh.param("search_rotation", c->search_rotation, c->search_rotation);
+  pnh.param("localized_scans", c->localized_scans, c->localized_scans);
+  pnh.param("localized_translation", c->localized_translation, c->localized_translation);
+  pnh.param("localized_rotation", c->localized_rotation, c->localized_rotation);
   pnh.param("max_iterations", c->matcher.max_iterations, c->matcher.max_iterations);
   pnh.param("outlier_distance_start", c->matcher.outlier_distance_start, c->matcher.outlier_distance_start);
   pnh.param("outlier_distance", c->matcher.outlier_distance_end, c->matcher.outlier_distance_end);
@@ -104,10 +123,27 @@ bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams
   }
   if (!positive(n->max_match_rate) || !positive(n->transform_publish_rate) || !positive(c->map.resolution) ||
       !positive(c->map.size) || n->max_points < 10 || !(n->max_range > n->min_range) ||
-      c->map.size / c->map.resolution > 8000) {
+      c->map.size / c->map.resolution > 8000 || !(c->map.max_size >= c->map.size) ||
+      c->map.max_size / c->map.resolution > 8000) {
     *error =
-        "rates, resolution, map_size must be > 0, max_points >= 10, max_range > min_range, map <= 8000 cells "
-        "wide";
+        "rates, resolution, map_size must be > 0, max_points >= 10, max_range > min_range, "
+        "map_size <= map_max_size <= 8000 cells wide";
+    return false;
+  }
+  if (!(c->map.static_time >= 0.0) || !(c->clear_weight >= 0.0) || !(c->clear_end_margin >= 0.0) ||
+      !(c->search_translation >= 0.0 && c->search_translation <= 5.0) ||
+      !(c->search_rotation >= 0.0 && c->search_rotation <= M_PI) || c->localized_scans < 1 ||
+      !positive(c->localized_translation) || !positive(c->localized_rotation)) {
+    *error =
+        "static_time, clear_weight, clear_end_margin >= 0; search_translation in [0, 5] m, search_rotation "
+        "in "
+        "[0, pi]; localized_scans >= 1; localized_translation/rotation > 0";
+    return false;
+  }
+  const int homes = std::isnan(n->home_x) + std::isnan(n->home_y) + std::isnan(n->home_yaw);
+  if ((homes != 0 && homes != 3) || std::isinf(n->home_x) || std::isinf(n->home_y) ||
+      std::isinf(n->home_yaw)) {
+    *error = "home_x, home_y, home_yaw must be given all three (finite) or none";
     return false;
   }
   if (!(c->matcher.outlier_distance_start >= c->matcher.outlier_distance_end) ||
@@ -125,10 +161,33 @@ bool MapCorrectionNode::init(std::string* error) {
   MapCorrection::Params core;
   if (!loadMapCorrectionParams(pnh_, &params_, &core, error)) return false;
   core_.reset(new MapCorrection(core));
+  if (!params_.map_file.empty()) {
+    std::unique_ptr<OccupancyMap> loaded;
+    MapFileInfo info;
+    if (!loadMap(params_.map_file, core.map, 0.0, &loaded, &info, error)) return false;
+    if (loaded->occupiedCount() == 0) {
+      *error = params_.map_file + " has no occupied cell: nothing to localize in";
+      return false;
+    }
+    if (!std::isnan(params_.home_x)) {
+      home_ = Eigen::Vector3d(params_.home_x, params_.home_y, params_.home_yaw);
+    } else if (info.has_home) {
+      home_ = info.home;
+    }
+    ROS_INFO("map_correction: localization mode in %s (%d x %d cells, %s), home (%.2f, %.2f, %.1f deg)%s%s",
+             params_.map_file.c_str(), loaded->width(), loaded->height(),
+             info.exact ? "exact log-odds from the sidecar" : "cells from the PGM", home_.x(), home_.y(),
+             home_.z() * 180.0 / M_PI, info.note.empty() ? "" : ": ", info.note.c_str());
+    core_->setReference(std::move(loaded), pose2d(home_.x(), home_.y(), home_.z()));
+  }
   tf_buffer_.reset(new tf2_ros::Buffer());
   tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, nh_));
   map_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("map", 1, true);
   pose_pub_ = nh_.advertise<geometry_msgs::PoseStamped>("rbd_localization/pose", 10);
+  localized_pub_ = nh_.advertise<std_msgs::Bool>("rbd_localization/localized", 1, true);
+  publishLocalized();
+  save_srv_ = pnh_.advertiseService("save_map", &MapCorrectionNode::saveMapService, this);
+  if (core_->localizationMode()) publishMap(ros::Time::now());
   if (params_.input == "points") {
     scan_sub_ = nh_.subscribe("points", 2, &MapCorrectionNode::cloudCallback, this);
   } else {
@@ -305,7 +364,7 @@ void MapCorrectionNode::processPendingScan() {
   const MapCorrection::Update u = core_->processScan(stamp.toSec(), points, planar(odom_from_base));
   last_cpu_ms_ = (cpuSeconds() - cpu0) * 1e3;
   last_status_ = MapCorrection::statusName(u.status);
-  if (u.status == MapCorrection::Status::kAccepted) {
+  if (u.status == MapCorrection::Status::kAccepted || u.status == MapCorrection::Status::kSearched) {
     ++accepted_;
   } else if (u.status != MapCorrection::Status::kMapping) {
     ++rejected_;
@@ -320,8 +379,45 @@ void MapCorrectionNode::processPendingScan() {
   }
 }
 
+void MapCorrectionNode::publishLocalized() {
+  const int now = core_->localized() ? 1 : 0;
+  if (now == localized_published_) return;
+  std_msgs::Bool msg;
+  msg.data = now == 1;
+  localized_pub_.publish(msg);
+  localized_published_ = now;
+  if (core_->localizationMode()) {
+    ROS_INFO("map_correction: %s", msg.data ? "localized in the map" : "not localized in the map");
+  }
+}
+
+bool MapCorrectionNode::saveMapService(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  pnh_.param<std::string>("map_save_dir", params_.map_save_dir, params_.map_save_dir);
+  pnh_.param<std::string>("map_save_name", params_.map_save_name, params_.map_save_name);
+  if (core_->mapping()) {
+    res.success = false;
+    res.message = "no map yet: still in the initial mapping";
+    return true;
+  }
+  const double now = core_->mapTime(last_match_stamp_.isZero() ? 0.0 : last_match_stamp_.toSec());
+  std::string error;
+  const std::string prefix = params_.map_save_dir + "/" + params_.map_save_name;
+  if (!saveMap(core_->map(), now, home_, params_.map_save_dir, params_.map_save_name, &error)) {
+    res.success = false;
+    res.message = "save failed: " + error;
+    ROS_ERROR("map_correction: %s", res.message.c_str());
+    return true;
+  }
+  res.success = true;
+  res.message = "saved " + prefix + ".yaml, .pgm, .rbdmap (" + std::to_string(core_->map().width()) + " x " +
+                std::to_string(core_->map().height()) + " cells)";
+  ROS_INFO("map_correction: %s", res.message.c_str());
+  return true;
+}
+
 void MapCorrectionNode::timerCallback(const ros::TimerEvent&) {
   processPendingScan();
+  publishLocalized();
   publishTransform();
   diagnostics_->update();
 }
@@ -347,7 +443,8 @@ void MapCorrectionNode::publishMap(const ros::Time& stamp) {
   grid.header.frame_id = params_.map_frame;
   grid.info.map_load_time = stamp;
   grid.info.resolution = static_cast<float>(m.params().resolution);
-  grid.info.width = grid.info.height = static_cast<uint32_t>(m.width());
+  grid.info.width = static_cast<uint32_t>(m.width());
+  grid.info.height = static_cast<uint32_t>(m.height());
   grid.info.origin.position.x = m.originX();
   grid.info.origin.position.y = m.originY();
   grid.info.origin.orientation.w = 1.0;
@@ -365,12 +462,19 @@ void MapCorrectionNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   stat.add("skipped", skipped_);
   stat.add("last cpu per scan [ms]", last_cpu_ms_);
   stat.add("mapping", core_->mapping());
+  stat.add("mode",
+           core_->localizationMode() ? "localization (" + params_.map_file + ")" : std::string("mapping"));
+  stat.add("localized", core_->localized());
+  stat.add("map cells", std::to_string(core_->map().width()) + " x " + std::to_string(core_->map().height()));
+  stat.add("map memory [MB]", core_->map().memoryBytes() / 1e6);
   const bool stale = last_scan_receive_.isZero() ? (now - start_time_).toSec() > params_.scan_timeout
                                                  : (now - last_scan_receive_).toSec() > params_.scan_timeout;
   if (!params_.correction_enabled) {
     stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "correction disabled: map -> odom is identity");
   } else if (stale) {
     stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "stale: no scan within scan_timeout");
+  } else if (core_->localizationMode() && !core_->localized()) {
+    stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "not localized in the map: " + last_status_);
   } else if (last_status_.find("rejected") == 0) {
     stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, last_status_);
   } else {

@@ -73,4 +73,75 @@ ScanMatcher::Result ScanMatcher::match(const OccupancyMap& map, const Points2d& 
   return r;
 }
 
+ScanMatcher::Result ScanMatcher::search(const OccupancyMap& map, const Points2d& points,
+                                        const Eigen::Isometry2d& prior, double max_translation,
+                                        double max_rotation, double step) const {
+  // Score a subset of the points on a pose grid: mean distance to structure, truncated.
+  constexpr size_t kSubset = 120;
+  constexpr double kTruncate = 0.3;
+  constexpr int kCandidates = 6;
+  Points2d sub;
+  const size_t stride = std::max<size_t>(1, points.size() / kSubset);
+  for (size_t i = 0; i < points.size(); i += stride) sub.push_back(points[i]);
+  step = std::max(step, map.params().resolution);
+  const int nt = static_cast<int>(std::ceil(max_translation / step));
+  const double astep = 0.025;
+  const int na = static_cast<int>(std::ceil(max_rotation / astep));
+  const double x0 = prior.translation().x(), y0 = prior.translation().y(), th0 = yawOf(prior);
+  struct Cand {
+    double score, x, y, th;
+  };
+  std::vector<Cand> best;  // sorted, distinct
+  Points2d rotated(sub.size());
+  for (int ia = -na; ia <= na; ++ia) {
+    const double th = th0 + ia * astep;
+    const double c = std::cos(th), s = std::sin(th);
+    for (size_t k = 0; k < sub.size(); ++k) {
+      rotated[k] = Eigen::Vector2d(c * sub[k].x() - s * sub[k].y(), s * sub[k].x() + c * sub[k].y());
+    }
+    for (int ix = -nt; ix <= nt; ++ix) {
+      for (int iy = -nt; iy <= nt; ++iy) {
+        const double x = x0 + ix * step, y = y0 + iy * step;
+        double sum = 0.0;
+        for (const Eigen::Vector2d& q : rotated) {
+          double d;
+          Eigen::Vector2d g;
+          map.distance(q + Eigen::Vector2d(x, y), &d, &g);
+          sum += std::min(d, kTruncate);
+        }
+        const double score = sub.empty() ? kTruncate : sum / sub.size();
+        if (static_cast<int>(best.size()) == kCandidates && score >= best.back().score) continue;
+        // Keep candidates distinct: a better one replaces a close neighbour.
+        bool replaced = false, dominated = false;
+        for (Cand& b : best) {
+          if (std::hypot(b.x - x, b.y - y) < 2.5 * step && std::fabs(wrapAngle(b.th - th)) < 4 * astep) {
+            if (score < b.score) {
+              b = Cand{score, x, y, th};
+              replaced = true;
+            } else {
+              dominated = true;
+            }
+            break;
+          }
+        }
+        if (dominated) continue;
+        if (!replaced) best.push_back(Cand{score, x, y, th});
+        std::sort(best.begin(), best.end(), [](const Cand& a, const Cand& b) { return a.score < b.score; });
+        if (static_cast<int>(best.size()) > kCandidates) best.pop_back();
+      }
+    }
+  }
+  Result out;
+  bool have = false;
+  for (const Cand& c : best) {
+    const Result r = match(map, points, pose2d(c.x, c.y, c.th));
+    if (!have || r.inliers > out.inliers || (r.inliers == out.inliers && r.rms < out.rms)) {
+      out = r;
+      have = true;
+    }
+  }
+  if (!have) out.points = static_cast<int>(points.size());
+  return out;
+}
+
 }  // namespace rbd_localization

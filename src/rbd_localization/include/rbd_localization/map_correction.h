@@ -1,10 +1,13 @@
-// ROS-free map correction: builds the 2D map in the first seconds, then matches every scan
-// against it with the EKF pose as prior and maintains map -> odom (gated, rate-limited),
-// refining the map slowly from well-matched scans.
+// ROS-free map correction. Mapping mode: builds the 2D map in the first seconds, then matches
+// every scan against it with the EKF pose as prior and maintains map -> odom (gated,
+// rate-limited), refining the map slowly from well-matched scans and clearing cells people left.
+// Localization mode (a loaded map): the map is the fixed reference; at start the robot is found
+// by a search around its home pose, and it is "localized" once the matches agree.
 #ifndef RBD_LOCALIZATION_MAP_CORRECTION_H
 #define RBD_LOCALIZATION_MAP_CORRECTION_H
 
 #include <Eigen/Geometry>
+#include <memory>
 #include <string>
 
 #include "rbd_localization/occupancy_map.h"
@@ -36,11 +39,29 @@ class MapCorrection {
     /// before (the pose consumers then never see a jump, only a bounded step per scan).
     double max_correction_step = 0.02;
     double max_correction_step_rotation = 0.02;
+    /// Mapping mode: while the robot stands (moved less than map_update_min_translation /
+    /// _rotation since the last refinement), every clear_interval [s] a matched scan is inserted
+    /// (log-odds scaled by clear_weight; a beam does not clear its last clear_end_margin [m], nor
+    /// at all when flatter than clear_min_incidence [rad] to its surface): cells people left
+    /// become free again, structure they hid appears. clear_interval <= 0: off.
+    double clear_interval = 0.5;
+    double clear_weight = 0.5;
+    double clear_end_margin = 0.15;
+    double clear_min_incidence = 0.35;
+    /// Localization mode: the start pose is searched within this distance [m] / angle [rad] of
+    /// the home pose (the robot may start up to 1 m / 45 deg away from it).
+    double search_translation = 1.2;
+    double search_rotation = 0.9;
+    /// Localized once this many consecutive matches each moved the pose by less than
+    /// localized_translation [m] / localized_rotation [rad].
+    int localized_scans = 5;
+    double localized_translation = 0.02;
+    double localized_rotation = 0.01;
     OccupancyMap::Params map;
     ScanMatcher::Params matcher;
   };
 
-  enum class Status { kMapping, kAccepted, kRejectedFit, kRejectedJump, kRejectedEmpty };
+  enum class Status { kMapping, kAccepted, kRejectedFit, kRejectedJump, kRejectedEmpty, kSearched };
 
   struct Update {
     Status status = Status::kRejectedEmpty;
@@ -53,20 +74,37 @@ class MapCorrection {
   MapCorrection();
   explicit MapCorrection(const Params& params);
 
+  /// Localization mode: `reference` is the fixed map (only its static cells are kept), the robot
+  /// starts near `home` (map_from_base at odometry's origin). Call before the first scan.
+  void setReference(std::unique_ptr<OccupancyMap> reference, const Eigen::Isometry2d& home);
+
   /// One scan (points in base_link, z dropped) with the EKF's odom -> base_link at its time.
   Update processScan(double time, const Points2d& points_in_base, const Eigen::Isometry2d& odom_from_base);
 
   const Eigen::Isometry2d& mapFromOdom() const { return map_from_odom_; }
   void setMapFromOdom(const Eigen::Isometry2d& t) { map_from_odom_ = t; }
-  const OccupancyMap& map() const { return map_; }
+  const OccupancyMap& map() const { return *map_; }
+  /// Clock of the map's occupied-since times (time of the first scan = 0) for `time` [s].
+  double mapTime(double time) const { return started_ ? time - start_time_ : 0.0; }
   bool mapping() const { return mapping_; }
+  /// Localization mode (a loaded, fixed map) rather than mapping mode.
+  bool localizationMode() const { return localization_mode_; }
+  /// The pose is trustworthy in the map: mapping mode after the initial mapping, localization
+  /// mode once the matches converged.
+  bool localized() const { return localized_; }
   const Params& params() const { return params_; }
 
   static const char* statusName(Status s);
 
  private:
+  Update searchStart(double time, const Points2d& points, const Eigen::Isometry2d& odom_from_base,
+                     const Eigen::Isometry2d& prior);
+  bool fitOk(const ScanMatcher::Result& m, std::string* reason) const;
+  bool standingUpdate(double time, const Eigen::Isometry2d& pose, const Points2d& points,
+                      const OccupancyMap::Insert& base);
+
   Params params_;
-  OccupancyMap map_;
+  std::unique_ptr<OccupancyMap> map_;
   ScanMatcher matcher_;
   Eigen::Isometry2d map_from_odom_;
   bool mapping_ = true;
@@ -76,6 +114,12 @@ class MapCorrection {
   double last_accept_time_ = 0.0;
   double last_map_update_time_ = 0.0;
   Eigen::Isometry2d last_map_update_pose_ = Eigen::Isometry2d::Identity();
+  double last_clear_time_ = 0.0;
+  bool localization_mode_ = false;
+  bool localized_ = false;
+  bool searched_ = false;
+  int good_matches_ = 0;
+  int failed_matches_ = 0;
 };
 
 }  // namespace rbd_localization

@@ -9,10 +9,12 @@
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <std_srvs/Trigger.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -42,6 +44,15 @@ struct MapCorrectionNodeParams {
   double slice_z_min = 0.0;  ///< [m] above base_frame (levelled): cloud points kept for the 2D slice
   double slice_z_max = 0.4;  ///< [m]
   int slice_bins = 720;      ///< azimuth bins of the slice (nearest point per bin)
+  /// map_server YAML of a saved map: localization mode in it. Empty: mapping mode.
+  std::string map_file;
+  /// Home pose in the loaded map [m, m, rad] (where the robot starts); NaN: the map's sidecar
+  /// home, else (0, 0, 0).
+  double home_x = std::numeric_limits<double>::quiet_NaN();
+  double home_y = std::numeric_limits<double>::quiet_NaN();
+  double home_yaw = std::numeric_limits<double>::quiet_NaN();
+  std::string map_save_dir = ".";     ///< ~save_map writes here (read at each call)
+  std::string map_save_name = "map";  ///< ... as NAME.pgm, NAME.yaml, NAME.rbdmap
 };
 
 /// Reads node + MapCorrection parameters; false with reason on invalid values.
@@ -67,12 +78,17 @@ class MapCorrectionNode {
   void publishTransform();
   void publishMap(const ros::Time& stamp);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  bool saveMapService(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
+  void publishLocalized();
 
   ros::NodeHandle nh_, pnh_;
   MapCorrectionNodeParams params_;
   std::unique_ptr<MapCorrection> core_;
   ros::Subscriber scan_sub_, odom_sub_;
-  ros::Publisher map_pub_, pose_pub_;
+  ros::Publisher map_pub_, pose_pub_, localized_pub_;
+  ros::ServiceServer save_srv_;
+  Eigen::Vector3d home_ = Eigen::Vector3d::Zero();
+  int localized_published_ = -1;
   ros::Timer timer_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;

@@ -44,6 +44,13 @@ class ScanMatcher {
   /// Aligns points (in the base frame) to the map's distance field starting at prior.
   Result match(const OccupancyMap& map, const Points2d& points_in_base, const Eigen::Isometry2d& prior) const;
 
+  /// Exhaustive search of poses within +-max_translation [m] and +-max_rotation [rad] of prior
+  /// (grid of `step` [m] and about step/2 m of arc at 5 m range), scored by the mean truncated
+  /// distance of a subset of the points; the best candidates are refined with match() and the
+  /// best refined fit (most inliers) returned. For a start far from the prior.
+  Result search(const OccupancyMap& map, const Points2d& points_in_base, const Eigen::Isometry2d& prior,
+                double max_translation, double max_rotation, double step = 0.1) const;
+
  private:
   Params params_;
 };

@@ -7,12 +7,16 @@ keep /rbd_localization/pose on the truth and publish map -> odom and /map at the
 """
 
 import math
+import os
+import subprocess
+import tempfile
 import threading
 import unittest
 
 import numpy as np
 import rospy
 import tf2_ros
+import yaml
 from geometry_msgs.msg import PoseStamped, TransformStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
 from sensor_msgs.msg import LaserScan
@@ -250,6 +254,79 @@ class MapCorrectionTest(unittest.TestCase):
         self.assertGreater(window(-3.0, 0.0).max(), 65)
         self.assertGreater(window(5.0, -0.5).max(), 65)
         self.assertTrue(((window(1.0, -0.5) >= 0) & (window(1.0, -0.5) < 35)).all())
+
+    def test_saved_map_read_as_map_server_matches_the_room(self):
+        """Save with the save_map tool, read back with map_server's documented semantics."""
+        d = tempfile.mkdtemp(prefix="rbd_saved_map_")
+        out = subprocess.run(["rosrun", "rbd_localization", "save_map", d, "room"], stdout=subprocess.PIPE,
+                             stderr=subprocess.STDOUT, universal_newlines=True, timeout=60)
+        self.assertEqual(out.returncode, 0, out.stdout)
+        self.assertEqual(sorted(f for f in os.listdir(d) if not f.startswith(".")),
+                         ["room.pgm", "room.rbdmap", "room.yaml"])
+        occ, free, xy = read_map_server(os.path.join(d, "room.yaml"))
+        ox, oy = xy(np.nonzero(occ))
+        self.assertGreater(ox.size, 200)
+        dist = wall_distance(ox, oy)
+        # Every occupied cell is a wall of the room (cell 5 cm: within 0.1 m), none is a person.
+        self.assertGreaterEqual(np.mean(dist < 0.1), 0.99, "occupied cells off the walls: %d of %d"
+                                % (np.count_nonzero(dist >= 0.1), dist.size))
+        for i in range(4):  # each outer wall is there
+            near = segment_distance(WALLS[i], ox, oy) < 0.1
+            self.assertGreater(np.count_nonzero(near), 40, "outer wall %d missing" % i)
+        fx, fy = xy(np.nonzero(free))
+        self.assertGreater(fx.size, 2000)
+        self.assertGreater(np.min(wall_distance(fx, fy)), 0.0)
+        self.assertGreaterEqual(np.mean(wall_distance(fx, fy) > 0.05), 0.99)
+
+
+def read_map_server(path):
+    """Return (occupied, free, cell_to_xy) of a map_server map: map_server's wiki semantics.
+
+    p = (255 - v) / 255 (or v / 255 with negate); occupied if p > occupied_thresh, free if
+    p < free_thresh; origin is the lower-left pixel, image row 0 is the top.
+    """
+    with open(path) as f:
+        meta = yaml.safe_load(f)
+    img_path = os.path.join(os.path.dirname(path), meta["image"])
+    with open(img_path, "rb") as f:
+        raw = f.read()
+    tokens, pos = [], 0
+    while len(tokens) < 4:
+        while raw[pos:pos + 1].isspace():
+            pos += 1
+        if raw[pos:pos + 1] == b"#":
+            pos = raw.index(b"\n", pos) + 1
+            continue
+        end = pos
+        while not raw[end:end + 1].isspace():
+            end += 1
+        tokens.append(raw[pos:end])
+        pos = end
+    assert tokens[0] == b"P5", tokens
+    w, h, maxval = int(tokens[1]), int(tokens[2]), int(tokens[3])
+    pix = np.frombuffer(raw[pos + 1:pos + 1 + w * h], dtype=np.uint8).reshape(h, w).astype(float) * 255.0 / maxval
+    p = pix / 255.0 if meta.get("negate", 0) else (255.0 - pix) / 255.0
+    res = float(meta["resolution"])
+    x0, y0 = float(meta["origin"][0]), float(meta["origin"][1])
+
+    def xy(rows_cols):
+        rows, cols = rows_cols
+        return x0 + (cols + 0.5) * res, y0 + (h - 1 - rows + 0.5) * res
+
+    return p > float(meta["occupied_thresh"]), p < float(meta["free_thresh"]), xy
+
+
+def segment_distance(seg, x, y):
+    """Distance of points (x, y) to one wall segment (x1, y1, x2, y2)."""
+    ax, ay, bx, by = seg
+    ex, ey = bx - ax, by - ay
+    t = np.clip(((x - ax) * ex + (y - ay) * ey) / (ex * ex + ey * ey), 0.0, 1.0)
+    return np.hypot(x - ax - t * ex, y - ay - t * ey)
+
+
+def wall_distance(x, y):
+    """Distance of points to the nearest wall of the room."""
+    return np.min([segment_distance(w, x, y) for w in WALLS], axis=0)
 
 
 if __name__ == "__main__":
