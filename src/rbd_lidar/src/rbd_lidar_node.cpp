@@ -21,6 +21,7 @@
 
 #include "rbd_lidar/os1_beams.h"
 #include "rbd_lidar/scan_pipeline.h"
+#include "rbd_lidar/zone_marker.h"
 
 namespace rbd_lidar {
 
@@ -341,42 +342,7 @@ class LidarNode {
   void publishMarker(const std_msgs::Header& header, const ZoneParams& z, const SensorPose& pose) {
     if (marker_pub_.getNumSubscribers() == 0 && marker_sent_) return;
     marker_sent_ = true;
-    visualization_msgs::Marker m;
-    m.header = header;
-    m.ns = "rbd_lidar_zone";
-    m.id = 0;
-    m.type = visualization_msgs::Marker::LINE_LIST;
-    m.action = visualization_msgs::Marker::ADD;
-    m.pose.orientation.w = 1.0;
-    m.scale.x = 0.01;
-    m.color.r = 1.0;
-    m.color.a = 0.9;
-    const double xs[2] = {z.front, -z.back}, ys[2] = {z.left, -z.right};
-    const double hs[2] = {z.floor_clearance, std::min(z.max_height, pose.height + 0.3)};
-    // Box corners in the level frame, drawn in the cloud frame.
-    auto corner = [&](int i, int j, int k) {
-      const Eigen::Vector3d level(xs[i], ys[j], hs[k] - pose.height);
-      const Eigen::Vector3d s = pose.level_from_sensor.transpose() * level;
-      geometry_msgs::Point p;
-      p.x = s.x();
-      p.y = s.y();
-      p.z = s.z();
-      return p;
-    };
-    for (int k = 0; k < 2; ++k) {  // top and bottom rectangles
-      const int order[5][2] = {{0, 0}, {0, 1}, {1, 1}, {1, 0}, {0, 0}};
-      for (int e = 0; e < 4; ++e) {
-        m.points.push_back(corner(order[e][0], order[e][1], k));
-        m.points.push_back(corner(order[e + 1][0], order[e + 1][1], k));
-      }
-    }
-    for (int i = 0; i < 2; ++i) {
-      for (int j = 0; j < 2; ++j) {  // vertical edges
-        m.points.push_back(corner(i, j, 0));
-        m.points.push_back(corner(i, j, 1));
-      }
-    }
-    marker_pub_.publish(m);
+    marker_pub_.publish(zoneMarker(header, z, pose));
   }
 
   // Calls the controller's collision service when the state changes; tolerates its absence
