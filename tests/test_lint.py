@@ -93,9 +93,6 @@ MAX_PRODUCT_LINES = 450
 OVER_BUDGET = {
     "src/rbd_lidar/src/critical_zone.cpp",  # split-cpp branch
     "src/rbd_localization/src/filter_params.cpp",  # split-cpp branch
-    "src/rbd_lidar/src/rbd_lidar_node.cpp",  # not split yet
-    "src/rbd_lidar/src/scan_pipeline.cpp",  # not split yet
-    "src/rbd_localization/src/ekf_node.cpp",  # not split yet
 }
 #: Packages whose budget another change of issue 30 brings down (the avoidance issue splits core.py).
 OVER_BUDGET_PACKAGES = ("src/rbd_controller/",)

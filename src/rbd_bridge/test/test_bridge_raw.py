@@ -7,7 +7,7 @@ import time
 
 import pytest
 from rbd_bridge_testing import WsClient as Client
-from rbd_bridge_testing import png_text, wait_until
+from rbd_bridge_testing import master_of, png_text, wait_for_service, wait_until
 
 
 @pytest.fixture
@@ -166,10 +166,19 @@ def test_call_service_list_dict_and_missing_args(client):
     assert reply["result"] is False and isinstance(reply["values"], str)
 
 
-def test_client_hosted_service_provider_vanishing_mid_call(client):
+def service_gone(env, name):
+    """True once the master no longer knows ``name`` (lookupService raises for an unknown service)."""
+    try:
+        master_of(env).lookupService(name)
+    except Exception:
+        return True
+    return False
+
+
+def test_client_hosted_service_provider_vanishing_mid_call(open_bridge, client):
     provider, caller = client(), client()
     provider.send({"op": "advertise_service", "service": "/web/hang", "type": "std_srvs/Trigger"})
-    time.sleep(0.5)
+    wait_for_service(open_bridge.env, "/web/hang")
     caller.send({"op": "call_service", "id": "c1", "service": "/web/hang"})
     request = provider.recv_until(lambda f: f.get("op") == "call_service")
     assert request["service"] == "/web/hang" and request["args"] == {}
@@ -180,10 +189,10 @@ def test_client_hosted_service_provider_vanishing_mid_call(client):
     assert time.monotonic() - start < 10
 
 
-def test_client_hosted_service_answer_and_failure(client):
+def test_client_hosted_service_answer_and_failure(open_bridge, client):
     provider, caller = client(), client()
     provider.send({"op": "advertise_service", "service": "/web/trig", "type": "std_srvs/Trigger"})
-    time.sleep(0.5)
+    wait_for_service(open_bridge.env, "/web/trig")
     for ok in (True, False):
         caller.send({"op": "call_service", "id": "c-%s" % ok, "service": "/web/trig"})
         request = provider.recv_until(lambda f: f.get("op") == "call_service")
@@ -208,7 +217,7 @@ def test_client_hosted_service_answer_and_failure(client):
         else:
             assert reply["result"] is False and "no way" in reply["values"]
     provider.send({"op": "unadvertise_service", "service": "/web/trig"})
-    time.sleep(0.3)
+    assert wait_until(lambda: service_gone(open_bridge.env, "/web/trig"), 10.0), "/web/trig still registered"
     caller.send({"op": "call_service", "id": "after", "service": "/web/trig"})
     assert caller.recv_until(lambda f: f.get("id") == "after")["result"] is False
 

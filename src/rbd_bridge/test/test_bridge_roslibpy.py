@@ -11,7 +11,7 @@ import roslibpy
 from rbd_bridge_testing import LINGER, master_of, png_text, start_echo, wait_until
 
 from rbd_bridge.core.rosapi import ROSAPI_TYPES
-from rbd_testkit import free_port
+from rbd_testkit import free_port, stays_unchanged
 
 BRIDGE = "/rbd_bridge"
 
@@ -386,7 +386,10 @@ def test_throttle_with_queue_length_keeps_the_newest_of_a_burst(roslibpy_client)
     for i in range(burst):
         pub.publish(roslibpy.Message({"data": i}))
     assert queued.wait(lambda m: m["data"] == burst - 1, 10), "the newest message of the burst never came"
-    time.sleep(0.2)
+    assert wait_until(lambda: dropped.count() > n_dropped, 10), "the queue_length=0 subscriber got nothing"
+    # nothing more comes on either subscription for a further throttle period
+    stays_unchanged(lambda: (queued.count(), dropped.count()), lambda: True, hold=throttle / 1000.0 + 0.1,
+                    what="the delivered counts")
     got_queued = [m["data"] for m in queued.items[n_queued:]]
     got_dropped = [m["data"] for m in dropped.items[n_dropped:]]
     # the first goes at once; queue_length=2 keeps the two newest for the next periods
@@ -447,10 +450,10 @@ def test_fragments_both_ways_through_roslibpy(roslibpy_client):
         # (repeated until the echo peer has connected to the bridge's new publisher)
         for part in reversed(make_fragments(frame_in, 25, "in:%d" % next(sets))):
             ros.send_on_ready(roslibpy.Message(part))
-        time.sleep(0.1)
         return {"data": text_in} in echoed.items
 
-    assert wait_until(send_fragmented, 10), echoed.items[:3]
+    # (the check runs right after a send; the next round's step gives the echo time to come back)
+    assert wait_until(send_fragmented, 10, step=0.1), echoed.items[:3]
     # out: a subscription with fragment_size gets fragment ops, never a whole publish
     out = roslibpy_client()
     fragments, whole = listen(out, "fragment"), Inbox()

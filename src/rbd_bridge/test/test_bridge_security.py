@@ -96,10 +96,9 @@ def test_default_allow_list_denies_cmd_vel_and_allows_gestures(robodog):
         )
         try:
             ws.send(json.dumps({"op": "advertise", "topic": "/rbd_gestrec/gesture", "type": "std_msgs/String"}))
-            deadline = time.monotonic() + 20
-            while echo.poll() is None and time.monotonic() < deadline:
-                ws.send(json.dumps({"op": "publish", "topic": "/rbd_gestrec/gesture", "msg": {"data": "wave"}}))
-                time.sleep(0.2)
+            # (published from the predicate until rostopic echo has one and exits)
+            wait_until(lambda: ws.send(json.dumps({"op": "publish", "topic": "/rbd_gestrec/gesture",
+                                                   "msg": {"data": "wave"}})) or echo.poll() is not None, 20.0, 0.2)
             out = echo.communicate(timeout=5)[0] if echo.poll() is not None else ""
         finally:
             if echo.poll() is None:

@@ -40,7 +40,7 @@ from rbd_bridge_testing import (
 from roslibpy.ros1 import actionlib
 from websockets.frames import Frame, Opcode
 
-from rbd_testkit import RosEnv
+from rbd_testkit import RosEnv, stays_unchanged
 
 PROBE = "probe"
 SMOKE_A = "/a_topic"
@@ -133,7 +133,9 @@ def test_publish_right_after_advertise_is_delivered(roslibpy_client, open_bridge
     for i in range(10):
         topic.publish(roslibpy.Message({"data": "m%d" % i}))
     assert wait_until(lambda: report(open_bridge)[IMMEDIATE]["count"] >= 10, 5), report(open_bridge)[IMMEDIATE]
-    time.sleep(0.3)
+    # (the ten arrived: proven above) no eleventh follows
+    stays_unchanged(lambda: report(open_bridge)[IMMEDIATE]["count"], lambda: True, hold=0.3, step=0.1,
+                    what="the delivered count")
     got = report(open_bridge)[IMMEDIATE]
     assert [m["data"] for m in got["messages"]] == ["m%d" % i for i in range(10)]
 

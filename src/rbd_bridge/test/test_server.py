@@ -4,7 +4,6 @@ import asyncio
 import json
 import socket
 import threading
-import time
 
 import pytest
 from websockets.exceptions import ConnectionClosed
@@ -179,9 +178,7 @@ def test_silent_client_is_dropped_after_ping_timeout_and_released(server):
     s.sendall(b"GET / HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
               b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")
     s.recv(1000)
-    deadline = time.monotonic() + 10
-    while not backend.closed and time.monotonic() < deadline:
-        time.sleep(0.1)
+    wait_for(lambda: backend.closed, 10.0, 0.1)
     assert backend.closed and not srv.sessions
     s.close()
 

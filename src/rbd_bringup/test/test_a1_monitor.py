@@ -1,7 +1,6 @@
 """rbd_bringup.a1_monitor: HighCmd packets over real LCM (UDP multicast, ttl=0) become speed samples."""
 
 import socket
-import time
 
 import lcm
 import pytest
@@ -60,10 +59,10 @@ def test_monitor_records_packets_over_lcm(url):
                 pub.publish("LCM_High_Cmd", cmd)
             pub.publish("LCM_High_Cmd", b"\x00" * 7)  # garbage: counted, ignored
             pub.publish("OTHER_CHANNEL", sent[0])  # other channels are not commands
-            time.sleep(0.05)
             return len(mon.snapshot()) >= 3 and mon.bad >= 1
 
-        assert wait_for(delivered, 5.0)
+        # (sent again each step until the monitor has them: the step gives LCM time to deliver)
+        assert wait_for(delivered, 5.0, 0.05)
         speeds = [v for _t, v in mon.snapshot()[:3]]
         assert speeds == pytest.approx([0.3, 0.0, 0.0])
         assert all(v in (0.0, pytest.approx(0.3)) for _t, v in mon.snapshot())

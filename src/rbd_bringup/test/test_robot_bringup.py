@@ -17,7 +17,6 @@ import math
 import os
 import socket
 import subprocess
-import time
 
 import numpy as np
 import pytest
@@ -186,14 +185,12 @@ def test_legs_follow_joint_states_and_the_fallback_steps_aside(robot):
     me = rospy.get_name()
 
     def send_until(predicate, timeout):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+        def sent_and_true():  # (the joint states are sent from the predicate until it holds)
             msg.header.stamp = rospy.Time.now()
             pub.publish(msg)
-            if predicate():
-                return True
-            time.sleep(0.02)
-        return False
+            return predicate()
+
+        return wait_for(sent_and_true, timeout, 0.02)
 
     def foot_at_expected():
         try:

@@ -1,3 +1,6 @@
+// The EKF node: parameters, subscriptions and the TF it needs, the filter cycle and its output.
+// The sensor callbacks (message -> measurement) are in ekf_sensor_input.cpp, the diagnostics in
+// ekf_diagnostics.cpp.
 #include "rbd_localization/ekf_node.h"
 
 #include <std_msgs/String.h>
@@ -12,15 +15,6 @@
 #include "rbd_localization/run_node.h"
 
 namespace rbd_localization {
-
-namespace {
-
-bool anyOf(const std::array<bool, STATE_SIZE>& v, int first, int count) {
-  for (int i = first; i < first + count; ++i) {
-    if (v[i]) return true;
-  }
-  return false;
-}
 
 // Measurements older than the filter by more than this are dropped rather than fused.
 constexpr double kMaxMeasurementAge = 1.0;
@@ -88,7 +82,7 @@ bool EkfNode::init(std::string* error) {
     switch (s.cfg.type) {
       case SensorType::kImu: {
         s.orientation_as_pose =
-            (s.cfg.relative || s.cfg.differential) && anyOf(s.cfg.update_vector, ORIENTATION_OFFSET, 3);
+            (s.cfg.relative || s.cfg.differential) && updatesAny(s.cfg.update_vector, ORIENTATION_OFFSET, 3);
         if (s.orientation_as_pose) {
           s.orientation_cfg = s.rest_cfg = s.cfg;
           for (int k = 0; k < STATE_SIZE; ++k) {
@@ -223,139 +217,6 @@ bool EkfNode::lookup(const std::string& target, const std::string& source, const
     }
     return false;
   }
-}
-
-void EkfNode::countReceived(size_t idx) {
-  SensorState& s = sensors_[idx];
-  s.last_receive = ros::Time::now();
-  ++s.received;
-  ++s.window_received;
-  ++s.cycle_received;
-}
-
-void EkfNode::imuCallback(const sensor_msgs::Imu::ConstPtr& msg, size_t idx) {
-  countReceived(idx);
-  SensorState& s = sensors_[idx];
-  Eigen::Matrix3d base_from_imu;
-  if (!sensorRotation(idx, msg->header.frame_id, &base_from_imu)) {
-    markInvalid(idx, "no transform " + params_.base_link_frame + " <- " + msg->header.frame_id);
-    return;
-  }
-  s.frames_ready = true;
-  const double t = stampToTime(msg->header.stamp);
-  std::string reason;
-  if (s.orientation_as_pose) {
-    PoseWithCov orientation;
-    if (imuOrientationPose(*msg, base_from_imu, &orientation))
-      fusePose(orientation, t, s.orientation_cfg, idx);
-  }
-  if (!imuMeasurements(*msg, base_from_imu, s.orientation_as_pose ? s.rest_cfg : s.cfg, ekf_.state(),
-                       params_.gravitational_acceleration, t, &queue_, &reason)) {
-    markInvalid(idx, reason);
-    return;
-  }
-  queue_sensor_.resize(queue_.size(), idx);  // the IMU parts were appended in place
-}
-
-void EkfNode::handlePose(const geometry_msgs::PoseWithCovariance& msg, const std::string& frame,
-                         const ros::Time& stamp, size_t idx) {
-  SensorState& s = sensors_[idx];
-  PoseWithCov pose;
-  if (!fromMsg(msg, &pose)) {
-    markInvalid(idx, "pose with NaN/inf or zero quaternion");
-    return;
-  }
-  // Differential poses become body-frame velocities, which no fixed world <- frame transform
-  // changes: like r_l, they are not transformed.
-  const bool transform =
-      !s.cfg.frame_is_world && !s.cfg.differential && !frame.empty() && frame != params_.world_frame;
-  if (transform) {
-    if (!needs_dynamic_tf_) {
-      needs_dynamic_tf_ = true;
-      ensureTfListener(s.cfg.name + " poses are in " + frame + ", not " + params_.world_frame);
-    }
-    Eigen::Isometry3d world_from_frame;
-    if (!lookup(params_.world_frame, frame, stamp, &world_from_frame)) {
-      markInvalid(idx, "no transform " + params_.world_frame + " <- " + frame);
-      return;
-    }
-    pose.pose = world_from_frame * pose.pose;
-    pose.covariance = rotateCovariance(pose.covariance, world_from_frame.linear());
-  }
-  fusePose(pose, stampToTime(stamp), s.cfg, idx);
-}
-
-void EkfNode::fusePose(PoseWithCov pose, double t, const SensorConfig& cfg, size_t idx) {
-  SensorState& s = sensors_[idx];
-  if (cfg.relative) {
-    if (!s.have_first) {
-      s.first = pose;
-      s.have_first = true;
-    }
-    pose.pose = s.first.pose.inverse() * pose.pose;
-  }
-  if (cfg.differential) {
-    Measurement m;
-    if (s.have_previous && differentialMeasurement(s.previous, pose, t - s.previous_time, cfg, t, &m)) {
-      enqueue(m, idx);
-    }
-    s.previous = pose;
-    s.previous_time = t;
-    s.have_previous = true;
-    return;
-  }
-  enqueue(poseMeasurement(pose, cfg, t), idx);
-}
-
-void EkfNode::poseCallback(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg, size_t idx) {
-  countReceived(idx);
-  handlePose(msg->pose, msg->header.frame_id, msg->header.stamp, idx);
-  sensors_[idx].frames_ready = true;
-}
-
-void EkfNode::odomCallback(const nav_msgs::Odometry::ConstPtr& msg, size_t idx) {
-  countReceived(idx);
-  SensorState& s = sensors_[idx];
-  if (anyOf(s.cfg.update_vector, POSITION_OFFSET, 6)) {
-    handlePose(msg->pose, msg->header.frame_id, msg->header.stamp, idx);
-  }
-  if (!anyOf(s.cfg.update_vector, POSITION_V_OFFSET, 6)) {
-    s.frames_ready = true;
-    return;
-  }
-  Eigen::Matrix3d base_from_child;
-  if (!sensorRotation(idx, msg->child_frame_id, &base_from_child)) {
-    markInvalid(idx, "no transform " + params_.base_link_frame + " <- " + msg->child_frame_id);
-    return;
-  }
-  s.frames_ready = true;
-  Measurement m;
-  if (!twistMeasurement(msg->twist, base_from_child, s.cfg, stampToTime(msg->header.stamp), &m)) {
-    markInvalid(idx, "twist with NaN/inf");
-    return;
-  }
-  enqueue(m, idx);
-}
-
-void EkfNode::twistCallback(const geometry_msgs::TwistWithCovarianceStamped::ConstPtr& msg, size_t idx) {
-  countReceived(idx);
-  Eigen::Matrix3d base_from_frame;
-  if (!sensorRotation(idx, msg->header.frame_id, &base_from_frame)) {
-    markInvalid(idx, "no transform " + params_.base_link_frame + " <- " + msg->header.frame_id);
-    return;
-  }
-  sensors_[idx].frames_ready = true;
-  Measurement m;
-  if (!twistMeasurement(msg->twist, base_from_frame, sensors_[idx].cfg, stampToTime(msg->header.stamp), &m)) {
-    markInvalid(idx, "twist with NaN/inf");
-    return;
-  }
-  enqueue(m, idx);
-}
-
-void EkfNode::enqueue(const Measurement& m, size_t idx) {
-  queue_.push_back(m);
-  queue_sensor_.push_back(idx);
 }
 
 bool EkfNode::sensorStale(const SensorState& s, const ros::Time& now) const {
@@ -530,51 +391,6 @@ void EkfNode::publish() {
   }
   last_published_stamp_ = t;
   tf_broadcaster_.sendTransform(tf);
-}
-
-void EkfNode::diagnoseSensor(size_t idx, diagnostic_updater::DiagnosticStatusWrapper& stat) {
-  SensorState& s = sensors_[idx];
-  const ros::Time now = ros::Time::now();
-  stat.add("topic", s.sub.getTopic());
-  stat.add("type", sensorTypeName(s.cfg.type));
-  stat.add("received", s.received);
-  stat.add("accepted", s.accepted);
-  stat.add("rejected", s.rejected);
-  stat.add("invalid", s.invalid);
-  stat.add("cycles with a full queue", s.full_queue_cycles);
-  stat.add("last message age [s]", s.received ? (now - s.last_receive).toSec() : -1.0);
-  if (sensorStale(s, now)) {
-    stat.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "stale: %s",
-                  s.received ? "no message within sensor_stale_timeout" : "no message received yet");
-  } else if (s.window_rejected > 0) {
-    stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
-                  "rejected %lu measurement(s) since last report: %s",
-                  static_cast<unsigned long>(s.window_rejected), s.last_problem.c_str());
-  } else if (s.window_invalid > 0) {
-    stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%lu invalid message(s) since last report: %s",
-                  static_cast<unsigned long>(s.window_invalid), s.last_problem.c_str());
-  } else {
-    stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "ok");
-  }
-  s.window_received = s.window_rejected = s.window_invalid = 0;
-}
-
-void EkfNode::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& stat) {
-  stat.add("initialized", ekf_.initialized());
-  stat.add("filter time", ekf_.lastUpdateTime());
-  stat.add("world_frame", params_.world_frame);
-  stat.add("TF listener", tf_listener_ ? "active" : "released");
-  if (!enabled_) {
-    stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "disabled: waiting for the enable service");
-  } else if (!ekf_.initialized()) {
-    stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for the first measurement");
-  } else if (!publishing_) {
-    stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "all sensors stale: estimate not published");
-  } else if (!ekf_.state().allFinite()) {
-    stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "state not finite");
-  } else {
-    stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "publishing");
-  }
 }
 
 int ekfLocalizationNodeMain(int argc, char** argv) {

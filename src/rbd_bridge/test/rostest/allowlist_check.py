@@ -11,17 +11,14 @@ import rospy
 from std_msgs.msg import String
 from websockets.sync.client import connect
 
+from rbd_testkit import wait_for
 from rbd_testkit.ros import run_rostest
 
 
 class AllowListWiring(unittest.TestCase):
     def setUp(self):
         rospy.init_node("allowlist_check", anonymous=True)
-        deadline = time.monotonic() + 30
-        self.port = None
-        while self.port is None and time.monotonic() < deadline:
-            self.port = rospy.get_param("/rbd_bridge/actual_port", None)
-            time.sleep(0.1)
+        self.port = wait_for(lambda: rospy.get_param("/rbd_bridge/actual_port", None), 30.0, 0.1)
         self.assertIsNotNone(self.port, "the bridge never published ~actual_port")
 
     def test_cmd_vel_denied_and_gesture_forwarded(self):

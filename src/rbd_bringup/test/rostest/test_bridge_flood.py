@@ -46,18 +46,20 @@ class BridgeFlood(Faults):
     def start_trick(self, gesture, timeout=45.0):
         """Release the e-stop if needed and show ``gesture`` until the robot moves in EXECUTING."""
         m = self.m
-        last = 0.0
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+        last = [0.0]
+
+        def started():  # (the release and the gesture are sent from the predicate until the robot moves)
             if m.speed() > 0.08 and m.state == "EXECUTING":
-                return
+                return True
             if m.state == "EMERGENCY_STOP":
                 self.em_stop(False)
-            if m.state == "WAITING_FOR_GESTURE" and time.monotonic() - last > 0.4:
+            if m.state == "WAITING_FOR_GESTURE" and time.monotonic() - last[0] > 0.4:
                 m.gesture.publish(String(gesture))
-                last = time.monotonic()
-            time.sleep(0.05)
-        self.fail("the robot never started %r: state %r" % (gesture, m.state))
+                last[0] = time.monotonic()
+            return False
+
+        if not wait_for(started, timeout):
+            self.fail("the robot never started %r: state %r" % (gesture, m.state))
 
     def fault_operator_finish(self, i):
         """operator_policy finish: the trick goes on past the timeout, then the robot waits."""

@@ -75,6 +75,7 @@ class Zed2Relay:
         self.path = []  # (x, y) of the planned path
         self.state = None
         self.rejected = 0
+        self.pose0_reports = 0  # pose0 (ZED2) statuses of the EKF on /diagnostics so far
         self.relayed = 0
         self.zed_pub = rospy.Publisher("/reliability/zed2_pose", PoseWithCovarianceStamped, queue_size=10)
         self.gesture = rospy.Publisher("/rbd_gestrec/gesture", String, queue_size=10)
@@ -134,6 +135,7 @@ class Zed2Relay:
     def on_diagnostics(self, msg):
         for status in msg.status:
             if "pose0" in status.name:
+                self.pose0_reports += 1
                 for kv in status.values:
                     if kv.key == "rejected":
                         self.rejected = max(self.rejected, int(kv.value))
@@ -178,16 +180,19 @@ class Zed2JumpFault:
         # Release the e-stop and show "walk" until the robot walks.
         rospy.wait_for_service("/rbd_controller/em_stop", 30.0)
         em_stop = rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)
-        deadline = time.monotonic() + 45.0
-        last_gesture = 0.0
-        while not (z.state == "EXECUTING" and self.speed() > 0.08):
-            self.assertLess(time.monotonic(), deadline, "robot never walked (state %r)" % z.state)
+        last_gesture = [0.0]
+
+        def walking():  # (the release and the gesture are sent from the predicate until the robot walks)
+            if z.state == "EXECUTING" and self.speed() > 0.08:
+                return True
             if z.state == "EMERGENCY_STOP":
                 em_stop(False)
-            if z.state == "WAITING_FOR_GESTURE" and time.monotonic() - last_gesture > 0.4:
+            if z.state == "WAITING_FOR_GESTURE" and time.monotonic() - last_gesture[0] > 0.4:
                 z.gesture.publish(String("walk"))
-                last_gesture = time.monotonic()
-            time.sleep(0.05)
+                last_gesture[0] = time.monotonic()
+            return False
+
+        self.assertTrue(self.wait_for(walking, 45.0), "robot never walked (state %r)" % z.state)
         t_start = rospy.get_time()
         rejected_before = z.rejected
         time.sleep(jump_delay)
@@ -200,7 +205,9 @@ class Zed2JumpFault:
             z.offset = (0.0, 0.0)
         t_clear = rospy.get_time()
         finished = self.wait_for(lambda: z.state == "WAITING_FOR_GESTURE", 60.0)
-        time.sleep(1.0)  # diagnostics (1 Hz) catch up
+        reports = z.pose0_reports
+        # the EKF's rejected count up to now: one more pose0 diagnostics report (1 Hz)
+        self.assertTrue(self.wait_for(lambda: z.pose0_reports > reports, 5.0), "no EKF diagnostics after the trick")
         t_end = rospy.get_time()
 
         with z.lock:

@@ -295,21 +295,33 @@ class Faults(unittest.TestCase):
         rospy.wait_for_service("/rbd_controller/collision", 30.0)
         return rospy.ServiceProxy("/rbd_controller/collision", SetBool)(detected)
 
+    def hold(self, seconds, what):
+        """Wait ``seconds`` of ground truth that keeps arriving, the controller's state unchanged throughout.
+
+        (A sleep would also pass with the simulation stalled; five new ground-truth samples prove it went on.)
+        """
+        m = self.m
+        t = time.monotonic()
+        rbd_testkit.stays_unchanged(lambda: m.state, lambda: m.count("truth", t, time.monotonic()) >= 5, hold=seconds,
+                                    what="%s: the controller's state" % what, proof="five new ground-truth samples")
+
     def walk(self, timeout=45.0):
         """Get the robot walking a trick (release the e-stop, show 'walk'); fail if it never moves."""
         m = self.m
-        deadline = time.monotonic() + timeout
-        last_gesture = 0.0
-        while time.monotonic() < deadline:
+        last_gesture = [0.0]
+
+        def walking():  # (the release and the gesture are sent from the predicate until the robot walks)
             if m.speed() > MOVING and m.state == "EXECUTING":
-                return
+                return True
             if m.state == "EMERGENCY_STOP":
                 self.em_stop(False)
-            if m.state == "WAITING_FOR_GESTURE" and time.monotonic() - last_gesture > 0.4:
+            if m.state == "WAITING_FOR_GESTURE" and time.monotonic() - last_gesture[0] > 0.4:
                 m.gesture.publish(String("walk"))
-                last_gesture = time.monotonic()
-            time.sleep(0.05)
-        self.fail("robot never walked: state %r, speed %.3f" % (m.state, m.speed()))
+                last_gesture[0] = time.monotonic()
+            return False
+
+        if not wait_for(walking, timeout):
+            self.fail("robot never walked: state %r, speed %.3f" % (m.state, m.speed()))
 
     def assert_stops(self, t0, bound_cmd, bound_truth, hold=2.0, lcm=True):
         """Zero velocity in the A1's commands within bound_cmd and on ground truth within bound_truth
@@ -557,7 +569,7 @@ class Faults(unittest.TestCase):
         self.assertTrue(wait_for(lambda: m.state == "EMERGENCY_STOP", 30.0), m.state)
         self.collision(False)
         t1 = time.monotonic()
-        time.sleep(1.5)
+        self.hold(1.5, "collision cleared under an e-stop")
         self.assertEqual(m.state, "EMERGENCY_STOP")
         self.assertLess(m.max_speed("truth", t1, time.monotonic()), TRUTH_STILL)
         self.em_stop(False)
@@ -579,7 +591,7 @@ class Faults(unittest.TestCase):
         self.em_stop(False)  # collision still set: stays stopped
         self.assertTrue(wait_for(lambda: m.state == "COLLISION_DETECTED", 5.0), m.state)
         t1 = time.monotonic()
-        time.sleep(1.0)
+        self.hold(1.0, "e-stop released with the collision still set")
         self.assertLess(m.max_speed("truth", t1, time.monotonic()), TRUTH_STILL)
         self.collision(False)
         self.assertTrue(wait_for(lambda: m.speed() > MOVING, 20.0), "trick did not resume")
@@ -776,7 +788,8 @@ class Faults(unittest.TestCase):
         logger = subprocess.Popen(["lcm-logger", "-q", "-f", "--flush-interval=50", "-l",
                                    rospy.get_param("/rbd_sim/lcm_url"), "-c", "LCM_High_.*", log])
         try:
-            time.sleep(0.5)
+            # the logger is up: it has written (with --flush-interval) this A1's HighCmds
+            wait_for(lambda: os.path.exists(log) and os.path.getsize(log) > 0, 10.0, what="lcm-logger writing %s" % log)
             hold = 4.0
             with m.lock:
                 n_held = len(m.remote_held)  # an earlier round's press and let-go are before this
@@ -806,7 +819,7 @@ class Faults(unittest.TestCase):
         self.assertFalse(res.success)
         self.assertIn("remote", res.message)
         t1 = time.monotonic()
-        time.sleep(0.5)
+        self.hold(0.5, "release refused while the remote is held")
         self.assertEqual(m.state, "EMERGENCY_STOP")
         # Let go: still stopped (the input arrived: remote_estop_held went true, then false, for
         # this press; the flag is latched and sent on change, so an earlier round's false is no proof).
@@ -816,7 +829,7 @@ class Faults(unittest.TestCase):
             return True in held and held[-1] is False
 
         self.assertTrue(wait_for(let_go, hold + 3.0), "the remote never let go")
-        time.sleep(1.0)
+        self.hold(1.0, "the remote let go")
         self.assertEqual(m.state, "EMERGENCY_STOP")
         self.assertLess(m.max_speed("truth", t1, time.monotonic()), TRUTH_STILL)
         self.assertLess(m.max_speed("commands", t1, time.monotonic()), 1e-6)

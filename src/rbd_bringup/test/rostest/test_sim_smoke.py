@@ -15,7 +15,6 @@ starts from the e-stop or an idle robot.
 import functools
 import math
 import os
-import time
 import unittest
 
 import rosnode
@@ -168,11 +167,14 @@ class SimSmoke(Zed2JumpFault, unittest.TestCase):
         # meanwhile), then watch the trick on ground truth.
         yaws = []  # relative to the yaw before the trick
         yaw0 = yaw_of(self.truth.pose.pose.orientation)
-        deadline = time.monotonic() + 30.0
-        while self.state not in ("GENERATING_PATH", "EXECUTING") and time.monotonic() < deadline:
+        def taken():  # (the gesture is shown from the predicate until the controller takes it)
+            if self.state in ("GENERATING_PATH", "EXECUTING"):
+                return True
             if self.state == "WAITING_FOR_GESTURE":
                 self.gesture.publish(String("spin"))
-            time.sleep(0.3)
+            return False
+
+        wait_for(taken, 30.0, 0.3)
         self.assertIn(self.state, ("GENERATING_PATH", "EXECUTING"), self.states)
 
         def back_waiting():

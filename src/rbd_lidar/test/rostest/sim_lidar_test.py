@@ -60,6 +60,11 @@ class SimLidarTest(unittest.TestCase):
         self._wait_clear()
         wait_for(lambda: not self.calls or self.calls[-1][1] is False, 5.0, what="the clear call after a collision")
 
+    def _wait_states(self, after: float, n: int, what: str) -> None:
+        """Wait for ``n`` zone states received after the ROS time ``after``: the node judged that many scans."""
+        wait_for(lambda: sum(1 for t, _ in list(self.states) if t > after) >= n, 10.0 + 0.2 * n,
+                 what="%d zone states %s" % (n, what), abort=rospy.is_shutdown)
+
     def _wait_clear(self, timeout: float = 20.0) -> None:
         def clear():
             with self.lock:
@@ -102,7 +107,8 @@ class SimLidarTest(unittest.TestCase):
             ncalls = len(self.calls)
         t0 = rospy.get_time()
         self.assertTrue(self.place(name="p", x=x + 0.5, y=y, radius=0.25, height=1.7, remove=False).success)
-        time.sleep(1.5)
+        # 12 scans judged with the person there (1.2 s at 10 Hz): one service call, not one per scan
+        self._wait_states(t0 + 0.25, 12, "with the person ahead")
         with self.lock:
             after = [(t, s) for t, s in self.states if t > t0]
             calls = self.calls[ncalls:]
@@ -115,7 +121,7 @@ class SimLidarTest(unittest.TestCase):
         self.assertEqual([c[1] for c in calls], [True])
         self.assertTrue(self.place(name="p", remove=True).success)
         t1 = rospy.get_time()
-        time.sleep(1.5)
+        self._wait_states(t1, 15, "after the person left")
         with self.lock:
             after = [(t, s) for t, s in self.states if t > t1]
             calls = self.calls[ncalls:]
@@ -137,8 +143,9 @@ class SimLidarTest(unittest.TestCase):
         gap = 0.85
         tripped = None
         while gap > 0.4:
+            t_step = rospy.get_time()
             self.place(name="b", x=x + gap + radius, y=y, radius=radius, height=1.7, remove=False)
-            time.sleep(0.35)
+            self._wait_states(t_step, 3, "after a 10 mm step")  # the third is a full scan after the move
             with self.lock:
                 last = self.states[-1][1]
             if last.collision:

@@ -35,6 +35,14 @@
 
 namespace rbd_localization {
 
+/// True if any of `count` entries of an update vector from `first` on is set.
+inline bool updatesAny(const std::array<bool, STATE_SIZE>& v, int first, int count) {
+  for (int i = first; i < first + count; ++i) {
+    if (v[i]) return true;
+  }
+  return false;
+}
+
 class EkfNode {
  public:
   EkfNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh);

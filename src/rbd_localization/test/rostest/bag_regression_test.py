@@ -15,6 +15,7 @@ from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
 
 from rbd_geometry.rotation import yaw_of
+from rbd_testkit import wait_for
 from rbd_testkit.ros import run_rostest
 
 
@@ -46,17 +47,13 @@ class BagRegressionTest(unittest.TestCase):
         # Sim time from the bag (/clock): wait until it has played to its end. The end is the
         # bag's own last stamp (this node may start after the first /clock under load).
         wall_end = time.time() + 3 * bag_duration + 60.0
-        while not rospy.is_shutdown() and time.time() < wall_end:
-            if rospy.get_time() > 0.0:
-                break
-            time.sleep(0.1)
+        wait_for(lambda: rospy.get_time() > 0.0, wall_end - time.time(), 0.1, abort=rospy.is_shutdown)
         if bag_path:
             with rosbag.Bag(bag_path) as bag:
                 deadline = bag.get_end_time() - 0.3
         else:
             deadline = rospy.get_time() + bag_duration - 0.5
-        while not rospy.is_shutdown() and rospy.get_time() < deadline and time.time() < wall_end:
-            time.sleep(0.1)
+        wait_for(lambda: rospy.get_time() >= deadline, max(0.0, wall_end - time.time()), 0.1, abort=rospy.is_shutdown)
         with lock:
             self.assertIn("pose", last, "no /rbd_localization/pose")
             pose = last["pose"].pose

@@ -39,6 +39,7 @@ class MockA1BadLcm(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node("mock_a1_bad_lcm")
         cls.pose = None
+        cls.gt_count = 0  # ground-truth messages so far: the simulation goes on
         cls.states = []
         cls.lock = threading.Lock()
         rospy.Subscriber("/rbd_sim/ground_truth", Odometry, cls._gt, queue_size=5)
@@ -55,13 +56,13 @@ class MockA1BadLcm(unittest.TestCase):
     def setUp(self):
         """Known state, whatever ran before: the mock stands still."""
         self.assertIsNotNone(self.get(), "no ground truth")
+        wait_for(self.still, 5.0, 0.0, what="the mock standing still")
 
-        def still():
-            before = self.get()
-            time.sleep(0.2)
-            return all(v < 1e-4 for v in self.moved(self.get(), before))
-
-        wait_for(still, 5.0, 0.0, what="the mock standing still")
+    def still(self):
+        """True if the ground truth moved less than 0.1 mm / 0.1 mrad in 0.2 s."""
+        before = self.get()
+        time.sleep(0.2)
+        return all(v < 1e-4 for v in self.moved(self.get(), before))
 
     def rejected_so_far(self):
         """The mock's count of rejected HighCmd packets, from its latest (throttled) log line."""
@@ -79,6 +80,7 @@ class MockA1BadLcm(unittest.TestCase):
         q = msg.pose.pose.orientation
         with cls.lock:
             cls.pose = (p.x, p.y, 2 * math.atan2(q.z, q.w))
+            cls.gt_count += 1
 
     @classmethod
     def _state(cls, channel, data):
@@ -148,14 +150,15 @@ class MockA1BadLcm(unittest.TestCase):
         at_last = self.get()
         d, _ = self.moved(at_last, start)
         self.assertGreater(d, 0.2, "valid commands did not move the mock (%.3f m)" % d)
-        time.sleep(1.0)
+        # the watchdog stops it: measured once the ground truth stands still (however long that takes)
+        wait_for(self.still, 5.0, 0.0, what="the mock stopping after the last command")
         stopped = self.get()
         coast, _ = self.moved(stopped, at_last)
         # latency 0.05 s + watchdog 0.1 s at 0.3 m/s + 0.03 m braking = 0.075 m
         self.assertLess(coast, 0.16, "watchdog: coasted %.3f m" % coast)
-        time.sleep(0.5)
-        d, _ = self.moved(self.get(), stopped)
-        self.assertLess(d, 0.002)
+        n = self.gt_count
+        stays_unchanged(lambda: self.moved(self.get(), stopped)[0] < 0.002, lambda: self.gt_count >= n + 5, hold=0.5,
+                        what="standing within 2 mm", proof="five new ground-truth messages")
 
 
 if __name__ == "__main__":

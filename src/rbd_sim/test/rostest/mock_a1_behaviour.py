@@ -17,6 +17,7 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Bool
 
+from rbd_a1_driver.unitree_layout import MODE_FORCE_STAND
 from rbd_geometry.rotation import quat_to_rpy
 from rbd_msgs.srv import SetBodyPose
 from rbd_testkit import stays_unchanged, wait_for
@@ -85,9 +86,20 @@ class MockA1Behaviour(unittest.TestCase):
     @classmethod
     def reason_after(cls, n):
         """rbd_a1_driver's zero_velocity_reason in the newest of its diagnostics after the first ``n``; None if none."""
+        return cls.driver_value_after(n, "zero_velocity_reason")
+
+    @classmethod
+    def driver_value_after(cls, n, key):
+        """The newest value of ``key`` in rbd_a1_driver's diagnostics after the first ``n``; None if none."""
         values = [kv.value for arr in list(cls.diag[n:]) for st in arr.status for kv in st.values
-                  if st.name.startswith("rbd_a1_driver") and kv.key == "zero_velocity_reason"]
+                  if st.name.startswith("rbd_a1_driver") and kv.key == key]
         return values[-1] if values else None
+
+    @classmethod
+    def wait_released(cls, n, timeout=5.0, what=None):
+        """Wait until a driver diagnostics after the first ``n`` gives a zero-velocity reason other than an e-stop."""
+        return wait_for(lambda: cls.driver_value_after(n, "zero_velocity_reason") not in (None, "e-stop"), timeout,
+                        what=what)
 
     @classmethod
     def rejected(cls):
@@ -185,8 +197,10 @@ class MockA1Behaviour(unittest.TestCase):
             start = self.gt.get()
             self.send(twist(0.3), 1.0)
             self.assertLess(dist(self.gt.get(), start), 0.005, "moved while e-stop engaged")
+            n_diag = len(self.diag)
             self.estop.publish(Bool(False))
-            time.sleep(0.2)
+            # the release reached the driver (its diagnostics, 1 Hz) before the cmd_vel below
+            self.wait_released(n_diag, what="the driver reporting the e-stop released")
             start = self.gt.get()
             self.send(twist(0.3), 1.0)
             self.assertGreater(dist(self.gt.get(), start), 0.15, "no motion after release")
@@ -197,8 +211,9 @@ class MockA1Behaviour(unittest.TestCase):
             self.assertLess(coast, 0.12, "coasted %.3f m after e-stop" % coast)
             self.assert_still(0.3, "e-stop with cmd_vel streaming")
         finally:
+            n_diag = len(self.diag)
             self.estop.publish(Bool(False))
-            time.sleep(0.2)
+            self.wait_released(n_diag)  # (no assertion here: the test's own failure is the news)
 
     def test_nan_cmd_vel_holds_still(self):
         self.settle()
@@ -220,7 +235,10 @@ class MockA1Behaviour(unittest.TestCase):
         self.settle()
         rospy.wait_for_service("/set_body_pose", timeout=10.0)
         call = rospy.ServiceProxy("/set_body_pose", SetBodyPose)
-        time.sleep(0.6)  # stand_delay: the driver puts the A1 in force stand
+        # stand_delay after the last motion: the driver puts the A1 in force stand (its diagnostics say so)
+        n_diag = len(self.diag)
+        wait_for(lambda: self.driver_value_after(n_diag, "mode") == str(MODE_FORCE_STAND), 5.0,
+                 what="the driver in force stand (mode %d)" % MODE_FORCE_STAND)
         before = self.gt.get()
         res = call(0.3, -0.2, 0.0, -0.1)
         self.assertTrue(res.success, res.message)
@@ -264,8 +282,11 @@ class TurnOnly(MockA1Behaviour):
         wait_for(lambda: any("estop_required" in r for r in cls.driver_values("zero_velocity_reason")), 3.0)
         cls.reasons_before_estop = cls.driver_values("zero_velocity_reason")
         # One released e-stop message (latched; a single message does not arm the signal watchdog).
+        n_diag = len(cls.diag)
         cls.estop.publish(Bool(False))
-        time.sleep(0.3)
+        wait_for(lambda: "estop_required" not in (cls.driver_value_after(n_diag, "zero_velocity_reason") or
+                                                   "estop_required"),
+                 5.0, what="the driver no longer waiting for an e-stop source")
 
     def test_estop_required_holds_until_first_estop_message(self):
         self.assertLess(self.walked_before_estop, 0.005, "walked before any e-stop message")
