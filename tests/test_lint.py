@@ -91,10 +91,10 @@ MAX_PRODUCT_LINES = 450
 #: Over the budget today; each is split on its own branch of issue 30 or is still to be split.
 #: Remove a line when its file is split (the test fails on a line whose file fits).
 OVER_BUDGET = {
-    "src/rbd_lidar/src/critical_zone.cpp",  # split-cpp branch
-    "src/rbd_localization/src/filter_params.cpp",  # split-cpp branch
+    "src/rbd_localization/src/map_correction_ros.cpp",  # grew with the saved maps (issue 29): to split
+    "src/rbd_pos_controller/src/rbd_pos_controller/controller.py",  # grew with FOLLOWING (issue 27): to split
 }
-#: Packages whose budget another change of issue 30 brings down (the avoidance issue splits core.py).
+#: Packages still over it: rbd_controller (lattice.py, the SE(2) planner of issue 27, not yet wired: split it then).
 OVER_BUDGET_PACKAGES = ("src/rbd_controller/",)
 
 

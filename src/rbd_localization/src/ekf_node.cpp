@@ -16,6 +16,8 @@
 
 namespace rbd_localization {
 
+namespace {
+
 // Measurements older than the filter by more than this are dropped rather than fused.
 constexpr double kMaxMeasurementAge = 1.0;
 
