@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Idempotent machine + venv setup for RoboDog (Debian 12).
-#   1. apt packages from tools/apt-packages.txt (skipped when all are installed)
+# Idempotent machine + venv setup for RoboDog (Debian 12; Debian 11 too, see README "Platforms").
+#   1. apt packages from tools/apt-packages.txt (skipped when all are installed); on Debian 11,
+#      whose apt has no catkin-tools and no colcon, those two come from PyPI into the venv
 #   2. localhost must resolve (roslaunch needs it)
 #   3. .venv from /usr/bin/python3 --system-site-packages with pinned requirements
 #      (skipped when requirements.txt and rbd_local/pyproject.toml are unchanged)
@@ -10,6 +11,20 @@ cd "$root"
 t_setup=$(date +%s)
 
 mapfile -t pkgs < <(grep -v '^\s*#' tools/apt-packages.txt | grep -v '^\s*$')
+codename="$(. /etc/os-release && echo "${VERSION_CODENAME:-}")"
+pypi=()  # what this release's apt lacks, pip-installed into the venv instead
+if [ "$codename" = bullseye ]; then
+  # Debian 11: no catkin-tools, no colcon (python3-colcon-*) in apt; PyPI has both. Its pip
+  # (20.3) cannot install rbd_local editable from pyproject.toml alone: a newer pip first.
+  keep=()
+  for p in "${pkgs[@]}"; do
+    case "$p" in catkin-tools | colcon | python3-colcon-*) ;; *) keep+=("$p") ;; esac
+  done
+  pkgs=("${keep[@]}")
+  pypi=(pip==24.3.1 catkin-tools==0.9.4 colcon-common-extensions==0.3.0)
+elif [ "$codename" != bookworm ]; then
+  echo "setup: Debian ${codename:-?} is untested (bookworm and bullseye are); trying anyway" >&2
+fi
 missing=()
 for p in "${pkgs[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
@@ -30,13 +45,16 @@ if ! getent hosts localhost >/dev/null; then
   echo "127.0.0.1 localhost" >> /etc/hosts
 fi
 
-want="$(cat requirements.txt rbd_local/pyproject.toml | sha256sum | cut -d' ' -f1)"
+want="$( (cat requirements.txt rbd_local/pyproject.toml; [ ${#pypi[@]} -eq 0 ] || echo "${pypi[*]}") | sha256sum | cut -d' ' -f1)"
 have="$(cat .venv/.rbd-requirements 2>/dev/null || true)"
 if [ "$want" != "$have" ] || [ ! -x .venv/bin/python ]; then
   echo "setup: creating .venv"
   [ -x .venv/bin/python ] || /usr/bin/python3 -m venv --system-site-packages .venv
   # catkin and colcon crawl the source space: keep the venv out of it.
   touch .venv/CATKIN_IGNORE .venv/COLCON_IGNORE
+  if [ ${#pypi[@]} -gt 0 ]; then
+    .venv/bin/python -m pip install -q --disable-pip-version-check "${pypi[@]}"
+  fi
   .venv/bin/python -m pip install -q --disable-pip-version-check -r requirements.txt 2>&1 | { grep -v "is ignored: it is neither" || true; }
   .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps -e rbd_local 2>&1 | { grep -v "is ignored: it is neither" || true; }
   echo "$want" > .venv/.rbd-requirements

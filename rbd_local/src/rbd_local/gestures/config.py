@@ -61,11 +61,11 @@ def load_config(path: str = None) -> dict:
         if g == "none":
             raise ValueError("gestures: the rejection class 'none' cannot be mapped to a command")
     thr = cfg.get("threshold")
-    if thr is not None and not (isinstance(thr, int | float) and 0.0 < float(thr) <= 1.0):
+    if thr is not None and not (isinstance(thr, (int, float)) and 0.0 < float(thr) <= 1.0):
         raise ValueError("threshold: must be empty or in (0, 1], got %r" % thr)
     if not isinstance(cfg.get("min_consecutive"), int) or cfg["min_consecutive"] < 1:
         raise ValueError("min_consecutive: must be an integer >= 1")
-    if not isinstance(cfg.get("cooldown_s"), int | float) or cfg["cooldown_s"] < 0:
+    if not isinstance(cfg.get("cooldown_s"), (int, float)) or cfg["cooldown_s"] < 0:
         raise ValueError("cooldown_s: must be >= 0")
     if cfg.get("model_complexity") not in (0, 1):
         raise ValueError("model_complexity: must be 0 or 1")
