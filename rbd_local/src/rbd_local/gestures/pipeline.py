@@ -20,7 +20,7 @@ class FrameResult:
 
     __slots__ = ("keypoints", "decision", "command", "detect_ms", "classify_ms")
 
-    def __init__(self, keypoints: np.ndarray | None, decision: Decision, command: str, detect_ms: float,
+    def __init__(self, keypoints: "np.ndarray | None", decision: Decision, command: str, detect_ms: float,
                  classify_ms: float) -> None:
         """Bundle the results."""
         self.keypoints = keypoints
@@ -86,19 +86,22 @@ class GesturePipeline:
         """
         t0 = time.perf_counter()
         try:
-            found = self.detector.detect(frame)
+            hands = [pts for pts, _score in self.detector.detect_hands(frame)]
         except ValueError as exc:  # a broken frame counts as "no hand", never a crash
             LOG.warning("frame skipped: %s", exc)
-            found = None
+            hands = []
         t1 = time.perf_counter()
-        keypoints = found[0] if found is not None else None
+        keypoints = hands[0] if hands else None
         if self.teach is not None and self.teach.active:
             # teach mode: the shows feed the session; nothing is recognised or sent meanwhile
-            self.teach.feed(t, keypoints)
+            self.teach.feed(t, hands)
             if not self.teach.active:
                 self.recognizer.reset()
             return FrameResult(keypoints, Decision(), "", 1000 * (t1 - t0), 1000 * (time.perf_counter() - t1))
-        decision = self.recognizer.update(t, keypoints)
+        decision = self.recognizer.update(t, hands)
+        followed = self.recognizer.followed
+        if followed is not None and followed.last_t == t and len(hands) > 1:
+            keypoints = followed.frames[-1]  # the overlay shows the hand that performs
         t2 = time.perf_counter()
         command = ""
         if decision.fired:
