@@ -133,11 +133,12 @@ def test_shipped_model_on_held_out_synthetic_windows(shipped_model):
 
 
 def test_shipped_model_is_reproducible_from_its_command(shipped_model):
-    # Same data and fit as `rbd-train --synthetic --seed 0` (the command in the README).
-    from rbd_local.train import DEFAULT_THRESHOLD, DEFAULT_WINDOW_S
+    # Same data and fit as `rbd-train --synthetic --seed 0 --C 30` (the command in the README).
+    from rbd_local.train import DEFAULT_C, DEFAULT_THRESHOLD, DEFAULT_WINDOW_S
 
     w, y, _ = synthetic.dataset(0, 600, 300)
-    m = train(features.batch_features(w), y, synthetic.DEFAULT_SAMPLES, DEFAULT_WINDOW_S, DEFAULT_THRESHOLD)
+    m = train(features.batch_features(w), y, synthetic.DEFAULT_SAMPLES, DEFAULT_WINDOW_S, DEFAULT_THRESHOLD,
+              DEFAULT_C)
     assert m.classes == shipped_model.classes
     np.testing.assert_allclose(m.coef, shipped_model.coef, rtol=1e-4, atol=1e-6)
     np.testing.assert_allclose(m.intercept, shipped_model.intercept, rtol=1e-4, atol=1e-6)

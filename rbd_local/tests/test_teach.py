@@ -58,6 +58,23 @@ def taught_file(tmp_path_factory, hand_sprites, shipped_model):
     return model, d
 
 
+def test_rbd_teach_clips_with_too_few_usable_shows_fails_and_says_which(taught_file, tmp_path):
+    # issue 26: 5 files of which 2 show no hand at all -> not taught, exit 1, the count and the files named
+    _model, d = taught_file
+    shows = [str(d / ("show%d.avi" % i)) for i in range(3)]
+    blank = [str(tmp_path / ("empty%d.avi" % i)) for i in range(2)]
+    for path in blank:
+        write_clip([np.full((480, 640, 3), 128, np.uint8)] * 45, path)
+    model = str(tmp_path / "model.npz")
+    proc = subprocess.run([sys.executable, "-m", "rbd_local.teach_app", "--name", "late", "--trick", TRICK,
+                           "--model", model, "--clips"] + shows + blank, env=ENV, capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 1, proc.stdout + proc.stderr[-3000:]
+    assert "usable 3 of 5, need 4" in proc.stderr, proc.stderr[-3000:]
+    assert all("no usable show in %s: no hand seen" % b in proc.stderr for b in blank), proc.stderr[-3000:]
+    assert not os.path.exists(model)  # nothing taught, nothing written
+
+
 def test_taught_gesture_recognised_builtins_kept_random_motion_ignored(taught_file, clips):
     model = GestureModel.load(taught_file[0])  # a fresh load of the file: what a restart sees
     assert model.taught.names == [TAUGHT] and model.taught_commands() == {TAUGHT: TRICK}

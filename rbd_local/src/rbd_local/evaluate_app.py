@@ -39,6 +39,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--cache", default="", help="keep the tracked key points of every clip set in this directory "
                    "and reuse them (a rerun after a model change skips MediaPipe; the key covers the clips' "
                    "code, photos, seed, plan, condition, enhancement and MediaPipe's version)")
+    p.add_argument("--failure-modes", action="store_true",
+                   help="the table of real footage's failure modes (issue 26, realclips.FAILURE_MODES) instead; "
+                   "--per-gesture clips of each gesture kind, --random-clips of each no-command kind per row")
+    p.add_argument("--max-hands", type=int, default=2, help="hands MediaPipe reports per frame (1: the detector "
+                   "before issue 26)")
     p.add_argument("--readme", help="README to write the table into")
     p.add_argument("--json", help="also write the raw numbers to this file")
     return p
@@ -128,6 +133,89 @@ def evaluate(args: argparse.Namespace) -> list[dict]:
     return rows
 
 
+FM_BEGIN = "<!-- failure-mode table: begin (rbd-evaluate --failure-modes writes this part) -->"
+FM_END = "<!-- failure-mode table: end -->"
+
+
+def evaluate_failure_modes(args: argparse.Namespace) -> list:
+    """The failure modes of real footage (issue 26): one result dictionary per row.
+
+    Each row: ``--per-gesture`` clips of each of its gesture kinds and ``--random-clips`` of each
+    of its no-command kinds (seed 500 + row); row 1 also teaches ``checkmark`` from 5 of its
+    blurred clips and scores 20 new ones (seed 900).
+    """
+    import os
+
+    from rbd_local.gestures.detector import HandDetector
+    from rbd_local.testdata import fetch_hand_photos
+
+    cache = args.photos or os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(
+        __file__)))), ".cache", "hand_photos")
+    photos = fetch_hand_photos(cache)
+    paths = [photos["handSrc.jpg"], photos["handDst.jpg"]]
+    sprites = evaluation.load_sprites(paths)
+    base = GestureModel.load(DEFAULT_MODEL)
+    version = _clip_code_version(paths)
+    wanted = [c.strip() for c in args.conditions.split(",") if c.strip()]
+    rows = []
+    with HandDetector(model_complexity=0, max_hands=args.max_hands) as det:
+        def tracked(plan: dict, cond: realclips.Condition, seed: int) -> list:
+            key = "%s|%r|%r|%d|hands%d" % (version, sorted(plan.items()), sorted(vars(cond).items()), seed,
+                                           args.max_hands)
+            return evaluation.cached_clips(args.cache, key,
+                                           lambda: evaluation.make_clips(sprites, plan, cond, seed, det))
+
+        for k, (cond, kinds, nones) in enumerate(realclips.FAILURE_MODES):
+            if wanted and not any(cond.name.startswith(w) for w in wanted):
+                continue
+            t0 = time.monotonic()
+            plan = {g: args.per_gesture for g in kinds}
+            plan.update({n: args.random_clips for n in nones})
+            clips = tracked(plan, cond, 500 + k)
+            res = evaluation.score(base, clips, {g: realclips.EXPECTED[g] for g in kinds})
+            gaps = [c.longest_gap() for c in clips if c.kind in kinds]
+            row = {"condition": cond.name, "detected": res["detected"], "frames": res["frames"],
+                   "lost_0_2": sum(g >= 0.19 for g in gaps), "gesture_clips": res["gesture_clips"],
+                   "longest_loss": max(gaps) if gaps else 0.0, "correct": res["correct"],
+                   "false_commands": res["false_commands"], "none_seconds": res["none_seconds"],
+                   "fired": res["fired"]}
+            if k == 0:
+                shows = tracked({"checkmark": 25}, cond, 900)
+                model = GestureModel.load(DEFAULT_MODEL)
+                w = evaluation.show_windows(model, shows[:5])
+                row["taught_shows"] = len(w)
+                if len(w) >= 3:
+                    model.teach("checkmark", "bow", w, force=True)
+                    taught = evaluation.score(model, shows[5:], {"checkmark": "checkmark"})
+                    row["taught_correct"], row["taught_clips"] = taught["correct"], taught["gesture_clips"]
+            row["seconds"] = round(time.monotonic() - t0, 1)
+            rows.append(row)
+            print(json.dumps(row), file=sys.stderr, flush=True)
+    return rows
+
+
+def failure_table(rows: list, args: argparse.Namespace) -> str:
+    """The Markdown table of the failure-mode rows."""
+    lines = ["| failure mode (issue 26) | hand found (frames) | gesture clips with the hand lost >= 0.2 s "
+             "(longest) | built-in gestures correct | false commands per minute of no-command motion |",
+             "|---|---|---|---|---|"]
+    for r in rows:
+        rate = 60.0 * r["false_commands"] / r["none_seconds"] if r["none_seconds"] else 0.0
+        lines.append("| %s | %s | %d of %d (%.2f s) | %d/%d (%s) | %.1f (%d in %.0f s) |" % (
+            r["condition"], _pct(r["detected"], r["frames"]), r["lost_0_2"], r["gesture_clips"], r["longest_loss"],
+            r["correct"], r["gesture_clips"], _pct(r["correct"], r["gesture_clips"]), rate, r["false_commands"],
+            r["none_seconds"]))
+    for r in rows:
+        if "taught_clips" in r:
+            lines.append("")
+            lines.append("Taught `checkmark` from %d usable of 5 blurred shows (row 1's condition): recognised in "
+                         "%d of %d new blurred clips." % (r["taught_shows"], r["taught_correct"], r["taught_clips"]))
+    lines.append("")
+    lines.append("Made by `rbd-evaluate --failure-modes --per-gesture %d --random-clips %d --max-hands %d "
+                 "--cache rbd_local/.cache/evaluate`." % (args.per_gesture, args.random_clips, args.max_hands))
+    return "\n".join(lines)
+
+
 def table(rows: list[dict], args: argparse.Namespace) -> str:
     """The Markdown table of the rows."""
     lines = [
@@ -160,8 +248,13 @@ def main(argv: list[str] = None) -> int:
         Process exit code.
     """
     args = build_parser().parse_args(argv)
-    rows = evaluate(args)
-    text = table(rows, args)
+    begin, end = (FM_BEGIN, FM_END) if args.failure_modes else (BEGIN, END)
+    if args.failure_modes:
+        rows = evaluate_failure_modes(args)
+        text = failure_table(rows, args)
+    else:
+        rows = evaluate(args)
+        text = table(rows, args)
     print(text)
     if args.json:
         with open(args.json, "w") as fh:
@@ -169,13 +262,13 @@ def main(argv: list[str] = None) -> int:
     if args.readme:
         with open(args.readme) as fh:
             readme = fh.read()
-        if BEGIN not in readme or END not in readme:
+        if begin not in readme or end not in readme:
             print("rbd-evaluate: %s has no table markers" % args.readme, file=sys.stderr)
             return 2
-        head, rest = readme.split(BEGIN, 1)
-        _old, tail = rest.split(END, 1)
+        head, rest = readme.split(begin, 1)
+        _old, tail = rest.split(end, 1)
         with open(args.readme, "w") as fh:
-            fh.write(head + BEGIN + "\n" + text + "\n" + END + tail)
+            fh.write(head + begin + "\n" + text + "\n" + end + tail)
     return 0
 
 

@@ -25,16 +25,35 @@ class Clip:
     __slots__ = ("kind", "times", "keypoints", "condition")
 
     def __init__(self, kind: str, times: np.ndarray, keypoints: np.ndarray, condition: str) -> None:
-        """Bundle a clip's data."""
+        """Bundle a clip's data; ``keypoints`` (K, 21, 3) of one hand or (K, H, 21, 3) of H hands."""
         self.kind = kind
-        self.times = times
-        self.keypoints = keypoints
+        self.times = np.asarray(times, dtype=np.float64)
+        kp = np.asarray(keypoints, dtype=np.float64)
+        self.keypoints = kp[:, None] if kp.ndim == 3 else kp
         self.condition = condition
+
+    def found(self) -> np.ndarray:
+        """(K,) whether a hand was found in each frame."""
+        return np.isfinite(self.keypoints[:, :, 0, 0]).any(axis=1)
 
     @property
     def detected(self) -> int:
         """Frames in which a hand was found."""
-        return int(np.isfinite(self.keypoints[:, 0, 0]).sum())
+        return int(self.found().sum())
+
+    @property
+    def seconds(self) -> float:
+        """The clip's length [s] (one frame interval after its last frame included)."""
+        if len(self.times) < 2:
+            return 0.0
+        return float(self.times[-1] - self.times[0] + np.median(np.diff(self.times)))
+
+    def longest_gap(self) -> float:
+        """The longest time without a hand between the first and the last frame with one [s]."""
+        found = np.flatnonzero(self.found())
+        if len(found) < 2:
+            return 0.0
+        return float(np.diff(np.asarray(self.times)[found]).max() - np.median(np.diff(self.times)))
 
 
 def load_sprites(photo_paths: list[str]) -> list:
@@ -117,7 +136,7 @@ def replay(model: GestureModel, clip: Clip, min_consecutive: int = 2, cooldown_s
     rec = GestureRecognizer(model, threshold, min_consecutive, cooldown_s)
     fired, windows = [], []
     for t, kp in zip_strict(clip.times, clip.keypoints):
-        d = rec.update(float(t), None if not np.isfinite(kp[0, 0]) else kp)
+        d = rec.update(float(t), kp)
         if d.label:
             windows.append(d.label)
         if d.fired:
@@ -144,10 +163,12 @@ def score(model: GestureModel, clips: list[Clip], expected: dict) -> dict:
     Returns:
         {"frames", "detected", "gesture_clips", "correct", "by_kind": {kind: [correct, n]},
         "random_windows", "random_false_windows", "random_clips", "random_clips_fired",
-        "fired": {kind: [first fired labels]}}.
+        "fired": {kind: [first fired labels]}, "false_commands" (gestures fired in the clips of
+        kinds that must not fire), "none_seconds" (their length)}.
     """
     res = {"frames": 0, "detected": 0, "gesture_clips": 0, "correct": 0, "by_kind": {},
-           "random_windows": 0, "random_false_windows": 0, "random_clips": 0, "random_clips_fired": 0, "fired": {}}
+           "random_windows": 0, "random_false_windows": 0, "random_clips": 0, "random_clips_fired": 0, "fired": {},
+           "false_commands": 0, "none_seconds": 0.0}
     for clip in clips:
         res["frames"] += len(clip.times)
         res["detected"] += clip.detected
@@ -163,6 +184,8 @@ def score(model: GestureModel, clips: list[Clip], expected: dict) -> dict:
         else:
             res["random_clips"] += 1
             res["random_clips_fired"] += bool(fired)
+            res["false_commands"] += len(fired)
+            res["none_seconds"] += clip.seconds
             res["random_windows"] += len(windows)
             res["random_false_windows"] += sum(w != NONE for w in windows)
     return res

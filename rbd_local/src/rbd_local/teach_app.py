@@ -4,7 +4,10 @@ Live (camera or video): ``--shows`` times "get ready", then "show it now" for 2 
 gesture is added to the model file as soon as the last good show is in::
 
     rbd-teach --name checkmark --trick bow                 # camera 0, overlay window
-    rbd-teach --name checkmark --trick bow --clips s1.avi s2.avi s3.avi   # one show per file
+    rbd-teach --name checkmark --trick bow --clips s1.avi s2.avi s3.avi s4.avi s5.avi   # one show per file
+
+With ``--clips`` at least 4 of 5 files (in general 80 %, at least 3) must give a usable show,
+else nothing is taught and the exit code is 1 ("usable 3 of 5, need 4", with the files to redo).
     rbd-teach --list
     rbd-teach --forget checkmark
     rbd-teach --undo                                       # back to the file before the last change
@@ -22,6 +25,7 @@ import sys
 import numpy as np
 
 from rbd_local.gestures.config import load_config
+from rbd_local.gestures.fewshot import MIN_SHOWS
 from rbd_local.gestures.model import GestureModel
 
 
@@ -47,10 +51,16 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _clip_windows(model: GestureModel, paths: list[str], complexity: int) -> tuple[np.ndarray, list[str]]:
+def needed_shows(given: int) -> int:
+    """Usable shows ``rbd-teach --clips`` needs of ``given`` files: 4 of 5 (at least 3, one in five may fail)."""
+    return max(MIN_SHOWS, int(np.ceil(0.8 * given)))
+
+
+def _clip_windows(model: GestureModel, paths: list, complexity: int) -> tuple:
+    """One show window per file; the files without one, each with the reason."""
     from rbd_local.gestures.detector import HandDetector
     from rbd_local.gestures.sources import FrameSource
-    from rbd_local.gestures.teach import extract_show
+    from rbd_local.gestures.teach import extract_show, show_problem
 
     windows, bad = [], []
     with HandDetector(model_complexity=complexity) as det:
@@ -59,14 +69,20 @@ def _clip_windows(model: GestureModel, paths: list[str], complexity: int) -> tup
             times, kps = [], []
             try:
                 for t, frame in source:
-                    found = det.detect(frame)
+                    frame_kps = np.full((det.max_hands, 21, 3), np.nan)
+                    for i, (pts, _score) in enumerate(det.detect_hands(frame)[:det.max_hands]):
+                        frame_kps[i] = pts
                     times.append(t)
-                    kps.append(found[0] if found is not None else np.full((21, 3), np.nan))
+                    kps.append(frame_kps)
             finally:
                 source.close()
-            det.detect(np.zeros((48, 64, 3), np.uint8))  # lose the hand: the next clip starts afresh
+            det.detect_hands(np.zeros((48, 64, 3), np.uint8))  # lose the hand: the next clip starts afresh
             w = extract_show(np.array(times), np.array(kps), model.window_s, model.samples) if times else None
-            (bad.append(path) if w is None else windows.append(w))
+            if w is None:
+                why = show_problem(np.array(times), np.array(kps), model.window_s) if times else "no frames"
+                bad.append((path, why))
+            else:
+                windows.append(w)
     return (np.stack(windows) if windows else np.empty((0, model.samples, 21, 3))), bad
 
 
@@ -148,9 +164,17 @@ def main(argv: list[str] = None) -> int:
         print("rbd-teach: %r is a built-in gesture; choose another name" % args.name, file=sys.stderr)
         return 2
     if args.clips:
+        if len(args.clips) < MIN_SHOWS:
+            print("rbd-teach: --clips needs at least %d files (one show each)" % MIN_SHOWS, file=sys.stderr)
+            return 2
         windows, bad = _clip_windows(model, args.clips, cfg["model_complexity"])
-        for b in bad:
-            print("no gesture seen in %s (skipped)" % b, file=sys.stderr)
+        for path, why in bad:
+            print("no usable show in %s: %s" % (path, why), file=sys.stderr)
+        need = needed_shows(len(args.clips))
+        if len(windows) < need:
+            print("rbd-teach: not taught: usable %d of %d, need %d (show the gesture again in: %s)"
+                  % (len(windows), len(args.clips), need, ", ".join(p for p, _ in bad)), file=sys.stderr)
+            return 1
         try:
             report = model.teach(args.name, args.trick, windows, force=args.force)
         except ValueError as exc:

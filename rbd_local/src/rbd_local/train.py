@@ -2,7 +2,7 @@
 
 The shipped bootstrap model is made from synthetic key points only, with::
 
-    rbd-train --synthetic --seed 0 --out src/rbd_local/models/gesture_model.npz
+    rbd-train --synthetic --seed 0 --C 30 --out src/rbd_local/models/gesture_model.npz
 
 Recordings from ``rbd-record`` (``--data``) replace or extend the synthetic gestures. Every
 run prints a confusion matrix on held-out windows and the false-trigger rate on held-out
@@ -20,6 +20,10 @@ from rbd_local.gestures.model import NONE, GestureModel, train
 
 DEFAULT_THRESHOLD = 0.8
 DEFAULT_WINDOW_S = 1.2
+#: Inverse regularisation strength of the shipped model (issue 26's harder synthetic data, with
+#: lost hands, fast motions and wrist waves, needs a looser fit: held-out accuracy 92 % at C=1,
+#: 96 % at C=30, false triggers on random motion 0.7 % / 1.0 %).
+DEFAULT_C = 30.0
 
 
 def evaluate(model: GestureModel, seed: int, per_gesture: int = 300, per_random: int = 400,
@@ -85,7 +89,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--per-none-kind", type=int, default=300, help="synthetic windows per none-class kind")
     p.add_argument("--threshold", type=float, default=DEFAULT_THRESHOLD,
                    help="confidence threshold stored in the model")
-    p.add_argument("--C", type=float, default=1.0, dest="c_reg", help="inverse regularisation strength")
+    p.add_argument("--C", type=float, default=DEFAULT_C, dest="c_reg", help="inverse regularisation strength")
     p.add_argument("--eval-per-class", type=int, default=300,
                    help="held-out synthetic windows per gesture (random motion: 4 x this over 3 kinds)")
     p.add_argument("--out", required=True, help="output model .npz")

@@ -8,7 +8,11 @@ from rbd_local.gestures.hand import NUM_LANDMARKS
 
 
 class HandDetector:
-    """Finds one hand per frame with MediaPipe Hands (the models shipped in the 0.10.21 wheel)."""
+    """Finds up to ``max_hands`` hands per frame with MediaPipe Hands (the models of the 0.10.21 wheel).
+
+    Two hands by default: a visitor's second, still hand (at the side, near the face) must not
+    hide the gesturing one (issue 26); the recognizer follows the hand that performs.
+    """
 
     def __init__(
         self,
@@ -18,6 +22,7 @@ class HandDetector:
         min_tracking_confidence: float = 0.5,
         enhance_dark: bool = True,
         dark_level: float = 40.0,
+        max_hands: int = 2,
     ) -> None:
         """Load the MediaPipe hand models.
 
@@ -28,6 +33,7 @@ class HandDetector:
             min_tracking_confidence: landmark-tracking threshold in [0, 1].
             enhance_dark: brighten dark frames before detection (see :func:`enhance_dark`).
             dark_level: a frame whose mean grey level is below this counts as dark [0..255].
+            max_hands: most hands reported per frame (1 or 2).
 
         Raises:
             ValueError: on out-of-range arguments.
@@ -38,6 +44,9 @@ class HandDetector:
                             ("min_tracking_confidence", min_tracking_confidence)):
             if not 0.0 <= value <= 1.0:
                 raise ValueError("%s must be in [0, 1], got %r" % (name, value))
+        if int(max_hands) not in (1, 2):
+            raise ValueError("max_hands must be 1 or 2, got %r" % max_hands)
+        self.max_hands = int(max_hands)
         self.enhance_dark = bool(enhance_dark)
         self.dark_level = float(dark_level)
         self.enhanced_frames = 0
@@ -45,14 +54,14 @@ class HandDetector:
 
         self._hands = mp.solutions.hands.Hands(
             static_image_mode=static_image,
-            max_num_hands=1,
+            max_num_hands=self.max_hands,
             model_complexity=model_complexity,
             min_detection_confidence=min_detection_confidence,
             min_tracking_confidence=min_tracking_confidence,
         )
 
-    def detect(self, image_bgr: np.ndarray) -> tuple[np.ndarray, float] | None:
-        """Find the hand in one BGR image.
+    def detect(self, image_bgr: np.ndarray) -> tuple | None:
+        """Find a hand in one BGR image (the first MediaPipe reports; see :meth:`detect_hands`).
 
         Args:
             image_bgr: (H, W, 3) uint8 image as OpenCV delivers it.
@@ -60,6 +69,22 @@ class HandDetector:
         Returns:
             ((21, 3) key points in pixels — x, y, and z scaled like x — , handedness score),
             or None when no hand is found.
+
+        Raises:
+            ValueError: if the image is not an (H, W, 3) uint8 array.
+        """
+        hands = self.detect_hands(image_bgr)
+        return hands[0] if hands else None
+
+    def detect_hands(self, image_bgr: np.ndarray) -> list:
+        """Find every hand (up to ``max_hands``) in one BGR image.
+
+        Args:
+            image_bgr: (H, W, 3) uint8 image as OpenCV delivers it.
+
+        Returns:
+            A list of ((21, 3) key points in pixels, handedness score), in MediaPipe's order
+            (not a fixed one: the recognizer follows hands by position); empty without a hand.
 
         Raises:
             ValueError: if the image is not an (H, W, 3) uint8 array.
@@ -76,14 +101,17 @@ class HandDetector:
         rgb.flags.writeable = False
         result = self._hands.process(rgb)
         if not result.multi_hand_landmarks:
-            return None
+            return []
         h, w = img.shape[:2]
-        lms = result.multi_hand_landmarks[0].landmark
-        pts = np.array([(p.x * w, p.y * h, p.z * w) for p in lms], dtype=np.float64)
-        if pts.shape != (NUM_LANDMARKS, 3):
-            return None
-        score = float(result.multi_handedness[0].classification[0].score) if result.multi_handedness else 1.0
-        return pts, score
+        out = []
+        for i, hand in enumerate(result.multi_hand_landmarks):
+            pts = np.array([(p.x * w, p.y * h, p.z * w) for p in hand.landmark], dtype=np.float64)
+            if pts.shape != (NUM_LANDMARKS, 3):
+                continue
+            handed = result.multi_handedness
+            score = float(handed[i].classification[0].score) if handed and i < len(handed) else 1.0
+            out.append((pts, score))
+        return out
 
     def close(self) -> None:
         """Release the MediaPipe graph."""

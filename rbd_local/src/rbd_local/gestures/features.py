@@ -78,6 +78,7 @@ def feature_names() -> list[str]:
     names += ["fx%d" % k for k in range(1, HARMONICS + 1)] + ["fy%d" % k for k in range(1, HARMONICS + 1)]
     names += ["reversals_x", "reversals_y", "corr_xy", "turning", "turn_consistency", "peak_x", "peak_y"]
     names += ["ext%d" % f for f in range(5)] + ["ext_change", "orient_cos", "orient_sin"]
+    names += ["swing_std", "swing_reversals", "swing_peak", "tip_swings"]
     return names
 
 
@@ -87,6 +88,43 @@ NUM_FEATURES = len(feature_names())
 def hand_size(frame: np.ndarray) -> float:
     """Wrist to middle-finger base distance of one frame of key points [same unit as input]."""
     return float(np.linalg.norm(frame[MIDDLE_MCP, :2] - frame[WRIST, :2]))
+
+
+def swings(v: np.ndarray, min_amplitude: float) -> int:
+    """Number of reversals of ``v`` between extremes at least ``min_amplitude`` apart.
+
+    A value that goes up, down and up again by at least the amplitude each time has 2 swings
+    back (a wave of 1.5 cycles); a one-way motion has none, however noisy, as long as its
+    noise stays below the amplitude.
+    """
+    v = np.asarray(v, dtype=np.float64)
+    count, direction = 0, 0
+    lo = hi = extreme = v[0] if len(v) else 0.0
+    for x in v[1:]:
+        if direction == 0:  # not yet moved by the amplitude either way
+            lo, hi = min(lo, x), max(hi, x)
+            if x - lo >= min_amplitude:
+                direction, extreme = 1, x
+            elif hi - x >= min_amplitude:
+                direction, extreme = -1, x
+        elif direction * (x - extreme) > 0:
+            extreme = x
+        elif abs(x - extreme) >= min_amplitude:
+            count, direction, extreme = count + 1, -direction, x
+    return count
+
+
+def swing_angle(window: np.ndarray) -> np.ndarray:
+    """The hand's angle about the wrist per frame, relative to its mean [rad], smoothed like the palm path.
+
+    The angle of the line from the wrist to the middle finger's base: a wave from the wrist
+    turns it back and forth while the palm barely travels.
+    """
+    xy = np.asarray(window, dtype=np.float64)[:, :, :2]
+    orient = xy[:, MIDDLE_MCP] - xy[:, WRIST]
+    ang = np.unwrap(np.arctan2(orient[:, 1], orient[:, 0]))
+    ang = smoother(len(ang), SMOOTH_SAMPLES) @ ang
+    return ang - ang.mean()
 
 
 def _reversals(v: np.ndarray, min_step: float) -> float:
@@ -144,6 +182,11 @@ def window_features(window: np.ndarray) -> np.ndarray:
     ext_change = float(np.abs(np.diff(ext_t.mean(axis=1))).sum())
     orient = xy[:, MIDDLE_MCP] - xy[:, WRIST]
     ang = np.arctan2(orient[:, 1], orient[:, 0])
+    swing = swing_angle(w)
+    sspec = np.abs(np.fft.rfft(swing)) ** 2
+    swing_peak = float(sspec[1:].max() / (sspec[1:].sum() + 1e-9)) if len(sspec) > 1 else 0.0
+    tips = xy[:, list(FINGER_TIPS)].mean(axis=1) - xy[:, WRIST]
+    tip_x = smoother(n, SMOOTH_SAMPLES) @ (tips[:, 0] / max(float(np.median(sizes)), 1e-6))
     feats = np.concatenate(
         [
             d,
@@ -155,6 +198,8 @@ def window_features(window: np.ndarray) -> np.ndarray:
             [rev_x, rev_y, corr, turning, consistency, peak[0], peak[1]],
             ext,
             [ext_change, float(np.cos(ang).mean()), float(np.sin(ang).mean())],
+            [float(swing.std()), float(swings(swing, np.deg2rad(12.0))), swing_peak,
+             float(swings(tip_x, 0.25))],
         ]
     )
     return feats

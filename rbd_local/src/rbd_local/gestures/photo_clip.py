@@ -145,7 +145,8 @@ class HandSprite:
         self.background = np.median(img[mask == 0], axis=0).astype(np.float32)
 
     def place(
-        self, canvas: np.ndarray, centre: tuple, length_px: float, roll_deg: float = 0.0, left: bool = False
+        self, canvas: np.ndarray, centre: tuple, length_px: float, roll_deg: float = 0.0, left: bool = False,
+        squash: float = 1.0, gain: float = 1.0,
     ) -> np.ndarray:
         """Draw the hand onto a copy of ``canvas``.
 
@@ -155,6 +156,9 @@ class HandSprite:
             length_px: hand length (wrist to the longest fingertip) in the canvas [px].
             roll_deg: rotation in the image plane, positive counter-clockwise as seen [deg].
             left: mirror the hand (a left hand).
+            squash: scale along the fingers about the palm centre (1: open hand; about 0.55: the
+                fingers folded into a fist, as the camera sees a hand that closes).
+            gain: factor on the hand's colour (below 1: a hand darker than the scene, backlight).
 
         Returns:
             The composed BGR image.
@@ -166,7 +170,7 @@ class HandSprite:
         c, si = np.cos(a) * s, np.sin(a) * s
         mx = -1.0 if left else 1.0
         # sprite (x, y) -> canvas: mirror about the anchor, scale + rotate, then move to centre
-        m = np.array([[c * mx, si], [-si * mx, c]])
+        m = np.array([[c * mx, si], [-si * mx, c]]) @ np.diag([1.0, float(squash)])
         t = np.asarray(centre, dtype=np.float64) - m @ self.anchor
         affine = np.hstack([m, t[:, None]])
         h, w = canvas.shape[:2]
@@ -185,6 +189,8 @@ class HandSprite:
         alpha = cv2.warpAffine(self.alpha, affine, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
         roi = out[y0:y1, x0:x1].astype(np.float32)
         a = alpha[:, :, None]
+        if gain != 1.0:
+            colour = colour.astype(np.float32) * float(gain)
         out[y0:y1, x0:x1] = np.clip(roi + (colour.astype(np.float32) - roi) * a, 0, 255).astype(np.uint8)
         return out
 

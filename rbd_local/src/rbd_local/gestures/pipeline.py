@@ -88,19 +88,26 @@ class GesturePipeline:
         """
         t0 = time.perf_counter()
         try:
-            found = self.detector.detect(frame)
+            if hasattr(self.detector, "detect_hands"):
+                hands = [pts for pts, _score in self.detector.detect_hands(frame)]
+            else:  # a detector of one hand per frame (tests' stand-ins)
+                found = self.detector.detect(frame)
+                hands = [found[0]] if found is not None else []
         except ValueError as exc:  # a broken frame counts as "no hand", never a crash
             LOG.warning("frame skipped: %s", exc)
-            found = None
+            hands = []
         t1 = time.perf_counter()
-        keypoints = found[0] if found is not None else None
+        keypoints = hands[0] if hands else None
         if self.teach is not None and self.teach.active:
             # teach mode: the shows feed the session; nothing is recognised or sent meanwhile
-            self.teach.feed(t, keypoints)
+            self.teach.feed(t, hands)
             if not self.teach.active:
                 self.recognizer.reset()
             return FrameResult(keypoints, Decision(), "", 1000 * (t1 - t0), 1000 * (time.perf_counter() - t1))
-        decision = self.recognizer.update(t, keypoints)
+        decision = self.recognizer.update(t, hands)
+        followed = self.recognizer.followed
+        if followed is not None and followed.last_t == t and len(hands) > 1:
+            keypoints = followed.frames[-1]  # the overlay shows the hand that performs
         t2 = time.perf_counter()
         command = ""
         if decision.fired:

@@ -26,8 +26,23 @@ FRAME_SIZE = (640, 480)
 GESTURE_KINDS = ("swipe_right", "push_down", "circle", "wave", "swipe_up", "swipe_left", "checkmark", "zigzag")
 #: Motions that must not trigger anything.
 RANDOM_KINDS = ("still", "wander", "random_points")
+#: Motions of real people that are no command (issue 26): an arm raised and lowered again, a hand
+#: drifting slowly, a hand closing into a fist (and opening), loose arm movement along arcs.
+REAL_NONE_KINDS = ("raise_lower", "drift", "close", "arm_arc")
+#: Every motion kind that must not fire.
+NONE_KINDS = RANDOM_KINDS + REAL_NONE_KINDS
+#: Gesture kind -> the built-in gesture it must fire (a wrist wave is a wave).
+EXPECTED = {"swipe_right": "swipe_right", "push_down": "push_down", "circle": "circle", "wave": "wave",
+            "wrist_wave": "wave"}
 #: Duration range of each gesture's motion [s] (default 0.6-1.0 s); people wave at 2-3 Hz.
-MOTION_S = {"wave": (0.9, 1.15), "circle": (0.7, 1.1), "zigzag": (0.8, 1.1)}
+MOTION_S = {"wave": (0.9, 1.15), "wrist_wave": (0.9, 1.3), "circle": (0.7, 1.1), "zigzag": (0.8, 1.1)}
+#: Duration range of a motion in clips of the "real" style [s]: people swipe and push fast.
+REAL_MOTION_S = {"swipe_right": (0.2, 0.45), "push_down": (0.25, 0.45), "swipe_left": (0.2, 0.45),
+                 "swipe_up": (0.25, 0.45), "circle": (0.5, 0.9), "wave": (0.9, 1.15), "wrist_wave": (0.9, 1.3)}
+#: Travel of swipes and pushes in clips of the "real" style [hand lengths] (issue 26: real swipes
+#: travel 2.6-7 hand lengths; pushes down are shorter, the frame is lower than wide).
+REAL_AMPLITUDE = {"swipe_right": (2.6, 7.0), "swipe_left": (2.6, 7.0), "swipe_up": (2.0, 4.0),
+                  "push_down": (2.0, 4.0)}
 #: Built-in gesture classes and the trick each one triggers (the shipped configuration).
 BUILT_IN = ("swipe_right", "circle", "wave", "push_down")
 
@@ -55,14 +70,28 @@ class Condition:
             ``contrast * v ** gamma + brightness / 255``.
         noise: sensor noise standard deviation [grey levels].
         in_range: whether the goals apply to this condition (see README).
+        exposure_s: (low, high) exposure time [s]; each clip draws one; a hand that moves during
+            the exposure is smeared along its path (motion blur); (0, 0): a sharp frame.
+        second_hand: a second, still hand in the frame (resting at the side or near the face).
+        arm: the arm is raised into the frame before the gesture and lowered out of it after.
+        style: "photo" (the motions above) or "real" (issue 26: fast swipes and pushes of
+            :data:`REAL_AMPLITUDE`, :data:`REAL_MOTION_S`).
+        size: (width, height) of the delivered frames (rendered at 640 x 480, then scaled).
+        backlight: a bright scene behind a dark hand (the camera exposes for the background).
     """
 
     def __init__(self, name: str, distance_m: tuple = (0.7, 1.3), hand: str = "both", fps: float = 30.0,
                  shake_px: float = 1.0, drop: float = 0.0, roll_deg: float = 25.0, brightness: float = 0.0,
-                 contrast: float = 1.0, gamma: float = 1.0, noise: float = 2.0, in_range: bool = True) -> None:
+                 contrast: float = 1.0, gamma: float = 1.0, noise: float = 2.0, in_range: bool = True,
+                 exposure_s: tuple = (0.0, 0.0), second_hand: bool = False, arm: bool = False,
+                 style: str = "photo", size: tuple = FRAME_SIZE, backlight: bool = False) -> None:
         """Store the condition (see the class attributes)."""
         if hand not in ("right", "left", "both"):
             raise ValueError("hand must be right, left or both")
+        if style not in ("photo", "real"):
+            raise ValueError("style must be photo or real")
+        if not 0.0 <= exposure_s[0] <= exposure_s[1] or int(size[0]) < 32 or int(size[1]) < 32:
+            raise ValueError("0 <= exposure low <= high and a frame of at least 32 x 32 required")
         if not fps > 0 or not 0.0 <= drop < 1.0 or not contrast > 0 or not gamma > 0:
             raise ValueError("fps > 0, 0 <= drop < 1, contrast > 0 and gamma > 0 required")
         self.name = name
@@ -77,6 +106,12 @@ class Condition:
         self.gamma = float(gamma)
         self.noise = float(noise)
         self.in_range = bool(in_range)
+        self.exposure_s = (float(exposure_s[0]), float(exposure_s[1]))
+        self.second_hand = bool(second_hand)
+        self.arm = bool(arm)
+        self.style = style
+        self.size = (int(size[0]), int(size[1]))
+        self.backlight = bool(backlight)
 
     def __repr__(self) -> str:
         """Readable form for logs."""
@@ -107,6 +142,28 @@ CONDITIONS = (
 )
 
 
+#: Distance range of the near hands that drift or close (issue 26: "a near hand") [m].
+NEAR_M = (0.4, 0.8)
+_REAL = {"exposure_s": (1.0 / 60.0, 1.0 / 30.0), "style": "real", "distance_m": (1.0, 1.6), "noise": 3.0}
+_BUILT_IN_KINDS = ("swipe_right", "push_down", "circle", "wave")
+
+#: The failure modes of real footage (issue 26), one table row each: (condition, gesture kinds
+#: that must fire their gesture (:data:`EXPECTED`), motion kinds that must not fire). Every row
+#: has the fast, long swipes and pushes of real people, and the motion blur of a 1/60-1/30 s
+#: exposure, at 1-2 m.
+FAILURE_MODES = (
+    (Condition("1 fast motion, blur (exposure 1/60-1/30 s)", **_REAL), _BUILT_IN_KINDS, ("still", "wander")),
+    (Condition("2 a second, still hand", second_hand=True, **_REAL), _BUILT_IN_KINDS, ("still", "wander")),
+    (Condition("3 wrist waves; arm raised before, lowered after", arm=True, **_REAL),
+     ("wrist_wave", "swipe_right", "push_down", "circle"), ("raise_lower", "swipe_left")),
+    (Condition("4 near hands drifting or closing (0.4-0.8 m)", **_REAL), _BUILT_IN_KINDS, ("drift", "close")),
+    (Condition("5 loose arm arcs", **_REAL), _BUILT_IN_KINDS, ("arm_arc",)),
+    (Condition("6 low resolution 176 x 132, dim", size=(176, 132), gamma=2.0, contrast=0.6, **_REAL),
+     _BUILT_IN_KINDS, ("still", "wander")),
+    (Condition("7 backlit (bright scene, dark hand)", backlight=True, **_REAL), _BUILT_IN_KINDS, ("still", "wander")),
+)
+
+
 def _ease(u: np.ndarray) -> np.ndarray:
     u = np.clip(u, 0.0, 1.0)
     return u * u * (3.0 - 2.0 * u)
@@ -125,13 +182,14 @@ def _polyline(points: np.ndarray, u: np.ndarray) -> np.ndarray:
     return out
 
 
-def motion_path(kind: str, rng: np.random.Generator, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def motion_path(kind: str, rng: np.random.Generator, u: np.ndarray, amplitude: tuple = None) -> tuple:
     """The palm's path of one performance.
 
     Args:
-        kind: one of :data:`GESTURE_KINDS` or :data:`RANDOM_KINDS`.
+        kind: one of :data:`GESTURE_KINDS`, ``wrist_wave``, or of :data:`NONE_KINDS`.
         rng: random generator (amplitudes, directions, speeds vary per performance).
         u: (N,) progress of the motion in [0, 1].
+        amplitude: (low, high) travel of a swipe or push [hand lengths] instead of the default.
 
     Returns:
         ((N, 2) palm position relative to the start [hand lengths], x right, y down;
@@ -146,7 +204,10 @@ def motion_path(kind: str, rng: np.random.Generator, u: np.ndarray) -> tuple[np.
     rot = np.array([[np.cos(tilt), -np.sin(tilt)], [np.sin(tilt), np.cos(tilt)]])
     e = _ease(u)
     if kind in ("swipe_right", "swipe_left", "swipe_up", "push_down"):
-        amp = rng.uniform(1.1, 2.0) if kind != "push_down" else rng.uniform(0.9, 1.6)
+        if amplitude is not None:
+            amp = rng.uniform(*amplitude)
+        else:
+            amp = rng.uniform(1.1, 2.0) if kind != "push_down" else rng.uniform(0.9, 1.6)
         direction = {"swipe_right": (1.0, 0.0), "swipe_left": (-1.0, 0.0), "swipe_up": (0.0, -1.0),
                      "push_down": (0.0, 1.0)}[kind]
         path = amp * e[:, None] * np.array(direction)
@@ -165,6 +226,17 @@ def motion_path(kind: str, rng: np.random.Generator, u: np.ndarray) -> tuple[np.
         s = np.sin(2 * np.pi * cycles * u) * np.sin(np.pi * u) ** 0.3
         path = amp * np.stack([s, 0.05 * np.abs(s)], axis=1)
         roll = -20.0 * s  # the wrist pivots with the wave
+    elif kind == "wrist_wave":
+        # a raised hand waving from the wrist: it turns about the wrist (0.25 hand lengths below the
+        # palm centre) by +-20-40 degrees, so the palm barely travels and the fingertips swing
+        swing = rng.uniform(20.0, 40.0)
+        cycles = rng.uniform(2.0, 3.5)
+        s = np.sin(2 * np.pi * cycles * u) * np.sin(np.pi * u) ** 0.3
+        roll = swing * s
+        a = np.deg2rad(roll)
+        arm = 0.25
+        path = np.stack([-arm * np.sin(a), arm * (1.0 - np.cos(a))], axis=1)
+        path[:, 0] += rng.uniform(0.0, 0.08) * s  # the forearm sways a little
     elif kind == "checkmark":
         a = rng.uniform(0.8, 1.2)
         pts = np.array([[0.0, 0.0], [0.45, 0.6], [1.3, -0.9]]) * a
@@ -173,7 +245,7 @@ def motion_path(kind: str, rng: np.random.Generator, u: np.ndarray) -> tuple[np.
         a = rng.uniform(0.8, 1.2)
         pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 0.7], [1.0, 0.7]]) * a
         path = _polyline(pts, u)
-    elif kind == "still":
+    elif kind in ("still", "raise_lower"):
         path = np.cumsum(rng.normal(0.0, 0.004, (n, 2)), axis=0)
     elif kind == "wander":
         k = max(3, n // 12)
@@ -186,9 +258,31 @@ def motion_path(kind: str, rng: np.random.Generator, u: np.ndarray) -> tuple[np.
         knots = rng.uniform(-1.0, 1.0, (k, 2)) * rng.uniform(0.2, 1.0)
         knots[0] = 0.0
         path = _polyline(knots, u)
+    elif kind == "drift":
+        # a slow drift of 0.3-2.7 hand lengths in any direction (u spans the clip)
+        angle = rng.uniform(0.0, 2 * np.pi)
+        travel = rng.uniform(0.3, 2.7)
+        path = travel * _ease(u)[:, None] * np.array([np.cos(angle), np.sin(angle)])
+        path += rng.uniform(-0.2, 0.2) * np.sin(np.pi * u)[:, None] * np.array([-np.sin(angle), np.cos(angle)])
+    elif kind == "close":
+        # the hand closes into a fist (and opens again) while it drifts a little
+        angle = rng.uniform(0.0, 2 * np.pi)
+        path = rng.uniform(0.0, 0.4) * u[:, None] * np.array([np.cos(angle), np.sin(angle)])
+    elif kind == "arm_arc":
+        # loose arm movement: the hand swings along an arc about the elbow or shoulder, 2.5-4.5 hand
+        # lengths away, 50-120 degrees, once or there and back
+        radius = rng.uniform(2.5, 4.5)
+        sweep = np.deg2rad(rng.uniform(50.0, 120.0)) * rng.choice([-1.0, 1.0])
+        back = rng.random() < 0.5
+        prog = np.sin(np.pi * u) if back else _ease(u)
+        base = np.deg2rad(rng.uniform(-50.0, 50.0)) - sweep / 2
+        ang = base + sweep * prog
+        # pivot below the hand: hand at pivot + radius * (sin a, -cos a)
+        path = radius * np.stack([np.sin(ang) - np.sin(base), -(np.cos(ang) - np.cos(base))], axis=1)
+        roll = -np.rad2deg(ang - base)
     else:
         raise ValueError("unknown motion %r" % kind)
-    if kind not in RANDOM_KINDS:
+    if kind not in NONE_KINDS:
         path = path @ rot.T
     return path, roll
 
@@ -200,7 +294,7 @@ class _Light:
         v = np.arange(256, dtype=np.float64) / 255.0
         self.lut = np.clip(255.0 * (cond.contrast * v**cond.gamma) + cond.brightness, 0, 255).astype(np.uint8)
         self.identity = bool(np.array_equal(self.lut, np.arange(256)))
-        shape = (FRAME_SIZE[1], FRAME_SIZE[0], 3)
+        shape = (cond.size[1], cond.size[0], 3)
         self.noise = [rng.normal(0.0, cond.noise, shape).astype(np.int16) for _ in range(3)] if cond.noise > 0 else []
 
     def __call__(self, frame: np.ndarray, i: int) -> np.ndarray:
@@ -212,12 +306,43 @@ class _Light:
         return out
 
 
+#: Durations of the motion of the no-command kinds of real people [s].
+_NONE_MOTION_S = {"raise_lower": (0.3, 1.0), "drift": (1.5, 4.0), "close": (1.0, 2.0), "arm_arc": (0.8, 2.0)}
+
+
+def _arm_segment(rng: np.random.Generator, fps: float, frm: np.ndarray, to: np.ndarray) -> np.ndarray:
+    """Palm positions of an arm raised (or lowered) between two points in 0.4-0.7 s [px]."""
+    n = max(3, int(round(rng.uniform(0.4, 0.7) * fps)))
+    e = _ease(np.linspace(0.0, 1.0, n))[:, None]
+    return frm + (to - frm) * e
+
+
+def _second_hand(sprites: list, sprite: object, left: bool, centres: np.ndarray, length: float,
+                 rng: np.random.Generator, background: np.ndarray) -> np.ndarray:
+    """The background with a second, still hand: resting at the side (fingers down) or near the face."""
+    width, height = FRAME_SIZE
+    other = sprites[(sprites.index(sprite) + 1) % len(sprites)]
+    mid = float(np.median(centres[:, 0])) if len(centres) else width / 2
+    side = -1.0 if mid > width / 2 else 1.0  # the free side of the frame
+    x = width / 2 + side * rng.uniform(0.25, 0.4) * width
+    if rng.random() < 0.5:  # resting at the side, fingers down
+        centre = (x, height - rng.uniform(0.5, 0.9) * length)
+        roll = 180.0 + rng.uniform(-25.0, 25.0)
+    else:  # near the face (upper part of the frame), upright
+        centre = (x, rng.uniform(0.3, 0.5) * height)
+        roll = rng.uniform(-30.0, 30.0)
+    return other.place(background, centre, length * rng.uniform(0.9, 1.1), roll, not left)
+
+
 def make_clip(sprites: list, kind: str, cond: Condition, rng: np.random.Generator, motion_s: float = None,
-              random_s: float = 4.0) -> tuple[np.ndarray, list]:
+              random_s: float = 4.0) -> tuple:
     """Render one clip.
 
-    Gestures: 0.3-0.5 s still, the motion (:data:`MOTION_S`, unless ``motion_s``), 0.9 s still.
-    Random motions: ``random_s`` seconds of it.
+    Gestures: 0.3-0.5 s still, the motion (:data:`MOTION_S`, or :data:`REAL_MOTION_S` in the
+    "real" style, unless ``motion_s``), 0.9 s still. Random motions: ``random_s`` seconds of it.
+    The no-command motions of real people (:data:`REAL_NONE_KINDS`) take their own time; a
+    ``raise_lower`` clip, and every clip of a condition with ``arm``, starts with the arm being
+    raised into the frame and ends with it lowered out of the frame.
 
     Args:
         sprites: hand sprites to choose from (one per real photo).
@@ -228,11 +353,15 @@ def make_clip(sprites: list, kind: str, cond: Condition, rng: np.random.Generato
         random_s: length of a random-motion clip [s].
 
     Returns:
-        (times (K,) [s], K BGR frames); lost frames are missing (their times skipped).
+        (times (K,) [s], K BGR frames of ``cond.size``); lost frames are missing (their times skipped).
     """
+    import cv2
+
     sprite = sprites[int(rng.integers(len(sprites)))]
     width, height = FRAME_SIZE
-    dist = rng.uniform(*cond.distance_m)
+    real = cond.style == "real"
+    near = real and kind in ("drift", "close")
+    dist = rng.uniform(*(NEAR_M if near else cond.distance_m))
     length = hand_length_px(dist)
     left = cond.hand == "left" or (cond.hand == "both" and rng.random() < 0.5)
     roll0 = rng.uniform(-cond.roll_deg, cond.roll_deg)
@@ -240,31 +369,92 @@ def make_clip(sprites: list, kind: str, cond: Condition, rng: np.random.Generato
     if kind in RANDOM_KINDS:
         n_before, n_move, n_after = 0, int(round(random_s * fps)), 0
     else:
-        lo, hi = MOTION_S.get(kind, (0.6, 1.0))
+        if kind in _NONE_MOTION_S:
+            lo, hi = _NONE_MOTION_S[kind]
+        elif real and kind in REAL_MOTION_S:
+            lo, hi = REAL_MOTION_S[kind]
+        else:
+            lo, hi = MOTION_S.get(kind, (0.6, 1.0))
         dur = motion_s if motion_s is not None else rng.uniform(lo, hi)
         n_before = int(round(rng.uniform(0.3, 0.5) * fps))
         n_move = max(4, int(round(dur * fps)))
-        n_after = int(round(0.9 * fps))
+        n_after = int(round((rng.uniform(0.3, 0.6) if cond.arm or kind == "raise_lower" else 0.9) * fps))
     u = np.concatenate([np.zeros(n_before), np.linspace(0.0, 1.0, n_move), np.ones(n_after)])
-    path, roll = motion_path(kind, rng, u)
+    amplitude = REAL_AMPLITUDE.get(kind) if real else None
+    if amplitude is not None:  # the whole travel stays in the frame (1.2 / 1.4 hand lengths spare)
+        room = (width / length - 1.2) if kind in ("swipe_right", "swipe_left") else (height / length - 1.4)
+        amplitude = (min(amplitude[0], room), min(amplitude[1], max(room, amplitude[0])))
+    path, roll = motion_path(kind, rng, u, amplitude)
+    squash = np.ones(len(u))
+    if kind == "close":
+        fist = rng.uniform(0.5, 0.65)
+        shape = np.sin(np.pi * u) if rng.random() < 0.5 else _ease(np.clip(2.0 * u, 0.0, 1.0))
+        squash = 1.0 - (1.0 - fist) * shape
     tremor = np.cumsum(rng.normal(0.0, 0.002, path.shape), axis=0)
     xy = (path + tremor) * length
     # place the whole motion inside the frame (the hand reaches 0.6 lengths above the palm)
     lo = np.array([0.45, 0.7]) * length - xy.min(axis=0)
     hi = np.array([width, height]) - np.array([0.45, 0.3]) * length - xy.max(axis=0)
     start = np.where(hi > lo, rng.uniform(np.minimum(lo, hi), np.maximum(lo, hi)), (lo + hi) / 2)
-    shake = rng.normal(0.0, cond.shake_px * length / hand_length_px(1.0), xy.shape)
-    centres = start + xy + shake
+    centres = start + xy
+    if cond.arm or kind == "raise_lower":
+        # the arm comes up from below the frame and goes down out of it (0.3 s without a hand after)
+        below = np.array([rng.uniform(-0.5, 0.5) * length, height + 1.0 * length])
+        up = _arm_segment(rng, fps, np.array([centres[0, 0], 0.0]) + below, centres[0])
+        down = _arm_segment(rng, fps, centres[-1], np.array([centres[-1, 0], 0.0]) + below)
+        out = np.repeat(down[-1:], int(round(0.3 * fps)), axis=0)
+        tilt = rng.uniform(-30.0, 30.0)
+        roll = np.concatenate([tilt * (1.0 - _ease(np.linspace(0, 1, len(up)))), roll,
+                               tilt * _ease(np.linspace(0, 1, len(down))), np.full(len(out), tilt)])
+        squash = np.concatenate([np.ones(len(up)), squash, np.ones(len(down) + len(out))])
+        centres = np.concatenate([up, centres, down, out])
+    shake = rng.normal(0.0, cond.shake_px * length / hand_length_px(1.0), centres.shape)
+    centres = centres + shake
     background = sprite.plain_background(FRAME_SIZE)
+    gain = 1.0
+    if cond.backlight:
+        # a bright window behind the visitor; the camera exposes for it, so the hand is dark
+        ramp = np.linspace(1.0, 0.85, height, dtype=np.float32)[:, None, None]
+        background = np.clip(rng.uniform(225.0, 250.0) * ramp * np.ones((1, width, 3), np.float32), 0,
+                             255).astype(np.uint8)
+        gain = rng.uniform(0.3, 0.45)
+    if cond.second_hand:
+        background = _second_hand(sprites, sprite, left, centres, length, rng, background)
+    exposure = rng.uniform(*cond.exposure_s)
     light = _Light(cond, rng)
+    idx = np.arange(len(centres), dtype=np.float64)
     times, frames = [], []
-    for i in range(len(u)):
+    for i in range(len(centres)):
         if cond.drop and rng.random() < cond.drop:
             continue
-        frame = sprite.place(background, centres[i], length, roll0 + roll[i], left)
+        # motion blur: the frame is the mean of the hand's images over the exposure
+        t0 = max(0.0, i - exposure * fps)
+        sub = np.array([float(i)])
+        if exposure > 0 and i > 0:
+            moved = np.linalg.norm(centres[i] - np.array([np.interp(t0, idx, centres[:, k]) for k in range(2)]))
+            moved += abs(np.deg2rad(roll0 + roll[i]) - np.deg2rad(roll0 + np.interp(t0, idx, roll))) * length
+            k = int(np.clip(np.ceil(moved / 2.0), 1, 24))
+            sub = np.linspace(t0, float(i), k) if k > 1 else sub
+        acc = None
+        for ts in sub:
+            c = (np.interp(ts, idx, centres[:, 0]), np.interp(ts, idx, centres[:, 1]))
+            img = sprite.place(background, c, length, roll0 + np.interp(ts, idx, roll), left,
+                               squash=float(np.interp(ts, idx, squash)), gain=gain)
+            acc = img.astype(np.float32) if acc is None else acc + img
+        frame = np.clip(acc / len(sub) + 0.5, 0, 255).astype(np.uint8) if len(sub) > 1 else img
+        if cond.size != FRAME_SIZE:
+            frame = cv2.resize(frame, cond.size, interpolation=cv2.INTER_AREA)
         frames.append(light(frame, i))
         times.append(i / fps)
     return np.array(times), frames
+
+
+def gesture_kinds(cond: Condition) -> tuple:
+    """The built-in gesture kinds of a row: the failure-mode row's own, else the four gestures."""
+    for row, kinds, _none in FAILURE_MODES:
+        if row is cond:
+            return kinds
+    return BUILT_IN
 
 
 def track_clip(detector: object, frames: list) -> np.ndarray:
@@ -275,13 +465,13 @@ def track_clip(detector: object, frames: list) -> np.ndarray:
         frames: the clip's BGR frames.
 
     Returns:
-        (K, 21, 3) key points in pixels, NaN where no hand was found.
+        (K, H, 21, 3) key points in pixels of up to H = ``detector.max_hands`` hands per frame
+        (in the detector's order), NaN where no hand was found.
     """
-    blank = np.zeros((FRAME_SIZE[1], FRAME_SIZE[0], 3), np.uint8)
-    detector.detect(blank)  # loses the previous clip's hand: the next frame is detected afresh
-    out = np.full((len(frames), 21, 3), np.nan)
+    blank = np.zeros_like(frames[0]) if len(frames) else np.zeros((FRAME_SIZE[1], FRAME_SIZE[0], 3), np.uint8)
+    detector.detect_hands(blank)  # loses the previous clip's hand: the next frame is detected afresh
+    out = np.full((len(frames), getattr(detector, "max_hands", 1), 21, 3), np.nan)
     for i, frame in enumerate(frames):
-        found = detector.detect(frame)
-        if found is not None:
-            out[i] = found[0]
+        for j, (pts, _score) in enumerate(detector.detect_hands(frame)[:out.shape[1]]):
+            out[i, j] = pts
     return out

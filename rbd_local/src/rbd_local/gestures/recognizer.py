@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import collections
-
 import numpy as np
 
-from rbd_local.gestures import features
+from rbd_local.gestures import checks, features, tracks
 from rbd_local.gestures.model import NONE, GestureModel
 
 
@@ -38,10 +36,16 @@ class Decision:
 class GestureRecognizer:
     """Keeps the last ``window_s`` seconds of key points and classifies them every frame.
 
+    Up to two hands are followed (:mod:`.tracks`); the one that performs (the farthest-travelled
+    in its window) is classified, so a second, still hand changes nothing, and a jump of the
+    detector from one hand to another starts a new track instead of looking like a swipe. A
+    hand lost for up to ``max_gap_s`` (0.5 s: a fast, blurred hand) is bridged by
+    straight-line interpolation between the frames before and after the loss.
+
     A gesture fires when the same class stays above the threshold for ``min_consecutive``
-    frames; afterwards the window is cleared and nothing fires for ``cooldown_s`` seconds, so
-    one performance sends one command. A hand that disappears for longer than ``max_gap_s``
-    clears the window (a gesture must be seen whole).
+    frames and passes the checks of :mod:`.checks` (travel, swings, turns, the hand at rest, no
+    arm being raised); afterwards the window is cleared and nothing fires for ``cooldown_s``
+    seconds, so one performance sends one command.
     """
 
     def __init__(
@@ -50,8 +54,9 @@ class GestureRecognizer:
         threshold: float = None,
         min_consecutive: int = 2,
         cooldown_s: float = 1.5,
-        max_gap_s: float = 0.25,
+        max_gap_s: float = tracks.MAX_GAP_S,
         min_fill: float = 0.9,
+        min_seen: float = 0.5,
     ) -> None:
         """Create a recognizer.
 
@@ -60,8 +65,9 @@ class GestureRecognizer:
             threshold: confidence threshold (default: the model's).
             min_consecutive: frames in a row above the threshold before firing (>= 1).
             cooldown_s: quiet time after a gesture fired [s].
-            max_gap_s: longest tolerated stretch without a hand [s].
-            min_fill: fraction of the window that must be covered by frames before classifying.
+            max_gap_s: longest bridged loss of a hand [s]; a longer one ends its track.
+            min_fill: fraction of the window that must be covered by a track's frames.
+            min_seen: fraction of the window's time with the hand actually seen (not bridged).
 
         Raises:
             ValueError: on out-of-range arguments.
@@ -77,50 +83,64 @@ class GestureRecognizer:
         self.cooldown_s = float(cooldown_s)
         self.max_gap_s = float(max_gap_s)
         self.min_fill = float(min_fill)
-        self._times: collections.deque = collections.deque()
-        self._frames: collections.deque = collections.deque()
+        self.min_seen = float(min_seen)
+        self.hands = tracks.HandTracks(self.max_gap_s)
+        self.followed = None  # the track classified last (its newest key points: the overlay's hand)
+        self.rejected = ""  # why the last gesture of the classifier was not believed
+        self._last_t = None
         self._streak_label = NONE
         self._streak = 0
         self._quiet_until = -np.inf
 
     def reset(self) -> None:
         """Forget all buffered frames."""
-        self._times.clear()
-        self._frames.clear()
+        self.hands.reset()
+        self.followed = None
         self._streak_label, self._streak = NONE, 0
 
-    def update(self, t: float, keypoints: np.ndarray | None) -> Decision:
+    def update(self, t: float, keypoints: object, frame_size: tuple = None) -> Decision:
         """Add one frame and classify the current window.
 
         Args:
             t: frame time [s], increasing.
-            keypoints: (21, 3) key points in pixels, or None when no hand was found.
+            keypoints: the frame's hands: None (no hand), one (21, 3) array in pixels, or a
+                sequence / (H, 21, 3) array of them (NaN hands are ignored).
+            frame_size: unused; kept for callers that pass the image size.
 
         Returns:
             The decision for this frame.
         """
-        if self._times and t <= self._times[-1]:
+        if self._last_t is not None and t <= self._last_t:
             self.reset()  # time went backwards (new clip): start over
-        if keypoints is None or not np.all(np.isfinite(keypoints)):
-            if self._times and t - self._times[-1] > self.max_gap_s:
-                self.reset()
+        self._last_t = float(t)
+        hands = tracks.as_hands(keypoints)
+        self.hands.update(float(t), hands)
+        if not hands:
             return Decision()
-        if self._times and t - self._times[-1] > self.max_gap_s:
-            self.reset()
-        self._times.append(float(t))
-        self._frames.append(np.asarray(keypoints, dtype=np.float64))
-        while len(self._times) > 2 and t - self._times[1] >= self.model.window_s:
-            self._times.popleft()
-            self._frames.popleft()
-        span = self._times[-1] - self._times[0]
-        if span < self.min_fill * self.model.window_s or len(self._times) < 4:
+        window_s = self.model.window_s
+        for tr in self.hands.tracks:
+            tr.trim(t, window_s)
+        track = tracks.performer(self.hands.tracks, float(t), window_s, self.min_fill)
+        if track is None:
+            return Decision()
+        self.followed = track
+        times = np.array(track.times)
+        seen = np.diff(times)
+        seen = float(np.minimum(seen, 0.1).sum())
+        if seen < self.min_seen * window_s:
             return Decision()
         try:
-            window = features.resample(np.array(self._times), np.array(self._frames), self.model.samples)
+            window = features.resample(times, np.array(track.frames), self.model.samples)
             label, conf, scores = self.model.classify(window, self.threshold)
+            reason = checks.check(label, window, times[-1] - times[0]) if label in self.model.classes else ""
+            if not reason and label != NONE and (track.settled_t is None or times[0] < track.settled_t):
+                reason = "the hand came into view moving (an arm being raised)"
         except ValueError:
             self.reset()  # degenerate key points: never a gesture
             return Decision()
+        if reason:
+            self.rejected = "%s: %s" % (label, reason)
+            label = NONE
         if label != NONE and label == self._streak_label:
             self._streak += 1
         else:
@@ -128,5 +148,12 @@ class GestureRecognizer:
         fired = label != NONE and self._streak >= self.min_consecutive and t >= self._quiet_until
         if fired:
             self._quiet_until = t + self.cooldown_s
-            self.reset()
+            self._restart_windows()
         return Decision(label, conf, fired, scores)
+
+    def _restart_windows(self) -> None:
+        """After a gesture: every window starts afresh, the hands stay known (not new arrivals)."""
+        for tr in self.hands.tracks:
+            tr.times, tr.frames = tr.times[-1:], tr.frames[-1:]
+            tr.forget_entry()
+        self._streak_label, self._streak = NONE, 0

@@ -26,12 +26,19 @@ NONE = "none"
 CLASSES = GESTURES + (NONE,)
 RANDOM_KINDS = ("static", "random_walk", "random_points")
 UNKNOWN_KINDS = ("swipe_left", "swipe_up", "diagonal", "vertical_wave", "push_towards", "fist_pump")
-NONE_KINDS = RANDOM_KINDS + UNKNOWN_KINDS
+#: Motions of real people that are no command (issue 26): loose arm arcs, slow drift, a hand closing.
+REAL_KINDS = ("arm_arc", "drift", "close")
+NONE_KINDS = RANDOM_KINDS + UNKNOWN_KINDS + REAL_KINDS
 DEFAULT_SAMPLES = 24
 #: Share of the window a motion takes (uniform in this range).
 ACTIVITY = (0.35, 1.0)
 #: Largest camera shake: standard deviation of a shift of the whole hand per frame [hand sizes].
 SHAKE = 0.1
+#: Share of the window a fast swipe or push may take at least (real people swipe in 0.3 s).
+FAST_ACTIVITY = 0.2
+#: Probability that a window has the hand lost for 0.15-0.5 s, bridged by straight lines as the
+#: recognizer bridges it (:mod:`.tracks`): fast real motions blur and MediaPipe loses them.
+GAP_PROB = 0.25
 IMAGE_SIZE = (640, 480)
 
 
@@ -39,9 +46,9 @@ def _ease(tau: np.ndarray) -> np.ndarray:
     return tau * tau * (3.0 - 2.0 * tau)
 
 
-def _activity(rng: np.random.Generator, t: np.ndarray) -> np.ndarray:
-    """Gesture progress in [0, 1]: the gesture fills :data:`ACTIVITY` of the window."""
-    frac = rng.uniform(*ACTIVITY)
+def _activity(rng: np.random.Generator, t: np.ndarray, low: float = ACTIVITY[0]) -> np.ndarray:
+    """Gesture progress in [0, 1]: the gesture fills ``low``-1 (:data:`ACTIVITY`) of the window."""
+    frac = rng.uniform(low, ACTIVITY[1])
     start = rng.uniform(0.0, 1.0 - frac)
     return np.clip((t - start) / frac, 0.0, 1.0)
 
@@ -61,14 +68,17 @@ def _smooth_noise(rng: np.random.Generator, n: int, width: float) -> np.ndarray:
 def _trajectory(
     kind: str, rng: np.random.Generator, t: np.ndarray, curl0: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Hand-centre path (hand units), scale factor per frame and curl per frame."""
+    """Hand-centre path (hand units), scale factor, curl and turn about the wrist [rad] per frame."""
     n = len(t)
     path = np.zeros((n, 2))
     scale = np.ones(n)
+    spin = np.zeros(n)
     curl = np.tile(curl0, (n, 1))
-    tau = _activity(rng, t)
+    fast = kind in ("swipe_right", "swipe_left", "swipe_up", "diagonal", "push_down")
+    tau = _activity(rng, t, FAST_ACTIVITY if fast else ACTIVITY[0])
     if kind == "swipe_right" or kind in ("swipe_left", "swipe_up", "diagonal", "push_down"):
-        amp = rng.uniform(2.0, 5.0) if kind != "push_down" else rng.uniform(1.5, 4.0)
+        # 1-5 hand lengths (a hand length is about two of these units)
+        amp = rng.uniform(2.0, 10.0) if kind != "push_down" else rng.uniform(1.6, 7.0)
         base = {"swipe_right": 0.0, "push_down": np.pi / 2, "swipe_left": np.pi, "swipe_up": -np.pi / 2}
         if kind == "diagonal":
             angle = rng.choice([-np.pi / 4, -3 * np.pi / 4, 3 * np.pi / 4]) + rng.uniform(-0.2, 0.2)
@@ -84,12 +94,39 @@ def _trajectory(
         phi0 = rng.uniform(0, 2 * np.pi)
         phi = phi0 + 2 * np.pi * turns * tau
         path = radius * np.stack([np.cos(phi) - np.cos(phi0), ratio * (np.sin(phi) - np.sin(phi0))], axis=1)
+    elif kind == "wave" and rng.random() < 0.5:
+        # a wave from the wrist: the hand turns back and forth about the wrist, the palm barely moves
+        cycles = rng.uniform(1.5, 3.5)
+        s = np.sin(2 * np.pi * cycles * tau + rng.uniform(-0.3, 0.3))
+        spin = np.deg2rad(rng.uniform(18.0, 45.0)) * s
+        path = rng.uniform(0.0, 0.3) * s[:, None] * np.array([1.0, 0.0])
     elif kind in ("wave", "vertical_wave"):
         amp = rng.uniform(0.5, 1.5)
         cycles = rng.uniform(1.5, 3.5)
         s = amp * np.sin(2 * np.pi * cycles * tau + rng.uniform(-0.3, 0.3))
         tilt = rng.uniform(-0.25, 0.25) + (np.pi / 2 if kind == "vertical_wave" else 0.0)
         path = s[:, None] * np.array([np.cos(tilt), np.sin(tilt)])
+    elif kind == "arm_arc":
+        # loose arm movement: an arc of 50-120 degrees about an elbow or shoulder 5-9 units away
+        radius = rng.uniform(5.0, 9.0)
+        sweep = np.deg2rad(rng.uniform(50.0, 120.0)) * rng.choice([-1.0, 1.0])
+        prog = np.sin(np.pi * tau) if rng.random() < 0.5 else _ease(tau)
+        base = np.deg2rad(rng.uniform(-60.0, 60.0)) - sweep / 2
+        ang = base + sweep * prog
+        path = radius * np.stack([np.sin(ang) - np.sin(base), -(np.cos(ang) - np.cos(base))], axis=1)
+        spin = ang - base
+    elif kind == "drift":
+        # a slow, steady drift (0.3-1.8 units in the window) in any direction
+        angle = rng.uniform(0.0, 2 * np.pi)
+        path = rng.uniform(0.3, 1.8) * t[:, None] * np.array([np.cos(angle), np.sin(angle)])
+        path += rng.uniform(0.0, 0.3) * _smooth_noise(rng, n, 6)
+    elif kind == "close":
+        # the hand closes into a fist (maybe opening again) while drifting a little
+        closed = np.sin(np.pi * tau) if rng.random() < 0.5 else _ease(tau)
+        curl = np.clip(curl + closed[:, None] * rng.uniform(0.6, 1.0), 0, 1)
+        scale = 1.0 - rng.uniform(0.0, 0.25) * closed
+        angle = rng.uniform(0.0, 2 * np.pi)
+        path = rng.uniform(0.0, 1.0) * closed[:, None] * np.array([np.cos(angle), np.sin(angle)])
     elif kind == "static":
         path = rng.uniform(0.0, 0.3) * _smooth_noise(rng, n, 6)
     elif kind == "random_walk":
@@ -113,7 +150,7 @@ def _trajectory(
         path = rng.uniform(0.0, 0.4) * _smooth_noise(rng, n, 6)
     else:
         raise ValueError("unknown synthetic motion %r" % kind)
-    return path, scale, curl
+    return path, scale, curl, spin
 
 
 def _random_curl(rng: np.random.Generator) -> np.ndarray:
@@ -143,7 +180,8 @@ def random_hand(rng: np.random.Generator) -> dict:
 
 
 def generate(
-    kind: str, rng: np.random.Generator, samples: int = DEFAULT_SAMPLES, hand: dict = None, start: np.ndarray = None
+    kind: str, rng: np.random.Generator, samples: int = DEFAULT_SAMPLES, hand: dict = None, start: np.ndarray = None,
+    gaps: bool = True,
 ) -> np.ndarray:
     """Generate one window of key points.
 
@@ -154,6 +192,7 @@ def generate(
         hand: the hand to move (:func:`random_hand`); default a new random one.
         start: (2,) starting position of the hand [px]; default a random one that keeps the
             whole motion inside the image.
+        gaps: lose the hand for a while in some windows (:data:`GAP_PROB`, :func:`bridge_gap`).
 
     Returns:
         (samples, 21, 3) float array in pixels of a 640 x 480 image.
@@ -165,7 +204,7 @@ def generate(
         raise ValueError("a window needs at least 4 samples, got %d" % samples)
     hand = random_hand(rng) if hand is None else hand
     t = np.linspace(0.0, 1.0, samples)
-    path, scale, curl = _trajectory(kind, rng, t, hand["curl"])
+    path, scale, curl, spin = _trajectory(kind, rng, t, hand["curl"])
     width, height = IMAGE_SIZE
     size, angle, mirror, depth, jitter = hand["size"], hand["angle"], hand["mirror"], hand["depth"], hand["jitter"]
     wobble = rng.uniform(0.0, 0.25) * _smooth_noise(rng, samples, 6)[:, 0]
@@ -177,7 +216,7 @@ def generate(
         start = np.where(hi > lo, rng.uniform(np.minimum(lo, hi), np.maximum(lo, hi)),
                          (np.array([width, height]) - span) / 2)
     shapes = hand_shape(curl) * np.array([mirror, 1.0])  # (samples, 21, 2)
-    c, s = np.cos(angle + wobble), np.sin(angle + wobble)
+    c, s = np.cos(angle + wobble + spin), np.sin(angle + wobble + spin)
     rot = np.stack([np.stack([c, -s], axis=1), np.stack([s, c], axis=1)], axis=1)  # (samples, 2, 2)
     pts = np.einsum("nij,nkj->nki", rot, shapes) * (size * scale)[:, None, None]
     pts += np.asarray(start) + path[:, None, :] * size
@@ -186,7 +225,22 @@ def generate(
     out = np.empty((samples, NUM_LANDMARKS, 3))
     out[:, :, :2] = pts
     out[:, :, 2] = depth * size * scale[:, None] + rng.normal(0.0, jitter * size, (samples, NUM_LANDMARKS))
+    if gaps and rng.random() < GAP_PROB:
+        bridge_gap(out, rng)
     return out
+
+
+def bridge_gap(window: np.ndarray, rng: np.random.Generator) -> None:
+    """Lose the hand for 0.15-0.5 of a 1.2 s window in its middle and bridge it by straight lines (in place)."""
+    n = len(window)
+    length = int(round(rng.uniform(0.125, 0.42) * n))
+    if length < 1 or n - length < 4:
+        return
+    start = int(rng.integers(1, n - length))
+    a, b = window[start - 1], window[start + length]
+    for k in range(length):
+        w = (k + 1.0) / (length + 1.0)
+        window[start + k] = a * (1.0 - w) + b * w
 
 
 def stream(kinds: list, seed: int, fps: float = 30.0, window_s: float = 1.2) -> list:
@@ -202,7 +256,7 @@ def stream(kinds: list, seed: int, fps: float = 30.0, window_s: float = 1.2) -> 
     pos = np.array(IMAGE_SIZE, dtype=np.float64) / 2 - np.array([0.15 * IMAGE_SIZE[0], 0.0])
     frames = []
     for kind in kinds:
-        w = generate(kind, rng, n, hand=hand, start=pos)
+        w = generate(kind, rng, n, hand=hand, start=pos, gaps=False)
         pos = w[-1, :, :2].mean(axis=0) - (w[0, :, :2].mean(axis=0) - pos)
         frames.extend(w)
     return [(i / fps, f) for i, f in enumerate(frames)]

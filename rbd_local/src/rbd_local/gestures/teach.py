@@ -25,11 +25,11 @@ import threading
 
 import numpy as np
 
-from rbd_local.gestures import features
+from rbd_local.gestures import features, tracks
 from rbd_local.gestures.model import GestureModel
 
 MIN_SHOW_EXTENT = 0.6  # hand sizes: a palm that stays within this in the best window made no gesture
-MAX_GAP_S = 0.25
+MAX_GAP_S = tracks.MAX_GAP_S  # the recognizer's: a loss of the hand up to this is bridged
 
 
 def _path_stats(window: np.ndarray) -> tuple[float, float, float]:
@@ -50,14 +50,17 @@ def _path_stats(window: np.ndarray) -> tuple[float, float, float]:
 def extract_show(times: np.ndarray, keypoints: np.ndarray, window_s: float, samples: int) -> np.ndarray | None:
     """The classifier window that holds one whole performance.
 
-    Every window of ``window_s`` seconds ending at a frame, fully covered by frames with a
-    hand (no gap longer than 0.25 s), is a candidate. The ones with the longest palm path
-    (within 3 % of the longest) contain the whole motion; of those the one with the motion
+    The hands are followed as the recognizer follows them (:func:`tracks.split_tracks`: up to
+    two hands, a loss of up to :data:`MAX_GAP_S` bridged). Every window of ``window_s``
+    seconds ending at a frame of a track, covered by its frames without a longer loss, is a
+    candidate. The ones with the longest palm path (within 3 % of the longest, over every
+    track: the hand that performs) contain the whole motion; of those the one with the motion
     nearest its middle is returned.
 
     Args:
         times: (K,) frame times [s], increasing.
-        keypoints: (K, 21, 3) key points, NaN where no hand was found.
+        keypoints: (K, 21, 3) key points of one hand or (K, H, 21, 3) of up to H hands, NaN
+            where no hand was found.
         window_s: window length [s].
         samples: frames per window.
 
@@ -65,34 +68,52 @@ def extract_show(times: np.ndarray, keypoints: np.ndarray, window_s: float, samp
         (samples, 21, 3) window, or None when no window qualifies or the hand hardly moved
         (its palm stayed within :data:`MIN_SHOW_EXTENT` hand sizes).
     """
-    times = np.asarray(times, dtype=np.float64)
-    kp = np.asarray(keypoints, dtype=np.float64)
-    ok = np.isfinite(kp.reshape(len(kp), -1)).all(axis=1)
-    t, k = times[ok], kp[ok]
-    if len(t) < 4:
-        return None
     candidates = []
-    start = 0
-    for end in range(len(t)):
-        while t[end] - t[start] > window_s + 1e-9:
-            start += 1
-        span = t[end] - t[start]
-        if end - start + 1 < 4 or span < 0.9 * window_s:
+    for t, k in tracks.split_tracks(times, keypoints, MAX_GAP_S):
+        if len(t) < 4:
             continue
-        if np.any(np.diff(t[start:end + 1]) > MAX_GAP_S):
-            continue
-        try:
-            w = features.resample(t[start:end + 1], k[start:end + 1], samples)
-            length, extent, centre = _path_stats(w)
-        except ValueError:  # too few frames, or a zero-size hand
-            continue
-        candidates.append((length, abs(centre - 0.5), w, extent))
+        start = 0
+        for end in range(len(t)):
+            while t[end] - t[start] > window_s + 1e-9:
+                start += 1
+            span = t[end] - t[start]
+            if end - start + 1 < 4 or span < 0.9 * window_s:
+                continue
+            if np.any(np.diff(t[start:end + 1]) > MAX_GAP_S):
+                continue
+            try:
+                w = features.resample(t[start:end + 1], k[start:end + 1], samples)
+                length, extent, centre = _path_stats(w)
+            except ValueError:  # too few frames, or a zero-size hand
+                continue
+            candidates.append((length, abs(centre - 0.5), w, extent))
     if not candidates:
         return None
     best = max(c[0] for c in candidates)
     near = [c for c in candidates if c[0] >= 0.97 * best]
     chosen = min(near, key=lambda c: c[1])
     return chosen[2] if chosen[3] >= MIN_SHOW_EXTENT else None
+
+
+def show_problem(times: np.ndarray, keypoints: np.ndarray, window_s: float) -> str:
+    """Why a show gave no usable window (for the visitor), given that :func:`extract_show` found none.
+
+    Args:
+        times: (K,) frame times [s].
+        keypoints: (K, 21, 3) or (K, H, 21, 3) key points, NaN without a hand.
+        window_s: the model's window [s].
+    """
+    kp = np.asarray(keypoints, dtype=np.float64)
+    if kp.ndim == 3:
+        kp = kp[:, None]
+    found = np.isfinite(kp[:, :, 0, 0]).any(axis=1) if len(kp) else np.zeros(0, bool)
+    if not found.any():
+        return "no hand seen"
+    longest = max((len(t) and t[-1] - t[0]) for t, _k in tracks.split_tracks(times, kp, MAX_GAP_S))
+    if longest < 0.9 * window_s:
+        return "hand seen for only %.1f s in one piece (lost for more than %.1f s; %.0f %% of frames)" % (
+            longest, MAX_GAP_S, 100.0 * found.mean())
+    return "the hand hardly moved"
 
 
 class TeachSession:
@@ -140,6 +161,7 @@ class TeachSession:
         self.force = bool(force)
         self.windows: list[np.ndarray] = []
         self.attempts = 0
+        self.unusable = 0
         self.phase = "ready"
         self.message = "get ready: show %d of %d" % (1, self.shows)
         self.result = None
@@ -152,12 +174,12 @@ class TeachSession:
         """True until the session is done or failed."""
         return self.phase in ("ready", "show")
 
-    def feed(self, t: float, keypoints: np.ndarray | None) -> str:
+    def feed(self, t: float, keypoints: object) -> str:
         """Advance with one frame.
 
         Args:
             t: frame time [s].
-            keypoints: (21, 3) key points, or None without a hand.
+            keypoints: the frame's hands (None, one (21, 3) array or a list of them).
 
         Returns:
             The current phase.
@@ -173,16 +195,22 @@ class TeachSession:
                 self.message = "show %d of %d: perform the gesture now" % (len(self.windows) + 1, self.shows)
             return self.phase
         self._times.append(float(t))
-        self._kps.append(np.full((21, 3), np.nan) if keypoints is None else np.asarray(keypoints, dtype=np.float64))
+        hands = tracks.as_hands(keypoints)[:2]
+        frame = np.full((2, 21, 3), np.nan)
+        for i, h in enumerate(hands):
+            frame[i] = h[:, :3] if h.shape[1] >= 3 else np.pad(h, ((0, 0), (0, 3 - h.shape[1])))
+        self._kps.append(frame)
         if t - self._phase_t >= self.show_s:
             self._finish_show(t)
         return self.phase
 
     def _finish_show(self, t: float) -> None:
         self.attempts += 1
-        w = extract_show(np.array(self._times), np.array(self._kps), self.model.window_s, self.model.samples)
+        kps = np.array(self._kps)
+        w = extract_show(np.array(self._times), kps, self.model.window_s, self.model.samples)
         if w is None:
-            note = "no gesture seen (hand lost or hardly moving): again"
+            self.unusable += 1
+            note = "show not usable: %s; again" % show_problem(np.array(self._times), kps, self.model.window_s)
         else:
             self.windows.append(w)
             note = "show %d of %d recorded" % (len(self.windows), self.shows)
