@@ -1,7 +1,6 @@
 """Services: ``call_service`` into ROS (and rosapi) in a thread pool; services hosted by clients."""
 
 import concurrent.futures
-import contextlib
 import itertools
 import logging
 import socket
@@ -166,14 +165,14 @@ class Services:
                     if self._proxies.get(service) is entry:
                         del self._proxies[service]
                 self._types.pop(service, None)
-                with contextlib.suppress(Exception):
-                    proxy.close()
                 if fresh or not _is_transport_error(exc):
                     raise
                 # the provider restarted since the connection was made: retry once on a new one
                 response = rospy.ServiceProxy(service, cls).call(request)
         finally:
             lock.release()
+            if self._proxies.get(service) is not entry:  # failed, or unhosted meanwhile: not reused
+                proxy.close()
         return msg_to_dict(response)
 
     def advertise_service(self, session: Any, service: str, type_name: str) -> None:
@@ -202,8 +201,9 @@ class Services:
         hosted.close(reason)
         with self._proxy_lock:  # rospy keeps serving a persistent connection after shutdown:
             entry = self._proxies.pop(hosted.name, None)  # drop it, or a re-advertised service's
-        if entry is not None:  # first call reaches the old provider
-            entry[1].close()
+        if entry is not None and entry[2].acquire(False):  # first call reaches the old provider
+            entry[1].close()  # (a call in flight gets its answer, then closes it itself)
+            entry[2].release()
 
     def unadvertise_service(self, session: Any, service: str) -> None:
         """Stop serving service for session."""
