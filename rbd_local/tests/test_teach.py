@@ -185,13 +185,23 @@ def test_embedding_ignores_where_and_how_big_the_hand_is_and_sees_direction():
 
 
 def test_taught_set_recognises_its_gesture_and_rejects_the_rest(shipped_model):
-    taught = fewshot.TaughtGestures(shipped_model.samples)
-    taught.add("swipe_up", "sit", _windows("swipe_up", 5, 2))
-    hits = [taught.classify(w)[0] for w in _windows("swipe_up", 30, 3)]
-    assert np.mean(np.array(hits) == "swipe_up") >= 0.9
-    for kind in ("static", "random_walk", "random_points", "swipe_right", "push_down", "swipe_left"):
-        labels = [taught.classify(w)[0] for w in _windows(kind, 30, 4)]
-        assert np.mean(np.array(labels) != NONE) <= 0.1, (kind, labels)
+    # Ten sets of 5 shows each, every set tried on 30 new windows. The synthetic swipes up span
+    # 1-5 hand lengths and 0.24-1.2 s (issue 26), so 5 random shows cover that range unevenly:
+    # recall measured 0.70-0.93 per set, 0.83 over the ten (one set of the generator before
+    # issue 26 passed a bar of 0.9 by its seed alone: 0.66 over ten sets). Taught from a
+    # visitor's real-photo shows the bar is 18 of 20 (test_taught_gesture_recognised_...).
+    recall, false = [], {}
+    for seed in range(2, 12):
+        taught = fewshot.TaughtGestures(shipped_model.samples)
+        taught.add("swipe_up", "sit", _windows("swipe_up", 5, seed))
+        hits = [taught.classify(w)[0] for w in _windows("swipe_up", 30, seed + 100)]
+        recall.append(np.mean(np.array(hits) == "swipe_up"))
+        for kind in ("static", "random_walk", "random_points", "swipe_right", "push_down", "swipe_left"):
+            labels = [taught.classify(w)[0] for w in _windows(kind, 10, seed + 200)]
+            false.setdefault(kind, []).extend(labels)
+    assert np.mean(recall) >= 0.75 and min(recall) >= 0.6, recall
+    for kind, labels in false.items():
+        assert np.mean(np.array(labels) != NONE) <= 0.05, (kind, labels)
     with pytest.raises(ValueError):
         taught.add("x", "sit", _windows("swipe_up", 2, 5))  # fewer than 3 shows
     with pytest.raises(ValueError):
