@@ -30,12 +30,17 @@ TRICK = "bow"
 
 @pytest.fixture(scope="module")
 def clips(hand_sprites):
-    """Tracked clips: 20 new checkmarks, 5 of each built-in gesture, 6 random motions (4 s)."""
+    """Tracked clips: 20 new checkmarks, 5 of each built-in gesture, 6 random motions (4 s).
+
+    One hand is tracked (``max_hands=1``): these clips show one hand, and MediaPipe asked for two
+    runs its palm detector on every frame (about 3 times the time). Two hands are tested in
+    test_real_world.py and by ``rbd-teach --clips`` in :func:`taught_file` (the app's detector).
+    """
     from rbd_local.gestures.detector import HandDetector
 
     plan = {TAUGHT: 20, "swipe_right": 5, "circle": 5, "wave": 5, "push_down": 5, "still": 2, "wander": 2,
             "random_points": 2}
-    with HandDetector(model_complexity=0) as det:
+    with HandDetector(model_complexity=0, max_hands=1) as det:
         return evaluation.make_clips(hand_sprites, plan, realclips.BASELINE, seed=2020, detector=det)
 
 
@@ -101,14 +106,15 @@ def test_taught_gesture_recognised_builtins_kept_random_motion_ignored(taught_fi
 @pytest.fixture(scope="module")
 def hard_clips(hand_sprites):
     """Tracked clips the shipped model used to miss: camera shake of 4 px (2 of each built-in gesture,
-    4 checkmarks, a still hand and wandering for 4 s each), and circles drawn in 0.6 s (baseline)."""
+    4 checkmarks, a still hand and wandering for 4 s each), and circles drawn in 0.6 s (baseline);
+    one hand tracked, as in :func:`clips`."""
     from rbd_local.gestures.detector import HandDetector
 
     shake = [c for c in realclips.CONDITIONS if c.name.startswith("camera shake")][0]
     assert shake.shake_px >= 4.0
     plan = {"swipe_right": 2, "circle": 2, "wave": 2, "push_down": 2, TAUGHT: 4, "still": 1, "wander": 1}
     rng = np.random.default_rng(2424)
-    with HandDetector(model_complexity=0) as det:
+    with HandDetector(model_complexity=0, max_hands=1) as det:
         shaky = evaluation.make_clips(hand_sprites, plan, shake, seed=2424, detector=det)
         fast = []
         for _ in range(4):
