@@ -30,12 +30,17 @@ TRICK = "bow"
 
 @pytest.fixture(scope="module")
 def clips(hand_sprites):
-    """Tracked clips: 20 new checkmarks, 5 of each built-in gesture, 6 random motions (4 s)."""
+    """Tracked clips: 20 new checkmarks, 5 of each built-in gesture, 6 random motions (4 s).
+
+    One hand is tracked (``max_hands=1``): these clips show one hand, and MediaPipe asked for two
+    runs its palm detector on every frame (about 3 times the time). Two hands are tested in
+    test_real_world.py and by ``rbd-teach --clips`` in :func:`taught_file` (the app's detector).
+    """
     from rbd_local.gestures.detector import HandDetector
 
     plan = {TAUGHT: 20, "swipe_right": 5, "circle": 5, "wave": 5, "push_down": 5, "still": 2, "wander": 2,
             "random_points": 2}
-    with HandDetector(model_complexity=0) as det:
+    with HandDetector(model_complexity=0, max_hands=1) as det:
         return evaluation.make_clips(hand_sprites, plan, realclips.BASELINE, seed=2020, detector=det)
 
 
@@ -101,14 +106,15 @@ def test_taught_gesture_recognised_builtins_kept_random_motion_ignored(taught_fi
 @pytest.fixture(scope="module")
 def hard_clips(hand_sprites):
     """Tracked clips the shipped model used to miss: camera shake of 4 px (2 of each built-in gesture,
-    4 checkmarks, a still hand and wandering for 4 s each), and circles drawn in 0.6 s (baseline)."""
+    4 checkmarks, a still hand and wandering for 4 s each), and circles drawn in 0.6 s (baseline);
+    one hand tracked, as in :func:`clips`."""
     from rbd_local.gestures.detector import HandDetector
 
     shake = [c for c in realclips.CONDITIONS if c.name.startswith("camera shake")][0]
     assert shake.shake_px >= 4.0
     plan = {"swipe_right": 2, "circle": 2, "wave": 2, "push_down": 2, TAUGHT: 4, "still": 1, "wander": 1}
     rng = np.random.default_rng(2424)
-    with HandDetector(model_complexity=0) as det:
+    with HandDetector(model_complexity=0, max_hands=1) as det:
         shaky = evaluation.make_clips(hand_sprites, plan, shake, seed=2424, detector=det)
         fast = []
         for _ in range(4):
@@ -185,13 +191,23 @@ def test_embedding_ignores_where_and_how_big_the_hand_is_and_sees_direction():
 
 
 def test_taught_set_recognises_its_gesture_and_rejects_the_rest(shipped_model):
-    taught = fewshot.TaughtGestures(shipped_model.samples)
-    taught.add("swipe_up", "sit", _windows("swipe_up", 5, 2))
-    hits = [taught.classify(w)[0] for w in _windows("swipe_up", 30, 3)]
-    assert np.mean(np.array(hits) == "swipe_up") >= 0.9
-    for kind in ("static", "random_walk", "random_points", "swipe_right", "push_down", "swipe_left"):
-        labels = [taught.classify(w)[0] for w in _windows(kind, 30, 4)]
-        assert np.mean(np.array(labels) != NONE) <= 0.1, (kind, labels)
+    # Ten sets of 5 shows each, every set tried on 30 new windows. The synthetic swipes up span
+    # 1-5 hand lengths and 0.24-1.2 s (issue 26), so 5 random shows cover that range unevenly:
+    # recall measured 0.70-0.93 per set, 0.83 over the ten (one set of the generator before
+    # issue 26 passed a bar of 0.9 by its seed alone: 0.66 over ten sets). Taught from a
+    # visitor's real-photo shows the bar is 18 of 20 (test_taught_gesture_recognised_...).
+    recall, false = [], {}
+    for seed in range(2, 12):
+        taught = fewshot.TaughtGestures(shipped_model.samples)
+        taught.add("swipe_up", "sit", _windows("swipe_up", 5, seed))
+        hits = [taught.classify(w)[0] for w in _windows("swipe_up", 30, seed + 100)]
+        recall.append(np.mean(np.array(hits) == "swipe_up"))
+        for kind in ("static", "random_walk", "random_points", "swipe_right", "push_down", "swipe_left"):
+            labels = [taught.classify(w)[0] for w in _windows(kind, 10, seed + 200)]
+            false.setdefault(kind, []).extend(labels)
+    assert np.mean(recall) >= 0.75 and min(recall) >= 0.6, recall
+    for kind, labels in false.items():
+        assert np.mean(np.array(labels) != NONE) <= 0.05, (kind, labels)
     with pytest.raises(ValueError):
         taught.add("x", "sit", _windows("swipe_up", 2, 5))  # fewer than 3 shows
     with pytest.raises(ValueError):

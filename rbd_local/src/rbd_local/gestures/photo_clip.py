@@ -23,7 +23,7 @@ def moving_photo_frames(
     hold_s: float = 0.4,
     move_s: float = 0.8,
     distance: float = 0.35,
-    scale: float = 0.6,
+    scale: float = 0.3,
     size: tuple = (640, 480),
 ) -> list[np.ndarray]:
     """Frames of ``photo`` held still, moved in one direction, then held still again.
@@ -35,7 +35,11 @@ def moving_photo_frames(
         hold_s: still time before and after the move [s].
         move_s: duration of the move [s].
         distance: travel as a fraction of the frame width.
-        scale: photo size relative to the frame.
+        scale: photo size relative to the frame. The photo's hand is about as long as the
+            photo is wide: at the default 0.3 a travel of 0.4 of the width is about 1.5 hand
+            lengths, a swipe the recognizer's travel check accepts (:mod:`.checks`). At 0.6 the
+            same travel was 0.6-0.7 hand lengths: a near hand drifting (issue 26's failure mode
+            4), which must not fire; real swipes travel 2.6-7 hand lengths.
         size: (width, height) of the output frames.
 
     Returns:
