@@ -343,12 +343,13 @@ def main():
             taken = False
             for attempt in range(5):
                 monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0)
+                n_log = len(monitor.state_log)  # a short trick can start and end while show() still runs
                 if trick in OPERATOR_TRICKS:
                     say("the operator sends %r over the bridge" % trick)
                     link.send_gesture(trick)
                 else:
                     audience.show(trick, seed=100 + 10 * i + attempt)
-                if monitor.wait_state(("GENERATING_PATH", "EXECUTING"), 8.0):
+                if wait_for(lambda n=n_log: {"GENERATING_PATH", "EXECUTING"} & set(states_since(monitor, n)), 8.0):
                     taken = True
                     break
             if not taken:
@@ -359,7 +360,9 @@ def main():
             if trick == args.bag:
                 drop_bag(monitor)
             timeout = args.trick_timeout * (2.0 if trick == args.bag else 1.0)  # the way round the bag, twice
-            if monitor.wait_state(("EXECUTING",), 10.0) and wait_done(monitor, timeout):
+            seen = states_since(monitor, n_log)
+            finished = "EXECUTING" in seen and seen[-1] == "WAITING_FOR_GESTURE"  # done before we looked
+            if finished or (monitor.wait_state(("EXECUTING",), 10.0) and wait_done(monitor, timeout)):
                 completed.append(trick)
                 say("trick %s completed (%d/%d)" % (trick, len(completed), len(tricks)))
             else:
@@ -451,6 +454,12 @@ def turn(monitor, yaw, xy=None):
                       and math.hypot(monitor.pose[0] - x, monitor.pose[1] - y) < 0.05, 30.0)
     say("the operator walks the robot to (%.2f, %.2f) facing %.0f deg: %s"
         % (x, y, math.degrees(yaw), "done" if turned else "not done"))
+
+
+def states_since(monitor, n):
+    """The controller states entered since the monitor's n-th logged state change."""
+    with monitor.lock:
+        return [state for _, state in monitor.state_log[n:]]
 
 
 def wait_done(monitor, timeout):
