@@ -73,6 +73,7 @@ class Monitor:
         self.people_log = {}
         self.state = ""
         self.state_log = []
+        self.state_poses = []  # the ground-truth pose when each state of state_log was entered
         self._stops = StopOnsets()
         self.onsets = self._stops.onsets  # scan stamps from which the zone demanded a stop
         self.stop_points = []
@@ -165,6 +166,7 @@ class Monitor:
         with self.lock:
             self.state = msg.data
             self.state_log.append((time.time(), msg.data))
+            self.state_poses.append(self.pose)
             if msg.data == "COLLISION_DETECTED" and self.pose:
                 self.stop_points.append(self.pose[:2])
         say("state -> %s" % msg.data)
@@ -341,9 +343,14 @@ def main():
                 c, s_ = math.cos(start_pose[2]), math.sin(start_pose[2])
                 turn(monitor, start_pose[2] + math.pi, (start_pose[0] + 0.5 * c, start_pose[1] + 0.5 * s_))
             taken = False
+            intruder = None
             for attempt in range(5):
                 monitor.wait_state(("WAITING_FOR_GESTURE",), 30.0)
                 n_log = len(monitor.state_log)  # a short trick can start and end while show() still runs
+                if trick == args.intrude and intruder is None:
+                    # the visitor watches from now on: the trick starts while the app still reads the clip
+                    intruder = threading.Thread(target=intrude, args=(monitor, n_log), daemon=True)
+                    intruder.start()
                 if trick in OPERATOR_TRICKS:
                     say("the operator sends %r over the bridge" % trick)
                     link.send_gesture(trick)
@@ -352,11 +359,11 @@ def main():
                 if wait_for(lambda n=n_log: {"GENERATING_PATH", "EXECUTING"} & set(states_since(monitor, n)), 8.0):
                     taken = True
                     break
+            if intruder is not None:
+                intruder.join(60.0)
             if not taken:
                 say("trick %s: the robot never took the gesture" % trick)
                 continue
-            if trick == args.intrude:
-                intrude(monitor)
             if trick == args.bag:
                 drop_bag(monitor)
             timeout = args.trick_timeout * (2.0 if trick == args.bag else 1.0)  # the way round the bag, twice
@@ -467,19 +474,32 @@ def wait_done(monitor, timeout):
     return monitor.wait_state(("WAITING_FOR_GESTURE",), timeout)
 
 
-def intrude(monitor):
-    """A visitor steps into the robot's way while it walks, waits, and leaves."""
+def intrude(monitor, n_log):
+    """A visitor steps into the robot's way while it walks, waits, and leaves.
+
+    Runs beside the audience's show: it waits for the trick to start after the monitor's
+    ``n_log``-th logged state change (the app may send the command long before its clip ends).
+    """
     import rospy
 
     from rbd_msgs.srv import PlaceObstacle
 
     place = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
-    # The person stands 1.0 m ahead of where the walk starts (the trick was just taken: the robot
-    # is still there), on its first leg (0.6 m forward), and steps in once the robot walks. Placed
-    # relative to the robot's pose at that moment instead, a late step-in (a loaded machine: 1.9 s
-    # after the walk began, in one CI run) put the person beyond the end of the leg, and the
-    # robot turned back before its zone reached them.
-    x, y, yaw = monitor.pose
+
+    def start_pose():
+        with monitor.lock:
+            return next((pose for (_, state), pose in zip(monitor.state_log[n_log:], monitor.state_poses[n_log:])
+                         if state in ("GENERATING_PATH", "EXECUTING") and pose is not None), None)
+
+    if not wait_for(lambda: start_pose() is not None, 150.0):
+        say("the visitor waited for the trick in vain")
+        return
+    # The person stands 1.0 m ahead of where the walk started (the robot's ground truth when the
+    # controller took the trick), on its first leg (0.6 m forward), and steps in once the robot
+    # walks. Placed relative to the robot's pose at the step-in instead, a late step-in (a loaded
+    # machine: 1.9 s after the walk began, in one CI run) put the person beyond the end of the leg,
+    # and the robot turned back before its zone reached them.
+    x, y, yaw = start_pose()
 
     def walking():
         with monitor.lock:
