@@ -125,6 +125,7 @@ def plan_escape(
         return None, "zone already clear by %.2f m" % margin
     occupied = set(occupied_sides(reading, zone, threshold, 0.0))
     candidates = []  # (sides moved towards, body-frame unit direction, distance, why)
+    step_length = min(max_distance, side_step)  # no escape is longer than max_distance
     for s in blocking:
         away = OPPOSITE[s]
         need = zone[s] + margin + OVERSHOOT - reading.min_distance[s]
@@ -132,13 +133,13 @@ def plan_escape(
                            "away from the %s" % SIDE_NAMES[s]))
     for s in blocking:
         for step in sorted(PERPENDICULAR[s], key=lambda p: -reading.min_distance[p]):
-            candidates.append(((step,), TOWARDS[step], side_step, "side-step from the %s" % SIDE_NAMES[s]))
+            candidates.append(((step,), TOWARDS[step], step_length, "side-step from the %s" % SIDE_NAMES[s]))
     for s in blocking:  # diagonally away: out of a corner (e.g. a wall behind and a box ahead-left)
         away = OPPOSITE[s]
         for step in sorted(PERPENDICULAR[s], key=lambda p: -reading.min_distance[p]):
             u = (TOWARDS[away][0] + TOWARDS[step][0], TOWARDS[away][1] + TOWARDS[step][1])
             n = math.hypot(*u)
-            candidates.append(((away, step), (u[0] / n, u[1] / n), side_step,
+            candidates.append(((away, step), (u[0] / n, u[1] / n), step_length,
                                "diagonally away from the %s" % SIDE_NAMES[s]))
     x, y, yaw = pose
     c, sn = math.cos(yaw), math.sin(yaw)
