@@ -67,6 +67,7 @@ def healthy():
     o.bridge = {"node": "/rbd_bridge", "host": "10.0.0.2", "port": 9090, "listening": True, "error": None,
                 "clients": ["192.168.12.20:51000"], "client_count": 1}
     o.clocks = {"10.0.0.2": (0.0, 0.0, "only host")}
+    o.map_mode, o.localized = "mapping", True  # mapping mode after its initial mapping
     return o
 
 
@@ -120,6 +121,7 @@ def test_a_ready_robot_passes_every_line():
     ("zone stale", "zone", "stale", set()),
     ("bridge down", "bridge", "not answering", set()),
     ("bridge missing", "bridge", "not running", set()),
+    ("not localized", "localized", "not localized in the map (localization (/maps/lab.yaml))", set()),
 ])
 def test_each_fault_fails_exactly_its_line(fault, key, text, skipped):
     o = healthy()
@@ -158,12 +160,63 @@ def test_each_fault_fails_exactly_its_line(fault, key, text, skipped):
         o.bridge.update(listening=False, error="Connection refused")
     elif fault == "bridge missing":
         o.bridge = {"node": None}
+    elif fault == "not localized":
+        o.map_mode, o.localized = "localization (/maps/lab.yaml)", False
     rows = rows_of(o)
     assert failing(rows) == [key], pf.render(list(rows.values()))
     assert text in rows[key].value
     assert rows[key].hint
     assert {k for k, r in rows.items() if r.status == pf.SKIP} == skipped
     assert not pf.passed(list(rows.values()))
+
+
+@pytest.mark.parametrize("mode, localized, status, text", [
+    # a loaded map: FAIL until the start search converged, then PASS
+    ("localization (/maps/lab.yaml)", False, pf.FAIL, "not localized in the map (localization (/maps/lab.yaml))"),
+    ("localization (/maps/lab.yaml)", True, pf.PASS, "localized in the map (localization (/maps/lab.yaml))"),
+    ("localization (/maps/lab.yaml)", None, pf.FAIL,
+     "no /rbd_localization/localized in 3.0 s (map correction in localization (/maps/lab.yaml) mode)"),
+    # no map: n/a, also while the initial mapping runs (the node says false then)
+    ("mapping", True, pf.PASS, "n/a: no map loaded (map correction in mapping mode)"),
+    ("mapping", False, pf.PASS, "n/a: no map loaded (map correction in mapping mode; initial mapping still running)"),
+    (None, None, pf.PASS, "n/a: no map loaded (no /rbd_localization/localized"),
+    # the mode not seen (diagnostics missed): the latched flag alone decides
+    (None, False, pf.FAIL, "not localized in the map"),
+    (None, True, pf.PASS, "localized in the map"),
+])
+def test_localized_line_fails_only_in_a_loaded_map_until_localized(mode, localized, status, text):
+    o = healthy()
+    o.map_mode, o.localized = mode, localized
+    rows = rows_of(o)
+    row = rows["localized"]
+    assert row.status == status, row
+    assert row.value.startswith(text), row.value
+    assert failing(rows) == (["localized"] if status == pf.FAIL else [])
+    assert bool(row.hint) == (status == pf.FAIL)
+    if localized is False and status == pf.FAIL:
+        assert "1 m / 45 deg" in row.hint  # what to do: where to place the robot
+
+
+def test_collector_reads_the_localized_flag_and_the_map_correction_mode():
+    """The adapter's callbacks with the real message types (no ROS master needed)."""
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from std_msgs.msg import Bool
+
+    from rbd_bringup import preflight_collect
+
+    c = preflight_collect.Collector(duration=0.1, tap_lcm=False, measure_clocks=False)
+    assert c.obs.localized is None and c.obs.map_mode is None
+    other = DiagnosticStatus(name="ekf_localization: Filter", values=[KeyValue("mode", "something else")])
+    ours = DiagnosticStatus(name="map_correction: Map correction",
+                            values=[KeyValue("mapping", "False"), KeyValue("mode", "localization (/maps/lab.yaml)")])
+    c._on_diag(DiagnosticArray(status=[other]))
+    assert c.obs.map_mode is None
+    c._on_diag(DiagnosticArray(status=[other, ours]))
+    assert c.obs.map_mode == "localization (/maps/lab.yaml)"
+    c._on_localized(Bool(data=False))
+    assert rows_of(c.obs)["localized"].status == pf.FAIL
+    c._on_localized(Bool(data=True))
+    assert c.obs.localized is True
 
 
 def test_cloud_layouts_other_than_ouster_original_fail_with_the_difference():

@@ -380,6 +380,7 @@ void MapCorrectionNode::processPendingScan() {
 }
 
 void MapCorrectionNode::publishLocalized() {
+  if (!params_.correction_enabled) return;  // nothing to be localized in: silent, not false for ever
   const int now = core_->localized() ? 1 : 0;
   if (now == localized_published_) return;
   std_msgs::Bool msg;

@@ -5,7 +5,8 @@ rospy node (the ``preflight`` command and the ``preflight_server`` node make one
 during one run (``duration`` seconds, 3 by default):
 
 - subscribes the sensor and state topics, keeps receive times (ROS time) and header stamps, the
-  last cloud, the last zone state, the last ZED2 covariance, the driver's diagnostics;
+  last cloud, the last zone state, the last ZED2 covariance, the driver's diagnostics, the latched
+  ``/rbd_localization/localized`` and the map correction's mode (its diagnostics);
 - listens to /tf and /tf_static itself to know every edge's publisher (a frame with two parents),
   and looks the mounts and the feet up in a tf2 buffer at the end;
 - taps LCM_High_State / LCM_High_Cmd on the driver's LCM URL when the ``lcm`` module is there and
@@ -51,6 +52,8 @@ def require_tf2() -> None:
         raise SystemExit(1)
 
 BRIDGE_NODE = "/rbd_bridge"
+#: rbd_localization's map correction: latched, false until localized in a loaded map.
+LOCALIZED_TOPIC = "/rbd_localization/localized"
 TOPICS = {
     "points": ("/ouster/points", PointCloud2),
     "imu": ("/ouster/imu", Imu),
@@ -199,8 +202,17 @@ class Collector:
                     self.obs.zed2_covariance = list(msg.pose.covariance)
         return cb
 
+    def _on_localized(self, msg: Bool) -> None:
+        with self.lock:
+            self.obs.localized = bool(msg.data)
+
     def _on_diag(self, msg: DiagnosticArray) -> None:
         for st in msg.status:
+            if st.name == preflight.MAP_CORRECTION_DIAG or st.name.endswith(": " + preflight.MAP_CORRECTION_DIAG):
+                mode = {kv.key: kv.value for kv in st.values}.get("mode")
+                if mode is not None:
+                    with self.lock:
+                        self.obs.map_mode = mode
             if st.name == preflight.A1_DIAG_NAME:
                 with self.lock:
                     self.obs.a1_diag.append({"level": st.level, "message": st.message,
@@ -245,6 +257,7 @@ class Collector:
                                  buff_size=(1 << 25 if key == "points" else 65536))
                 for key, (topic, cls) in TOPICS.items()]
         subs += [rospy.Subscriber("/diagnostics", DiagnosticArray, self._on_diag, queue_size=50),
+                 rospy.Subscriber(LOCALIZED_TOPIC, Bool, self._on_localized, queue_size=5),
                  rospy.Subscriber("/tf", TFMessage, self._on_tf(False), queue_size=200),
                  rospy.Subscriber("/tf_static", TFMessage, self._on_tf(True), queue_size=50),
                  rospy.Subscriber("/ouster/metadata", String, self._on_metadata, queue_size=1)]

@@ -254,6 +254,8 @@ class Preflight(unittest.TestCase):
         self.assertIn("SDK 3.3,", rows["a1_layout"]["value"])  # this rostest runs the v3.3 layout
         self.assertIn(FAKE_HOST, rows["clocks"]["value"])  # the "other host" was measured, in sync
         self.assertIn("no clients connected", rows["bridge"]["value"])
+        # no map loaded: the map correction's own diagnostics say mapping mode (issue 29)
+        self.assertIn("n/a: no map loaded (map correction in mapping mode", rows["localized"]["value"])
         self.assertEqual(report["mounts"]["os_sensor"], "xyz (-0.080, 0.000, 0.070) m, rpy (0.0, 0.0, 0.0) deg")
 
         with self.case("LiDAR silent"):

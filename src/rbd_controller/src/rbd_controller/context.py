@@ -4,7 +4,7 @@ Each behaviour (:mod:`tricks`, :mod:`stops`, :mod:`avoidance`, :mod:`dodging`) o
 what more than one of them reads or writes lives here, in :class:`Context`: the outside world
 (:class:`Ports`), the FSM and its lock, the goal last sent to the position controller
 (:class:`Goal`), the avoidance episode and its no-progress clock (:class:`Episode`), the show's
-home and the avoidance counters.
+home, the avoidance counters and whether the robot is localized in a loaded map.
 """
 
 import threading
@@ -168,6 +168,7 @@ class Context:
         self.home = None  # type: Optional[Tuple[float, float]]  # where the show is (dodge, arena, back home)
         self.home_yaw = None  # type: Optional[float]
         self.reason = ""  # why the last avoidance event fired (published when BLOCKED is entered)
+        self.localized = None  # type: Optional[bool]  # latest /rbd_localization/localized (None: none yet)
         self.now = 0.0  # latest time seen by tick()/on_heartbeat()
         self.lidar_lost = False
         self._synced = (None, None)  # (emergency, collision) told to the position controller

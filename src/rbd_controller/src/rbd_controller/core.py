@@ -77,6 +77,7 @@ class MainController:
         self.set_collision, self.on_heartbeat, self.on_lidar_state = (
             stops.set_collision, stops.on_heartbeat, stops.on_lidar_state)
         self.check_lidar, self.check_operator = stops.check_lidar, stops.check_operator
+        self.on_localized = self.tricks.on_localized  # /rbd_localization/localized: tricks refused while false
         self.faults = 0  # behaviours that raised (each engaged the e-stop)
         self._fault = None  # type: Optional[Tuple[str, str]]  # raised in an on_enter hook, not handled yet
         self._last_tick = None  # type: Optional[float]

@@ -1,7 +1,9 @@
 """The tricks behaviour: wait for a gesture, generate its path, execute it pose by pose. ROS-free.
 
 Slow calls (gesture poll, path generation, set_position, body pose) run in tick() without the
-lock; their results are dropped if the FSM changed meanwhile (epoch check).
+lock; their results are dropped if the FSM changed meanwhile (epoch check). While the map
+correction says it is not localized in the loaded map, gestures are refused and the idle robot
+does not dodge (:meth:`Tricks.refusal`).
 """
 
 import math
@@ -42,6 +44,31 @@ class Tricks(Behaviour):
     def remaining(self) -> List[Tuple[Any, str]]:
         """The pose being executed (first) and the ones still queued."""
         return ([self.current] if self.current is not None else []) + list(self.queue)
+
+    # ------------------------------------------------------------------ localization gate
+    def refusal(self) -> str:
+        """Why a gesture would be refused now ("" if it would not): not localized in the loaded map."""
+        if self.ctx.localized is False:
+            return "not localized in the map (/rbd_localization/localized is false); tricks wait until it is true"
+        return ""
+
+    def on_localized(self, localized: bool) -> None:
+        """The latest /rbd_localization/localized. False: gestures are refused, no dodge; true: taken again.
+
+        Turning true while waiting for a gesture takes home again from the next pose: a home taken
+        before the start search converged may be off by the start's distance from the map's home.
+        """
+        ctx = self.ctx
+        with ctx.lock:
+            was, ctx.localized = ctx.localized, bool(localized)
+            if was is ctx.localized:
+                return
+            if not ctx.localized:
+                ctx.ports.log("warn", "not localized in the map: gestures are refused until it is")
+            elif was is False:
+                ctx.ports.log("info", "localized in the map: taking gestures again")
+                if ctx.fsm.state == State.WAITING_FOR_GESTURE:
+                    ctx.home = ctx.home_yaw = None
 
     # ------------------------------------------------------------------ on_enter
     def on_enter(self, state: State, previous: State) -> None:
@@ -93,7 +120,7 @@ class Tricks(Behaviour):
             with ctx.lock:
                 pose = ctx.perception.pose  # the first pose seen while waiting
                 ctx.home, ctx.home_yaw = (pose[0], pose[1]), pose[2]
-        if ctx.avoid.dodge and ctx.home is not None and ctx.may_avoid(now):
+        if ctx.avoid.dodge and ctx.home is not None and ctx.localized is not False and ctx.may_avoid(now):
             sides = ctx.perception.recently_approached(now)
             if sides:
                 with ctx.lock:
@@ -111,6 +138,10 @@ class Tricks(Behaviour):
             ctx.ports.log("info", "dropping gesture %r made before the robot was ready" % command)
             return
         if not command:
+            return
+        refusal = self.refusal()
+        if refusal:
+            ctx.ports.log("warn", "refusing gesture %r: %s" % (command, refusal))
             return
         with ctx.lock:
             if ctx.fsm.epoch == epoch:

@@ -26,6 +26,7 @@ from rbd_bringup.preflight.facts import (  # noqa: F401
     DATATYPE_NAMES,
     FEET,
     FOOT_RADIUS,
+    MAP_CORRECTION_DIAG,
     NOMINAL_BODY_HEIGHT,
     OS1_ROWS,
     OS1_WIDTHS,
@@ -38,12 +39,14 @@ from rbd_bringup.preflight.graph_checks import (  # noqa: F401
     check_bridge,
     check_clocks,
     check_floor,
+    check_localized,
     check_pose,
     check_tf_lidar,
     check_tf_parents,
     check_tf_zed2,
     check_zone,
     clock_spread,
+    localization_mode,
     tf_clashes,
 )
 from rbd_bringup.preflight.model import FAIL, PASS, SKIP, Limits, Observation, Row, Stream, passed  # noqa: F401

@@ -25,6 +25,10 @@ A1_OTHER_STATE_SIZES = {256: "SDK v3.2", 319: "SDK v3.3.2"}
 A1_HIGH_CMD_SIZE = 113
 #: The driver's diagnostics status preflight reads (rbd_a1_driver README, "the diagnostics contract").
 A1_DIAG_NAME = "rbd_a1_driver: A1 link"
+#: rbd_localization's map correction diagnostics task (README "Published Topics"; diagnostic_updater
+#: puts the node's name in front: ``map_correction: Map correction``). Its ``mode`` value is
+#: ``mapping`` or ``localization (FILE)``.
+MAP_CORRECTION_DIAG = "Map correction"
 #: The A1's foot spheres (a1_description): the floor is one radius below a foot frame.
 FOOT_RADIUS = 0.02
 FEET = ("FR_foot", "FL_foot", "RR_foot", "RL_foot")

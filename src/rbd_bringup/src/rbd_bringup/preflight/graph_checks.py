@@ -1,6 +1,6 @@
-"""The checks of the ROS graph: TF, the zone, the pose, the floor, the bridge, the hosts' clocks."""
+"""The checks of the ROS graph: TF, the zone, the pose, the map, the floor, the bridge, the hosts' clocks."""
 
-from typing import Dict, List, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -87,6 +87,36 @@ def check_pose(obs: Observation, lim: Limits) -> Tuple[str, str, str]:
                        "no localization pose: rbd_localization (EKF + map correction) is not running or has no input",
                        "localization pose slower than 10 Hz: the EKF lacks input (IMU, ZED2) or the CPU is overloaded",
                        "pose stamps are not ROS time")
+
+
+LOCALIZE_HINT = ("the start search in the loaded map has not converged: place the robot within 1 m / 45 deg "
+                 "of the map's home (or give home_x/home_y/home_yaw), keep it standing for 5 s; if it never "
+                 "converges the map is of another place or the robot sees little of it (map_correction's log "
+                 "and its 'Map correction' diagnostics say why)")
+
+
+def localization_mode(mode: Optional[str]) -> Optional[bool]:
+    """From the map correction's diagnostics ``mode``: True in a loaded map, False mapping, None unknown."""
+    if mode is None:
+        return None
+    return mode.startswith("localization")
+
+
+def check_localized(obs: Observation, lim: Limits) -> Tuple[str, str, str]:
+    """With a loaded map: /rbd_localization/localized is true (n/a without a map)."""
+    in_map = localization_mode(obs.map_mode)
+    if in_map is False:
+        note = "; initial mapping still running" if obs.localized is False else ""
+        return PASS, "n/a: no map loaded (map correction in %s mode%s)" % (obs.map_mode, note), ""
+    if obs.localized is None:
+        if in_map is None:
+            return PASS, "n/a: no map loaded (no /rbd_localization/localized, no map correction diagnostics)", ""
+        value = "no /rbd_localization/localized in %.1f s (map correction in %s mode)" % (obs.duration, obs.map_mode)
+        return FAIL, value, "map_correction_node publishes it latched from its start: see its log"
+    where = " (%s)" % obs.map_mode if obs.map_mode else ""
+    if obs.localized:
+        return PASS, "localized in the map%s" % where, ""
+    return FAIL, "not localized in the map%s" % where, LOCALIZE_HINT
 
 
 def check_floor(obs: Observation, lim: Limits) -> Tuple[str, str, str]:

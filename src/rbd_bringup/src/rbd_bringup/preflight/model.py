@@ -94,6 +94,9 @@ class Observation:
         zed2_covariance: the last ZED2 pose covariance (36 numbers), if any.
         a1_diag: the driver's diagnostics statuses in order, each {``level``, ``message``,
             ``values``: {key: value}}.
+        localized: the last ``/rbd_localization/localized`` (latched), None if none arrived.
+        map_mode: ``mode`` of the last map correction diagnostics (``mapping`` or
+            ``localization (FILE)``), None if none arrived.
         wire: what an LCM tap saw, if one ran: {``state_sizes``: {size: count}, ``cmd_sizes``:
             {size: count}, ``span``: seconds listened, ``url``}.
         base_frame: the robot's body frame (``base_link``).
@@ -116,6 +119,8 @@ class Observation:
         self.zone_last = None  # type: Optional[dict]
         self.zed2_covariance = None  # type: Optional[Sequence[float]]
         self.a1_diag = []  # type: List[dict]
+        self.localized = None  # type: Optional[bool]
+        self.map_mode = None  # type: Optional[str]
         self.wire = None  # type: Optional[dict]
         self.base_frame = "base_link"
         self.lidar_frame = "os_sensor"
