@@ -26,6 +26,7 @@ from rbd_pos_controller.control_law import (
     rotation_command,
     wrap_angle,
 )
+from rbd_pos_controller.goal import Goal, GoalRejectedError
 from rbd_pos_controller.path_follower import PathFollower, check_path
 from rbd_pos_controller.zone_guard import ZoneGuard, cap_speed
 
@@ -105,33 +106,6 @@ STATUS = {
 }
 
 
-class Goal:
-    """A goal pose: position [m], heading [rad], body roll/pitch [rad], body height change [m]."""
-
-    __slots__ = ("x", "y", "yaw", "roll", "pitch", "body_height")
-
-    def __init__(
-        self, x: float, y: float, yaw: float, roll: float = 0.0, pitch: float = 0.0, body_height: float = 0.0
-    ) -> None:
-        self.x = x
-        self.y = y
-        self.yaw = yaw
-        self.roll = roll
-        self.pitch = pitch
-        self.body_height = body_height
-
-    def __repr__(self) -> str:
-        """Readable form for logs."""
-        return "Goal(x=%.3f, y=%.3f, yaw=%.3f, roll=%.3f, pitch=%.3f, body_height=%.3f)" % (
-            self.x,
-            self.y,
-            self.yaw,
-            self.roll,
-            self.pitch,
-            self.body_height,
-        )
-
-
 class Params:
     """Tolerances and options of the position controller (defaults documented in the README)."""
 
@@ -190,10 +164,6 @@ class Params:
         self.max_v_hold = float(max_v_hold)
         self.keep_direction = bool(keep_direction)
         self.body_pose_settle = float(body_pose_settle)
-
-
-class GoalRejectedError(ValueError):
-    """Raised by set_goal when a goal cannot be accepted; the message says why."""
 
 
 ZERO = (0.0, 0.0, 0.0)  # type: Twist2D
