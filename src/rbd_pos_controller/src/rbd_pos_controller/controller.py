@@ -17,6 +17,7 @@ import enum
 import math
 from typing import Callable, Optional, Sequence
 
+from rbd_msgs.msg import PosControllerStatus as Status
 from rbd_pos_controller.control_law import (
     Errors,
     Gains,
@@ -94,15 +95,15 @@ for _state in (State.WAITING_FOR_POSE,) + MOTION_STATES:
     TRANSITIONS[(_state, Event.COLLISION)] = State.COLLISION_DETECTED
 
 STATUS = {
-    State.WAITING_FOR_POSE: "idle",
-    State.PRE_ROTATION: "running",
-    State.LINEAR: "running",
-    State.POST_ROTATION: "running",
-    State.BODY_POSE: "running",
-    State.GUARDED: "running",
-    State.FOLLOWING: "running",
-    State.EMERGENCY_STOP: "emergency",
-    State.COLLISION_DETECTED: "collision",
+    State.WAITING_FOR_POSE: Status.IDLE,
+    State.PRE_ROTATION: Status.RUNNING,
+    State.LINEAR: Status.RUNNING,
+    State.POST_ROTATION: Status.RUNNING,
+    State.BODY_POSE: Status.RUNNING,
+    State.GUARDED: Status.RUNNING,
+    State.FOLLOWING: Status.RUNNING,
+    State.EMERGENCY_STOP: Status.EMERGENCY,
+    State.COLLISION_DETECTED: Status.COLLISION,
 }
 
 
