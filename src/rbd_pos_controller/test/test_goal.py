@@ -5,7 +5,8 @@ from types import SimpleNamespace
 
 import pytest
 
-from rbd_pos_controller.controller import PositionController, State
+from rbd_pos_controller.controller import PositionController
+from rbd_pos_controller.fsm import State
 from rbd_pos_controller.goal import GoalRejectedError, goal_from_pose
 
 

@@ -3,8 +3,11 @@
 import math
 from typing import Callable, Optional, Sequence
 
-from rbd_pos_controller.controller import Goal, Params, PositionController, State
+from rbd_pos_controller.controller import PositionController
+from rbd_pos_controller.fsm import State
+from rbd_pos_controller.goal import Goal
 from rbd_pos_controller.kinematic_sim import KinematicRobot
+from rbd_pos_controller.params import Params
 from rbd_pos_controller.runlog import RunLog
 
 #: Gives the controller its next goal or path at time t (and records it in the log).
