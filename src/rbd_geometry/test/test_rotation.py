@@ -53,6 +53,14 @@ def test_bad_quaternions_raise_value_error(bad):
         rot.quat_to_rpy(bad)
 
 
+def test_yaw_or_nan_is_nan_exactly_where_yaw_of_raises():
+    assert rot.yaw_or_nan(SimpleNamespace(x=0.0, y=0.0, z=S, w=S)) == pytest.approx(math.pi / 2)
+    for bad in ((0.0, 0.0, 0.0, 0.0), (0.0, 0.0, float("inf"), 1.0), SimpleNamespace(x=0, y=0, z=0, w=float("nan"))):
+        with pytest.raises(ValueError):
+            rot.yaw_of(bad)
+        assert math.isnan(rot.yaw_or_nan(bad))
+
+
 def test_wrap_angle():
     assert rot.wrap_angle(3.0 * math.pi / 2) == pytest.approx(-math.pi / 2)
     assert rot.wrap_angle(-math.pi) == pytest.approx(-math.pi)

@@ -7,7 +7,7 @@ import pytest
 import yaml
 
 from rbd_pos_controller.control_law import Gains
-from rbd_pos_controller.controller import Params
+from rbd_pos_controller.params import Params
 
 PKG = os.path.join(os.path.dirname(__file__), "..")
 PROFILES = ("thesis_table2", "sim_tuned")

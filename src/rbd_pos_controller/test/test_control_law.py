@@ -84,12 +84,3 @@ def test_helpers():
     assert wrap_angle(3 * math.pi) == pytest.approx(-math.pi)
     assert wrap_angle(-0.5) == pytest.approx(-0.5)
     assert saturate(5.0, 1.0) == 1.0 and saturate(-5.0, 1.0) == -1.0 and saturate(0.5, 1.0) == 0.5
-
-
-@pytest.mark.parametrize("rpy", [(0.0, 0.0, 0.0), (0.3, -0.2, 2.5), (-0.5, 0.4, -3.0)])
-def test_quaternion_roundtrip(rpy):
-    from rbd_pos_controller.geometry import quaternion_from_rpy, rpy_from_quaternion
-
-    q = quaternion_from_rpy(*rpy)
-    assert sum(c * c for c in q) == pytest.approx(1.0)
-    assert rpy_from_quaternion(*q) == pytest.approx(rpy)

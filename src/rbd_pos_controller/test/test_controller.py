@@ -3,18 +3,11 @@ import math
 import pytest
 
 from rbd_pos_controller.control_law import Gains
-from rbd_pos_controller.controller import (
-    MOTION_STATES,
-    STATUS,
-    TRANSITIONS,
-    Event,
-    Goal,
-    GoalRejectedError,
-    Params,
-    PositionController,
-    State,
-)
+from rbd_pos_controller.controller import PositionController
+from rbd_pos_controller.fsm import MOTION_STATES, TRANSITIONS, Event, State
+from rbd_pos_controller.goal import Goal, GoalRejectedError
 from rbd_pos_controller.kinematic_sim import KinematicRobot
+from rbd_pos_controller.params import Params
 
 
 def controller_in(state, **params):
@@ -94,11 +87,6 @@ def test_collision_during_estop_keeps_estop():
     assert ctl.state == State.EMERGENCY_STOP
     ctl.set_collision(False)
     assert ctl.state == State.EMERGENCY_STOP
-
-
-def test_status_values():
-    assert set(STATUS.values()) == {"idle", "running", "emergency", "collision"}
-    assert all(STATUS[s] == "running" for s in MOTION_STATES)
 
 
 def test_pre_rotation_skipped_when_close():
@@ -207,15 +195,6 @@ def test_new_goal_replaces_running_goal():
     ctl.set_goal(Goal(0.0, -2.0, 0.0), 0.0)
     assert ctl.state == State.PRE_ROTATION
     assert ctl.step(0.0)[2] < 0.0
-
-
-def test_invalid_params_rejected():
-    with pytest.raises(ValueError):
-        Params(position_tolerance=0.0)
-    with pytest.raises(ValueError):
-        Params(pose_timeout=float("nan"))
-    with pytest.raises(ValueError):
-        Params(body_pose_settle=-1.0)
 
 
 # ---------------------------------------------------------------- closed loop

@@ -13,6 +13,7 @@ from typing import Any, Callable, List, Optional, Sequence, Tuple
 from rbd_controller.detour import zone_occupied_at
 from rbd_controller.fsm import Event, State
 from rbd_controller.perception import AvoidParams, Perception
+from rbd_msgs.msg import PosControllerStatus
 
 PathResult = Tuple[bool, str, Sequence[Any], Sequence[str]]
 
@@ -91,7 +92,7 @@ class Goal:
         """A status message (idle/running/emergency/collision) from the position controller."""
         self.status_seq += 1
         self.status = status
-        if status == "running" and self.status_seq > self.sent_seq:
+        if status == PosControllerStatus.RUNNING and self.status_seq > self.sent_seq:
             self.seen_running = True
 
     def sending(self) -> None:
@@ -101,7 +102,7 @@ class Goal:
 
     def done(self) -> bool:
         """The position controller went running -> idle since the goal was sent."""
-        return self.seen_running and self.status == "idle"
+        return self.seen_running and self.status == PosControllerStatus.IDLE
 
     def result(self, now: float, timeout: float) -> str:
         """"none", "active", "done" or "failed" for the last goal sent (done/failed forget it)."""

@@ -9,6 +9,8 @@ from typing import Any, Tuple
 
 import numpy as np
 
+from rbd_geometry.rotation import yaw_or_nan
+
 FLOAT32 = 7  # sensor_msgs/PointField.FLOAT32
 
 
@@ -62,5 +64,8 @@ def to_map(points: np.ndarray, mount: Tuple[float, float, float], pose: Tuple[fl
 
 
 def yaw_of(q: Any) -> float:
-    """Heading of a quaternion (x, y, z, w fields) [rad]."""
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+    """Heading of a quaternion (x, y, z, w fields) [rad]; NaN for a zero or non-finite one.
+
+    NaN, not heading 0: the pose consumers drop non-finite poses (stale data stops the robot).
+    """
+    return yaw_or_nan(q)

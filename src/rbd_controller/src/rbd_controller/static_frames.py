@@ -8,6 +8,8 @@ transform of each child frame and chains them into a planar (x, y, yaw).
 import math
 from typing import Dict, Optional, Sequence, Tuple
 
+from rbd_geometry.rotation import yaw_of
+
 __all__ = ["StaticFrames"]
 
 Vec = Tuple[float, float, float]
@@ -80,5 +82,5 @@ class StaticFrames:
         root_t, in_root_t = self._to_root(target.lstrip("/"))
         if not root_s or root_s != root_t:
             return None
-        (x, y, _), (qx, qy, qz, qw) = _compose(_inverse(in_root_t), in_root_s)
-        return x, y, math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+        (x, y, _), q = _compose(_inverse(in_root_t), in_root_s)
+        return x, y, yaw_of(q)

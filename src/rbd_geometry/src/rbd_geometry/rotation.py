@@ -60,6 +60,18 @@ def yaw_of(q: object) -> float:
     return quat_to_rpy(q)[2]
 
 
+def yaw_or_nan(q: object) -> float:
+    """Yaw [rad] of a measured orientation, NaN for a zero, non-finite or malformed quaternion.
+
+    For pose callbacks whose consumers drop non-finite poses: a bad orientation then counts as no
+    pose (stale data stops the robot) instead of as heading 0.
+    """
+    try:
+        return quat_to_rpy(q)[2]
+    except ValueError:
+        return math.nan
+
+
 def rpy_to_quat(roll: float, pitch: float, yaw: float) -> Quaternion:
     """Unit quaternion (x, y, z, w) of roll, pitch, yaw [rad]."""
     cr, sr = math.cos(roll / 2.0), math.sin(roll / 2.0)

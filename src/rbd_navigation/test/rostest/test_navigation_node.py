@@ -8,8 +8,8 @@ import unittest
 import rospy
 from geometry_msgs.msg import PoseStamped
 
+from rbd_geometry.rotation import yaw_of, yaw_to_quat
 from rbd_msgs.srv import GeneratePath
-from rbd_pos_controller.geometry import quaternion_from_rpy, rpy_from_quaternion
 from rbd_testkit import wait_for
 from rbd_testkit.ros import run_rostest
 
@@ -29,7 +29,7 @@ class TestNavigation(unittest.TestCase):
         msg.header.frame_id = "map"
         msg.pose.position.x, msg.pose.position.y = x, y
         o = msg.pose.orientation
-        o.x, o.y, o.z, o.w = quaternion_from_rpy(0.0, 0.0, yaw)
+        o.x, o.y, o.z, o.w = yaw_to_quat(yaw)
         wait_for(lambda: self.pub.get_num_connections() > 0, 10.0, what="rbd_navigation subscribed to the pose")
         for _ in range(3):
             self.pub.publish(msg)
@@ -52,7 +52,7 @@ class TestNavigation(unittest.TestCase):
         self.assertAlmostEqual(first.position.x, 1.0, places=6)
         self.assertAlmostEqual(first.position.y, 2.6, places=6)
         o = first.orientation
-        self.assertAlmostEqual(rpy_from_quaternion(o.x, o.y, o.z, o.w)[2], math.pi / 2, places=6)
+        self.assertAlmostEqual(yaw_of(o), math.pi / 2, places=6)
 
     def test_unknown_command(self):
         self.publish_pose(0.0, 0.0, 0.0)

@@ -1,200 +1,20 @@
-"""Position controller FSM (thesis Fig. 9) around the control law. ROS-free.
+"""The position controller: its FSM (:mod:`rbd_pos_controller.fsm`) driving the control law. ROS-free.
 
 The node feeds poses, stop/release events and the clock in; step() returns the velocity to
-command. Transitions are one explicit table; the stop states zero the velocity on entry.
-
-GUARDED is the avoidance motion (issue 17: escape, dodge): a straight translation to a
-position without turning, capped at a low speed, gated per side by the LiDAR zone
-(:mod:`rbd_pos_controller.zone_guard`) instead of the slowdown scale, because it starts with
-something in the zone. E-stop and collision preempt it like every motion state.
-
-FOLLOWING follows a path of poses (issue 27: the detour), walking and turning at once
-(:mod:`rbd_pos_controller.path_follower`); a new path (or goal) replaces it without stopping, the
-slowdown scale applies, and e-stop and collision preempt it like every motion state.
+command (Eq. 1 in PRE_ROTATION, LINEAR and POST_ROTATION, the zone-gated translation in GUARDED,
+the path follower in FOLLOWING, zero otherwise). The stop states zero the velocity on entry; the
+LiDAR slowdown scale applies to every motion but GUARDED.
 """
 
-import enum
 import math
 from typing import Callable, Optional, Sequence
 
-from rbd_pos_controller.control_law import (
-    Errors,
-    Gains,
-    Twist2D,
-    hold_command,
-    linear_command,
-    rotation_command,
-    wrap_angle,
-)
+from rbd_pos_controller.control_law import Errors, Twist2D, hold_command, linear_command, rotation_command, wrap_angle
+from rbd_pos_controller.fsm import MOTION_STATES, STATUS, STOP_STATES, TRANSITIONS, Event, State
+from rbd_pos_controller.goal import Goal, GoalRejectedError
+from rbd_pos_controller.params import Params
 from rbd_pos_controller.path_follower import PathFollower, check_path
 from rbd_pos_controller.zone_guard import ZoneGuard, cap_speed
-
-
-class State(enum.Enum):
-    """States of the position controller."""
-
-    WAITING_FOR_POSE = "WAITING_FOR_POSE"
-    PRE_ROTATION = "PRE_ROTATION"
-    LINEAR = "LINEAR"
-    POST_ROTATION = "POST_ROTATION"
-    BODY_POSE = "BODY_POSE"
-    GUARDED = "GUARDED"  # avoidance translation, gated per side by the zone
-    FOLLOWING = "FOLLOWING"  # following a path of poses (detour)
-    EMERGENCY_STOP = "EMERGENCY_STOP"
-    COLLISION_DETECTED = "COLLISION_DETECTED"
-
-
-class Event(enum.Enum):
-    """Events that move the position controller FSM."""
-
-    GOAL_FAR = "GOAL_FAR"  # new goal, rho >= skip distance: turn towards it first
-    GOAL_NEAR = "GOAL_NEAR"  # new goal, rho < skip distance: no pre-rotation
-    GOAL_GUARDED = "GOAL_GUARDED"  # new avoidance goal (translation only, zone-gated)
-    GUARDED_REACHED = "GUARDED_REACHED"  # the avoidance goal's position is reached (no rotation follows)
-    GOAL_PATH = "GOAL_PATH"  # new path to follow
-    PATH_DONE = "PATH_DONE"  # the path's last pose, heading included, is reached
-    ALIGNED = "ALIGNED"  # |gamma| within tolerance
-    REACHED = "REACHED"  # rho within tolerance
-    ORIENTED = "ORIENTED"  # |delta| within tolerance
-    BODY_POSE_DONE = "BODY_POSE_DONE"  # set_body_pose answered (or failed) and settled
-    ESTOP = "ESTOP"
-    ESTOP_RELEASE = "ESTOP_RELEASE"
-    COLLISION = "COLLISION"
-    COLLISION_CLEAR = "COLLISION_CLEAR"
-
-
-MOTION_STATES = (State.PRE_ROTATION, State.LINEAR, State.POST_ROTATION, State.BODY_POSE, State.GUARDED,
-                 State.FOLLOWING)
-STOP_STATES = (State.EMERGENCY_STOP, State.COLLISION_DETECTED)
-
-TRANSITIONS = {}  # type: Dict[Tuple[State, Event], State]
-TRANSITIONS.update(
-    {
-        (State.PRE_ROTATION, Event.ALIGNED): State.LINEAR,
-        (State.LINEAR, Event.REACHED): State.POST_ROTATION,
-        (State.POST_ROTATION, Event.ORIENTED): State.BODY_POSE,
-        (State.BODY_POSE, Event.BODY_POSE_DONE): State.WAITING_FOR_POSE,
-        (State.GUARDED, Event.GUARDED_REACHED): State.WAITING_FOR_POSE,
-        (State.FOLLOWING, Event.PATH_DONE): State.WAITING_FOR_POSE,
-        (State.EMERGENCY_STOP, Event.ESTOP_RELEASE): State.WAITING_FOR_POSE,
-        (State.COLLISION_DETECTED, Event.COLLISION_CLEAR): State.WAITING_FOR_POSE,
-        (State.COLLISION_DETECTED, Event.ESTOP): State.EMERGENCY_STOP,
-        # A collision while the e-stop is engaged keeps the e-stop (it needs explicit release).
-        (State.EMERGENCY_STOP, Event.COLLISION): State.EMERGENCY_STOP,
-    }
-)
-for _state in (State.WAITING_FOR_POSE,) + MOTION_STATES:
-    # A new goal is accepted when idle and replaces the current one while moving.
-    TRANSITIONS[(_state, Event.GOAL_FAR)] = State.PRE_ROTATION
-    TRANSITIONS[(_state, Event.GOAL_NEAR)] = State.LINEAR
-    TRANSITIONS[(_state, Event.GOAL_GUARDED)] = State.GUARDED
-    TRANSITIONS[(_state, Event.GOAL_PATH)] = State.FOLLOWING
-    TRANSITIONS[(_state, Event.ESTOP)] = State.EMERGENCY_STOP
-    TRANSITIONS[(_state, Event.COLLISION)] = State.COLLISION_DETECTED
-
-STATUS = {
-    State.WAITING_FOR_POSE: "idle",
-    State.PRE_ROTATION: "running",
-    State.LINEAR: "running",
-    State.POST_ROTATION: "running",
-    State.BODY_POSE: "running",
-    State.GUARDED: "running",
-    State.FOLLOWING: "running",
-    State.EMERGENCY_STOP: "emergency",
-    State.COLLISION_DETECTED: "collision",
-}
-
-
-class Goal:
-    """A goal pose: position [m], heading [rad], body roll/pitch [rad], body height change [m]."""
-
-    __slots__ = ("x", "y", "yaw", "roll", "pitch", "body_height")
-
-    def __init__(
-        self, x: float, y: float, yaw: float, roll: float = 0.0, pitch: float = 0.0, body_height: float = 0.0
-    ) -> None:
-        self.x = x
-        self.y = y
-        self.yaw = yaw
-        self.roll = roll
-        self.pitch = pitch
-        self.body_height = body_height
-
-    def __repr__(self) -> str:
-        """Readable form for logs."""
-        return "Goal(x=%.3f, y=%.3f, yaw=%.3f, roll=%.3f, pitch=%.3f, body_height=%.3f)" % (
-            self.x,
-            self.y,
-            self.yaw,
-            self.roll,
-            self.pitch,
-            self.body_height,
-        )
-
-
-class Params:
-    """Tolerances and options of the position controller (defaults documented in the README)."""
-
-    __slots__ = (
-        "gains",
-        "skip_rotation_distance",
-        "position_tolerance",
-        "align_tolerance",
-        "yaw_tolerance",
-        "pose_timeout",
-        "rotation_x_control",
-        "rotation_y_control",
-        "k_hold",
-        "max_v_hold",
-        "keep_direction",
-        "body_pose_settle",
-    )
-
-    def __init__(
-        self,
-        gains: Optional[Gains] = None,
-        skip_rotation_distance: float = 0.4,
-        position_tolerance: float = 0.02,
-        align_tolerance: float = 0.05,
-        yaw_tolerance: float = 0.02,
-        pose_timeout: float = 0.5,
-        rotation_x_control: bool = True,
-        rotation_y_control: bool = True,
-        k_hold: float = 5.0,
-        max_v_hold: float = 0.2,
-        keep_direction: bool = True,
-        body_pose_settle: float = 0.0,
-    ) -> None:
-        self.gains = gains if gains is not None else Gains()
-        for name, value in (
-            ("skip_rotation_distance", skip_rotation_distance),
-            ("position_tolerance", position_tolerance),
-            ("align_tolerance", align_tolerance),
-            ("yaw_tolerance", yaw_tolerance),
-            ("pose_timeout", pose_timeout),
-            ("k_hold", k_hold),
-            ("max_v_hold", max_v_hold),
-        ):
-            if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-                raise ValueError("%s must be a finite number > 0, got %r" % (name, value))
-        if not isinstance(body_pose_settle, (int, float)) or not 0.0 <= body_pose_settle < 60.0:
-            raise ValueError("body_pose_settle must be in [0, 60) s, got %r" % (body_pose_settle,))
-        self.skip_rotation_distance = float(skip_rotation_distance)
-        self.position_tolerance = float(position_tolerance)
-        self.align_tolerance = float(align_tolerance)
-        self.yaw_tolerance = float(yaw_tolerance)
-        self.pose_timeout = float(pose_timeout)
-        self.rotation_x_control = bool(rotation_x_control)
-        self.rotation_y_control = bool(rotation_y_control)
-        self.k_hold = float(k_hold)
-        self.max_v_hold = float(max_v_hold)
-        self.keep_direction = bool(keep_direction)
-        self.body_pose_settle = float(body_pose_settle)
-
-
-class GoalRejectedError(ValueError):
-    """Raised by set_goal when a goal cannot be accepted; the message says why."""
-
 
 ZERO = (0.0, 0.0, 0.0)  # type: Twist2D
 

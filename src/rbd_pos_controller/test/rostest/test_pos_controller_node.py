@@ -11,8 +11,8 @@ from geometry_msgs.msg import Pose, Pose2D, PoseStamped, Twist, Vector3
 from std_msgs.msg import Float32, String
 from std_srvs.srv import SetBool
 
+from rbd_geometry.rotation import rpy_to_quat, yaw_of
 from rbd_msgs.srv import FollowPath, SetPosition
-from rbd_pos_controller.geometry import quaternion_from_rpy, rpy_from_quaternion
 from rbd_testkit import wait_for
 from rbd_testkit.ros import run_rostest
 
@@ -23,7 +23,7 @@ def make_pose(x, y, yaw, roll=0.0, pitch=0.0, z=0.0):
     pose = Pose()
     pose.position.x, pose.position.y, pose.position.z = x, y, z
     o = pose.orientation
-    o.x, o.y, o.z, o.w = quaternion_from_rpy(roll, pitch, yaw)
+    o.x, o.y, o.z, o.w = rpy_to_quat(roll, pitch, yaw)
     return pose
 
 
@@ -53,11 +53,7 @@ class Recorder:
     def xy_yaw(self):
         with self.lock:
             p = self.truth
-        return (
-            p.position.x,
-            p.position.y,
-            rpy_from_quaternion(p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w)[2],
-        )
+        return p.position.x, p.position.y, yaw_of(p.orientation)
 
 
 class TestPosController(unittest.TestCase):
@@ -152,12 +148,14 @@ class TestPosController(unittest.TestCase):
 
     def test_bad_goals_rejected_without_motion(self):
         x0, y0, _ = self.rec.xy_yaw()
-        for pose in (make_pose(float("nan"), 0.0, 0.0), make_pose(0.0, 0.0, 0.0)):
-            if pose.position.x == 0.0:
-                pose.orientation.w = 3.0  # non-unit quaternion
+        non_unit, zero = make_pose(x0 + 0.5, y0, 0.0), make_pose(x0 + 0.5, y0, 0.0)
+        non_unit.orientation.w = 3.0
+        zero.orientation.w = 0.0  # all four zero: malformed, not heading 0
+        for pose in (make_pose(float("nan"), 0.0, 0.0), non_unit, zero):
             res = self.set_position(pose=pose)
             self.assertFalse(res.accepted)
             self.assertTrue(res.message)
+        self.assertIn("unit quaternion", res.message)
         self.assertTrue(self.idle())
         self.assert_robot_stopped()
 
