@@ -92,6 +92,29 @@ def test_tracks_follow_hands_by_position_and_end_after_the_bridge():
     assert len(ht.tracks) == 1 and ht.tracks[0] is left and len(left.frames) == 21
 
 
+def _moved(hand, dx):
+    out = np.array(hand, dtype=np.float64)
+    out[:, 0] += dx
+    return out
+
+
+@pytest.mark.parametrize("onward, same_track", [(+1, True), (-1, False), (0, False)])
+def test_a_fast_hand_found_again_farther_on_continues_only_the_way_it_moved(onward, same_track):
+    # a hand (size ~48 px) starting a swipe at 10 px per frame, blurred out of view for 0.27 s,
+    # found again 12 hand sizes on: beyond the plain limit (2.5 + 30 * 0.27 = 10.5), so only its
+    # motion before the loss joins it -- not a still hand, not a jump back against the motion
+    hand = _still_hand(3, 4, at=(320.0, 240.0))[0]
+    size = tracks.palm_and_size(hand)[1]
+    ht = tracks.HandTracks(max_gap_s=0.5)
+    for i in range(12):
+        ht.update(i / 30.0, [_moved(hand, 10.0 * max(0, i - 9) * abs(onward))])
+    first = ht.tracks[0]
+    jump = 12.0 * size * (onward if onward else 1)
+    ht.update(19 / 30.0, [_moved(hand, first.palm[0] - tracks.palm_and_size(hand)[0][0] + jump)])
+    assert (ht.tracks == [first] and len(first.frames) == 13) == same_track
+    assert len(ht.tracks) == (1 if same_track else 2)
+
+
 def _window(kind, seed):
     return synthetic.generate(kind, np.random.default_rng(seed), gaps=False)
 
@@ -175,6 +198,21 @@ def test_a_hand_raised_into_view_fires_no_taught_swipe_up(shipped_model):
     fired_shown = sum(_fired(model, _raise(seed, start_still_s=0.6)) == ["swipe_up"] for seed in range(6))
     assert fired_raise == 0
     assert fired_shown >= 3, fired_shown
+
+
+def test_a_push_soon_after_the_arm_was_raised_fires(shipped_model):
+    # raised into view in 0.5 s, held 0.35 s, pushed down 6 hand sizes in 0.35 s, held 0.45 s,
+    # gone: every full window still holds part of the raise, which must not hide the push
+    hits = 0
+    for seed in range(6):
+        frames = _raise(seed, still_s=1.15)
+        size = features.hand_size(frames[0][1])
+        out = []
+        for t, kp in frames:
+            u = np.clip((t - 0.85) / 0.35, 0.0, 1.0)
+            out.append((t, kp + np.array([0.0, 6.0 * size * u * u * (3 - 2 * u), 0.0])))
+        hits += _fired(shipped_model, out) == ["push_down"]
+    assert hits >= 5, hits
 
 
 def shipped_model_path():

@@ -13,9 +13,10 @@ wrist to fingertip, is :data:`HAND_LENGTH` of them):
   palm) -- a one-way swipe left is no wave;
 - ``circle``: the palm's heading turns by at least :data:`MIN_TURNS` of a full turn in one
   sense (loose arm arcs turn much less, or back and forth);
-- every gesture, built-in or taught: a window that holds part of the motion a hand came into
-  view with (an arm being raised) gives nothing (:class:`~rbd_local.gestures.tracks.Track`'s
-  ``settled_t``, checked by the recognizer).
+- every gesture, built-in or taught: the motion a hand came into view with (an arm being
+  raised) is no gesture: the recognizer replaces that part of a window by the hand held where it
+  came to rest (:class:`~rbd_local.gestures.tracks.Track`'s ``settled_t``), and gives nothing
+  while the hand has not yet come to rest.
 """
 
 import numpy as np

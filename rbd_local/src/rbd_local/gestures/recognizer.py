@@ -43,9 +43,11 @@ class GestureRecognizer:
     straight-line interpolation between the frames before and after the loss.
 
     A gesture fires when the same class stays above the threshold for ``min_consecutive``
-    frames and passes the checks of :mod:`.checks` (travel, swings, turns, the hand at rest, no
-    arm being raised); afterwards the window is cleared and nothing fires for ``cooldown_s``
-    seconds, so one performance sends one command.
+    frames and passes the checks of :mod:`.checks` (travel, swings, turns, the hand at rest);
+    the motion a hand came into view with (an arm being raised) is replaced in the window by the
+    hand held where it came to rest, and nothing fires before it came to rest; afterwards the
+    window is cleared and nothing fires for ``cooldown_s`` seconds, so one performance sends one
+    command.
     """
 
     def __init__(
@@ -129,11 +131,17 @@ class GestureRecognizer:
         seen = float(np.minimum(seen, 0.1).sum())
         if seen < self.min_seen * window_s:
             return Decision()
+        frames = np.array(track.frames)
+        if track.settled_t is not None and times[0] < track.settled_t:
+            # the motion the hand came into view with (an arm being raised) is no gesture: the
+            # window sees the hand held where it came to rest until then
+            k = int(np.searchsorted(times, track.settled_t))
+            frames[:k] = frames[min(k, len(frames) - 1)]
         try:
-            window = features.resample(times, np.array(track.frames), self.model.samples)
+            window = features.resample(times, frames, self.model.samples)
             label, conf, scores = self.model.classify(window, self.threshold)
             reason = checks.check(label, window, times[-1] - times[0]) if label in self.model.classes else ""
-            if not reason and label != NONE and (track.settled_t is None or times[0] < track.settled_t):
+            if not reason and label != NONE and track.settled_t is None:
                 reason = "the hand came into view moving (an arm being raised)"
         except ValueError:
             self.reset()  # degenerate key points: never a gesture

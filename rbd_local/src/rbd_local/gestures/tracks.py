@@ -8,7 +8,9 @@ hand to the other. So the recognizer and teach mode do not take "the" hand of a 
 - every hand of a frame is given to the :class:`Track` whose last palm position is nearest
   (within :data:`MAX_JUMP` hand sizes plus what a fast hand covers in the time since,
   :data:`MAX_SPEED`); a hand far from every track starts a track of its own, so a jump to
-  another hand never looks like a swipe;
+  another hand never looks like a swipe. A lost hand found again farther on (up to
+  :data:`MAX_SPEED_ONWARD`) continues its track only when it was already moving that way before
+  it was lost (a fast swipe blurs out of view mid-motion) and its size is about the same;
 - a track that has not been seen for more than ``max_gap_s`` (0.5 s) ends; a shorter loss is
   bridged: the window's frames are resampled in time (:func:`features.resample`), which fills
   the gap by straight-line interpolation of every key point between the frames before and after;
@@ -26,6 +28,15 @@ from rbd_local.gestures.hand import MIDDLE_MCP, NUM_LANDMARKS, PALM, WRIST
 MAX_JUMP = 2.5
 #: Fastest palm motion followed across a loss [hand sizes / s] (a swipe of 7 hand lengths in 0.5 s).
 MAX_SPEED = 30.0
+#: Fastest palm motion followed across a loss when the hand was already moving that way before it
+#: was lost [hand sizes / s] (a fast swipe: 7 hand lengths in 0.2-0.3 s, blurred out of MediaPipe's view).
+MAX_SPEED_ONWARD = 80.0
+#: Least palm speed before a loss for :data:`MAX_SPEED_ONWARD` [hand sizes / s], and the least cosine
+#: between that motion and the jump across the loss.
+ONWARD_SPEED = 2.0
+ONWARD_COS = 0.7
+#: Most a hand's size may change across such a jump (ratio).
+ONWARD_SIZE_RATIO = 1.5
 #: Most hands followed at once.
 MAX_TRACKS = 2
 #: Longest loss of a hand that is bridged [s].
@@ -87,8 +98,8 @@ class Track:
 
     ``settled_t`` is when the hand first came to rest after it came into view (None while the
     motion it came into view with goes on): a hand raised into the frame is moving when it is
-    first seen, and that motion is no gesture (issue 26). A window that begins before
-    ``settled_t`` is not classified.
+    first seen, and that motion is no gesture (issue 26). The recognizer classifies a window that
+    begins before ``settled_t`` with the hand held at its place of rest until then.
     """
 
     __slots__ = ("times", "frames", "first_t", "palm", "size", "settled_t", "_entry")
@@ -136,6 +147,29 @@ class Track:
             del self.times[0]
             del self.frames[0]
 
+    def onward(self, t: float, palm: np.ndarray, size: float) -> bool:
+        """Whether a hand found at ``palm`` after a loss continues this track's motion before the loss.
+
+        Args:
+            t: the frame time [s] (after :attr:`last_t`).
+            palm: the found hand's palm centre [px].
+            size: its hand size [px].
+        """
+        dt = t - self.last_t
+        if len(self.frames) < 2 or dt <= 0 or self.size <= 0 or size <= 0:
+            return False
+        if max(size, self.size) / min(size, self.size) > ONWARD_SIZE_RATIO:
+            return False
+        step_t = self.times[-1] - self.times[-2]
+        if step_t <= 0:
+            return False
+        v = (self.palm - palm_and_size(self.frames[-2])[0]) / step_t / self.size
+        jump = (np.asarray(palm) - self.palm) / self.size
+        speed, dist = float(np.linalg.norm(v)), float(np.linalg.norm(jump))
+        if speed < ONWARD_SPEED or dist > MAX_JUMP + MAX_SPEED_ONWARD * dt:
+            return False
+        return float(np.dot(v, jump)) >= ONWARD_COS * speed * dist
+
     def travel(self) -> float:
         """Palm path length over the kept frames [hand sizes]."""
         if len(self.frames) < 2 or self.size <= 0:
@@ -177,7 +211,7 @@ class HandTracks:
             for j, tr in enumerate(self.tracks):
                 unit = max(tr.size, size, 1e-6)
                 dist = float(np.linalg.norm(palm - tr.palm)) / unit
-                if dist <= MAX_JUMP + MAX_SPEED * max(t - tr.last_t, 0.0):
+                if dist <= MAX_JUMP + MAX_SPEED * max(t - tr.last_t, 0.0) or tr.onward(t, palm, size):
                     pairs.append((dist, i, j))
         pairs.sort()
         used_h, used_t, touched = set(), set(), []
