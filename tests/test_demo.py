@@ -45,7 +45,7 @@ def test_demo_scenario(tmp_path):
         assert 1.0 < report["time_blocked_s"] < 60.0, report
         assert report["time_avoiding_s"] > 0.0, report
     assert report["collision_stops"] >= 1, "the robot never stopped for the visitor"
-    assert report["resumes"] >= 1, "the interrupted trick never resumed"
+    assert report["resumes"] >= 1, ("the interrupted trick never resumed", [s["state"] for s in report["states"]])
     assert report["min_distance_to_person_m"] > 0.0
     assert report["final_position_error_m"] < 0.1
     assert (out / "run.png").stat().st_size > 10000

@@ -565,21 +565,33 @@ class DriverWire(unittest.TestCase):
         """SIGSTOP the driver while walking, then the A1 reports L2 + B: the keep-alive process, which
         would repeat the walk for keepalive_hold after the driver's last send, fills with zero
         velocity from the HighState with the press on (at most one HighCmd in flight). Without
-        the keep-alive's own reading of the remote, the fills inside the hold would walk."""
-        self.walk()
-        pid = driver_pid()
-        t_stop = time.time()
-        os.kill(pid, signal.SIGSTOP)
-        try:
-            self.press(True)  # the test's HighState sender goes on while the driver is stopped
-            self.events_until(t_stop + 0.3)  # 0.3 s of a running machine (see the test above)
-        finally:
-            os.kill(pid, signal.SIGCONT)
-        t_cont = time.time()
-        self.assertTrue(wait_for(lambda: self.diag_value("remote_estop") == "engaged", 30.0))
-        events = self.events_until(t_cont + 0.1)
-        t_packet = press_time(events, t_stop)
-        self.assertLess(t_packet, t_stop + KEEPALIVE_HOLD - 0.015, "the press came too late to be inside the hold")
+        the keep-alive's own reading of the remote, the fills inside the hold would walk.
+
+        The press must reach the wire inside the 50 ms hold; when this test's own sender is later
+        than that (a loaded machine: 22 ms late in one run), the scene is undone and played again.
+        """
+        late = []
+        for _attempt in range(4):
+            self.walk()
+            pid = driver_pid()
+            t_stop = time.time()
+            os.kill(pid, signal.SIGSTOP)
+            try:
+                self.press(True)  # the test's HighState sender goes on while the driver is stopped
+                self.events_until(t_stop + 0.3)  # 0.3 s of a running machine (see the test above)
+            finally:
+                os.kill(pid, signal.SIGCONT)
+            t_cont = time.time()
+            self.assertTrue(wait_for(lambda: self.diag_value("remote_estop") == "engaged", 30.0))
+            events = self.events_until(t_cont + 0.1)
+            t_packet = press_time(events, t_stop)
+            if t_packet < t_stop + KEEPALIVE_HOLD - 0.015:
+                break
+            late.append(round((t_packet - t_stop) * 1e3, 1))
+            self.press(False)
+            self.assertTrue(self.release_remote(), "the operator's release did not open the latch")
+        else:
+            self.fail("the press came too late to be inside the hold in every attempt (ms after the stop: %s)" % late)
         after = [vendor.unpack(vendor.HIGH_CMD, d) for t, ch, d in events if ch == HIGH_CMD and t_packet < t < t_cont]
         trace = " ".join("%.1f:%s" % ((t - t_stop) * 1e3, "%.1f" % vendor.unpack(vendor.HIGH_CMD, d)["velocity"][0]
                                       if ch == HIGH_CMD else "state") for t, ch, d in events
