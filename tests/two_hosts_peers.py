@@ -117,16 +117,26 @@ def run_probe() -> None:
     """Robot side: ground-truth speed, controller state, heartbeats as they reach the robot."""
     import rospy
     from nav_msgs.msg import Odometry
+    from rbd_msgs.msg import ControllerState
     from rospy.msg import AnyMsg
     from std_msgs.msg import String
 
+    def stamp_mono(stamp: "rospy.Time") -> str:
+        """A header stamp (wall clock) on the monotonic clock of the event lines."""
+        return "%.4f" % (stamp.to_sec() - (time.time() - time.monotonic()))
+
     def on_truth(msg: Odometry) -> None:
         t = msg.twist.twist
-        emit("T", "%.4f" % max(math.hypot(t.linear.x, t.linear.y), abs(t.angular.z)))
+        speed = max(math.hypot(t.linear.x, t.linear.y), abs(t.angular.z))
+        emit("T", "%.4f" % speed, stamp_mono(msg.header.stamp))
+
+    def on_controller_state(msg: ControllerState) -> None:
+        emit("C", msg.state_name, stamp_mono(msg.header.stamp))
 
     rospy.init_node("two_hosts_probe", disable_signals=True)
     rospy.Subscriber("/rbd_sim/ground_truth", Odometry, on_truth, queue_size=50)
     rospy.Subscriber("/rbd_controller/state", String, lambda m: emit("S", m.data), queue_size=20)
+    rospy.Subscriber("/rbd_controller/controller_state", ControllerState, on_controller_state, queue_size=20)
     rospy.Subscriber("/rbd_local/heartbeat", AnyMsg, lambda _m: emit("H"), queue_size=20)
     emit("ready")
     sys.stdin.read()  # until the test closes stdin
