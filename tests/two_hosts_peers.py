@@ -117,9 +117,10 @@ def run_probe() -> None:
     """Robot side: ground-truth speed, controller state, heartbeats as they reach the robot."""
     import rospy
     from nav_msgs.msg import Odometry
-    from rbd_msgs.msg import ControllerState
     from rospy.msg import AnyMsg
     from std_msgs.msg import String
+
+    from rbd_msgs.msg import ControllerState
 
     def stamp_mono(stamp: "rospy.Time") -> str:
         """A header stamp (wall clock) on the monotonic clock of the event lines."""
