@@ -501,7 +501,7 @@ def exp_reaction(ctx):
     from rbd_msgs.srv import SetPosition
 
     sys.path.insert(0, os.path.join(ROOT, "tools"))
-    from demo_scenario import Monitor  # the demo's LCM + ground-truth + state monitor
+    from demo_monitor import Monitor  # the demo's LCM + ground-truth + state monitor
 
     zone = ctx.zone()
     monitor = Monitor(rospy.get_param("/rbd_sim/lcm_url"))

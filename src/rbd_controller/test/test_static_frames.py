@@ -5,10 +5,7 @@ import math
 import pytest
 
 from rbd_controller.static_frames import StaticFrames
-
-
-def _yaw_q(yaw):
-    return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
+from rbd_geometry.rotation import yaw_to_quat as _yaw_q
 
 
 def test_a_chain_of_mounts_composes_translation_and_yaw():
@@ -34,6 +31,15 @@ def test_roll_of_a_mount_leaves_the_planar_pose():
     roll = (math.sin(0.25), 0.0, 0.0, math.cos(0.25))  # 0.5 rad about x
     frames.add("base_link", "cam", (0.2, -0.1, 0.4), roll)
     assert frames.lookup("base_link", "cam") == pytest.approx((0.2, -0.1, 0.0))
+
+
+def test_a_frame_upside_down_turns_its_childs_yaw_and_offsets_the_other_way():
+    # A LiDAR mounted upside down (pi about x): its +y is base_link's -y and its +z is -z, so a
+    # child turned +90 deg about the LiDAR's z faces -90 deg in base_link.
+    frames = StaticFrames()
+    frames.add("base_link", "lidar", (0.0, 0.0, 0.5), (1.0, 0.0, 0.0, 0.0))
+    frames.add("lidar", "beam", (0.0, 0.3, 0.0), _yaw_q(math.pi / 2))
+    assert frames.lookup("base_link", "beam") == pytest.approx((0.0, -0.3, -math.pi / 2))
 
 
 def test_unconnected_frames_and_loops_give_none():

@@ -14,6 +14,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <ros/ros.h>
 #include <sensor_msgs/Imu.h>
+#include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
 #include <cmath>
@@ -110,8 +111,7 @@ int main(int argc, char** argv) {
     imu.angular_velocity.z = kYawRate;
     imu.linear_acceleration.y = kSpeed * kYawRate;  // centripetal
     imu.linear_acceleration.z = 9.80665;
-    imu.orientation.z = std::sin(yaw / 2);
-    imu.orientation.w = std::cos(yaw / 2);
+    imu.orientation = tf2::toMsg(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())));
     imu_pub.publish(imu);
     ++imu_count;
     if (imu_count % kImuPerPose == 0) {
@@ -119,8 +119,7 @@ int main(int argc, char** argv) {
       pose.header.stamp = stamp;
       pose.pose.pose.position.x = radius * std::sin(yaw);
       pose.pose.pose.position.y = radius * (1 - std::cos(yaw));
-      pose.pose.pose.orientation.z = std::sin(yaw / 2);
-      pose.pose.pose.orientation.w = std::cos(yaw / 2);
+      pose.pose.pose.orientation = imu.orientation;
       pose_pub.publish(pose);
       ++pose_count;
     }

@@ -5,10 +5,10 @@
 #include <nav_msgs/OccupancyGrid.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <std_msgs/Bool.h>
+#include <tf2_eigen/tf2_eigen.h>
 
 #include <cmath>
 #include <ctime>
-#include <limits>
 #include <vector>
 
 #include "rbd_localization/geometry.h"
@@ -20,15 +20,6 @@
 namespace rbd_localization {
 
 namespace {
-
-Eigen::Isometry3d toEigen(const geometry_msgs::Transform& t) {
-  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  out.linear() = Eigen::Quaterniond(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z)
-                     .normalized()
-                     .toRotationMatrix();
-  out.translation() = Eigen::Vector3d(t.translation.x, t.translation.y, t.translation.z);
-  return out;
-}
 
 Eigen::Isometry2d planar(const Eigen::Isometry3d& t) {
   const Eigen::Vector3d rpy = rpyFromRotation(t.linear());
@@ -44,115 +35,7 @@ Eigen::Isometry3d lift(const Eigen::Isometry2d& t) {
 
 double cpuSeconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
-bool positive(double v) { return v > 0.0 && std::isfinite(v); }
-
 }  // namespace
-
-bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams* n, MapCorrection::Params* c,
-                             std::string* error) {
-  pnh.param<std::string>("map_frame", n->map_frame, n->map_frame);
-  pnh.param<std::string>("odom_frame", n->odom_frame, n->odom_frame);
-  pnh.param<std::string>("base_frame", n->base_frame, n->base_frame);
-  pnh.param("max_match_rate", n->max_match_rate, n->max_match_rate);
-  pnh.param("max_points", n->max_points, n->max_points);
-  pnh.param("min_range", n->min_range, n->min_range);
-  pnh.param("max_range", n->max_range, n->max_range);
-  pnh.param("transform_publish_rate", n->transform_publish_rate, n->transform_publish_rate);
-  pnh.param("transform_tolerance", n->transform_tolerance, n->transform_tolerance);
-  pnh.param("pose_timeout", n->pose_timeout, n->pose_timeout);
-  pnh.param("map_publish_interval", n->map_publish_interval, n->map_publish_interval);
-  pnh.param("scan_timeout", n->scan_timeout, n->scan_timeout);
-  pnh.param("correction_enabled", n->correction_enabled, n->correction_enabled);
-  pnh.param<std::string>("input", n->input, n->input);
-  pnh.param("slice_z_min", n->slice_z_min, n->slice_z_min);
-  pnh.param("slice_z_max", n->slice_z_max, n->slice_z_max);
-  pnh.param("slice_bins", n->slice_bins, n->slice_bins);
-  pnh.param<std::string>("map_file", n->map_file, n->map_file);
-  pnh.param("home_x", n->home_x, n->home_x);
-  pnh.param("home_y", n->home_y, n->home_y);
-  pnh.param("home_yaw", n->home_yaw, n->home_yaw);
-  pnh.param<std::string>("map_save_dir", n->map_save_dir, n->map_save_dir);
-  pnh.param<std::string>("map_save_name", n->map_save_name, n->map_save_name);
-  if (n->input != "scan" && n->input != "points") {
-    *error = "input must be 'scan' or 'points'";
-    return false;
-  }
-  if (!(n->slice_z_max > n->slice_z_min) || n->slice_bins < 36) {
-    *error = "slice_z_max must be > slice_z_min and slice_bins >= 36";
-    return false;
-  }
-
-  pnh.param("initial_mapping_duration", c->initial_mapping_duration, c->initial_mapping_duration);
-  pnh.param("initial_mapping_min_scans", c->initial_mapping_min_scans, c->initial_mapping_min_scans);
-  pnh.param("map_update_interval", c->map_update_interval, c->map_update_interval);
-  pnh.param("map_update_weight", c->map_update_weight, c->map_update_weight);
-  pnh.param("min_inlier_ratio", c->min_inlier_ratio, c->min_inlier_ratio);
-  pnh.param("max_rms", c->max_rms, c->max_rms);
-  pnh.param("min_inliers", c->min_inliers, c->min_inliers);
-  pnh.param("min_translation_information", c->min_translation_information, c->min_translation_information);
-  pnh.param("max_jump_translation", c->max_jump_translation, c->max_jump_translation);
-  pnh.param("max_jump_rotation", c->max_jump_rotation, c->max_jump_rotation);
-  pnh.param("max_correction_speed", c->max_correction_speed, c->max_correction_speed);
-  pnh.param("max_correction_angular_speed", c->max_correction_angular_speed, c->max_correction_angular_speed);
-  pnh.param("max_correction_step", c->max_correction_step, c->max_correction_step);
-  pnh.param("map_update_min_translation", c->map_update_min_translation, c->map_update_min_translation);
-  pnh.param("map_update_min_rotation", c->map_update_min_rotation, c->map_update_min_rotation);
-  pnh.param("max_correction_step_rotation", c->max_correction_step_rotation, c->max_correction_step_rotation);
-  pnh.param("resolution", c->map.resolution, c->map.resolution);
-  pnh.param("map_size", c->map.size, c->map.size);
-  pnh.param("map_max_size", c->map.max_size, c->map.max_size);
-  pnh.param("static_time", c->map.static_time, c->map.static_time);
-  pnh.param("clear_interval", c->clear_interval, c->clear_interval);
-  pnh.param("clear_weight", c->clear_weight, c->clear_weight);
-  pnh.param("clear_end_margin", c->clear_end_margin, c->clear_end_margin);
-  pnh.param("clear_min_incidence", c->clear_min_incidence, c->clear_min_incidence);
-  pnh.param("search_translation", c->search_translation, c->search_translation);
-  pnh.param("search_rotation", c->search_rotation, c->search_rotation);
-  pnh.param("localized_scans", c->localized_scans, c->localized_scans);
-  pnh.param("localized_translation", c->localized_translation, c->localized_translation);
-  pnh.param("localized_rotation", c->localized_rotation, c->localized_rotation);
-  pnh.param("max_iterations", c->matcher.max_iterations, c->matcher.max_iterations);
-  pnh.param("outlier_distance_start", c->matcher.outlier_distance_start, c->matcher.outlier_distance_start);
-  pnh.param("outlier_distance", c->matcher.outlier_distance_end, c->matcher.outlier_distance_end);
-  pnh.param("inlier_distance", c->matcher.inlier_distance, c->matcher.inlier_distance);
-
-  if (n->map_frame.empty() || n->odom_frame.empty() || n->base_frame.empty() ||
-      n->map_frame == n->odom_frame) {
-    *error = "map_frame, odom_frame, base_frame must be set and map_frame != odom_frame";
-    return false;
-  }
-  if (!positive(n->max_match_rate) || !positive(n->transform_publish_rate) || !positive(c->map.resolution) ||
-      !positive(c->map.size) || n->max_points < 10 || !(n->max_range > n->min_range) ||
-      c->map.size / c->map.resolution > 8000 || !(c->map.max_size >= c->map.size) ||
-      c->map.max_size / c->map.resolution > 8000) {
-    *error =
-        "rates, resolution, map_size must be > 0, max_points >= 10, max_range > min_range, "
-        "map_size <= map_max_size <= 8000 cells wide";
-    return false;
-  }
-  if (!(c->map.static_time >= 0.0) || !(c->clear_weight >= 0.0) || !(c->clear_end_margin >= 0.0) ||
-      !(c->search_translation >= 0.0 && c->search_translation <= 5.0) ||
-      !(c->search_rotation >= 0.0 && c->search_rotation <= M_PI) || c->localized_scans < 1 ||
-      !positive(c->localized_translation) || !positive(c->localized_rotation)) {
-    *error =
-        "static_time, clear_weight, clear_end_margin >= 0; search_translation in [0, 5] m, search_rotation "
-        "in "
-        "[0, pi]; localized_scans >= 1; localized_translation/rotation > 0";
-    return false;
-  }
-  const int homes = std::isnan(n->home_x) + std::isnan(n->home_y) + std::isnan(n->home_yaw);
-  if ((homes != 0 && homes != 3) || std::isinf(n->home_x) || std::isinf(n->home_y) ||
-      std::isinf(n->home_yaw)) {
-    *error = "home_x, home_y, home_yaw must be given all three (finite) or none";
-    return false;
-  }
-  if (!(c->matcher.outlier_distance_start >= c->matcher.outlier_distance_end) ||
-      !positive(c->matcher.inlier_distance)) {
-    *error = "outlier_distance_start must be >= outlier_distance; inlier_distance > 0";
-    return false;
-  }
-  return true;
-}
 
 MapCorrectionNode::MapCorrectionNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh)
     : nh_(nh), pnh_(pnh) {}
@@ -235,27 +118,21 @@ void MapCorrectionNode::odomCallback(const nav_msgs::Odometry::ConstPtr& msg) {
     return;
   }
   const auto& p = msg->pose.pose;
-  Eigen::Isometry3d odom_from_base = Eigen::Isometry3d::Identity();
-  const Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
+  Eigen::Quaterniond q;
+  tf2::fromMsg(p.orientation, q);
   if (!q.coeffs().allFinite() || q.norm() < 1e-6 || !std::isfinite(p.position.x) ||
       !std::isfinite(p.position.y) || !std::isfinite(p.position.z)) {
     ROS_WARN_THROTTLE(2.0, "map_correction: odometry with NaN/inf or zero quaternion ignored");
     return;
   }
+  Eigen::Isometry3d odom_from_base = Eigen::Isometry3d::Identity();
   odom_from_base.linear() = q.normalized().toRotationMatrix();
   odom_from_base.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
   const Eigen::Isometry3d map_from_base = lift(core_->mapFromOdom()) * odom_from_base;
   geometry_msgs::PoseStamped out;
   out.header.stamp = msg->header.stamp;
   out.header.frame_id = params_.map_frame;
-  out.pose.position.x = map_from_base.translation().x();
-  out.pose.position.y = map_from_base.translation().y();
-  out.pose.position.z = map_from_base.translation().z();
-  const Eigen::Quaterniond qo(map_from_base.linear());
-  out.pose.orientation.x = qo.x();
-  out.pose.orientation.y = qo.y();
-  out.pose.orientation.z = qo.z();
-  out.pose.orientation.w = qo.w();
+  out.pose = tf2::toMsg(map_from_base);
   pose_pub_.publish(out);
 }
 
@@ -264,7 +141,7 @@ bool MapCorrectionNode::sensorTransform(const std::string& frame, Eigen::Isometr
   if (it == base_from_sensor_.end()) {
     try {
       const auto ts = tf_buffer_->lookupTransform(params_.base_frame, frame, ros::Time(0));
-      it = base_from_sensor_.emplace(frame, toEigen(ts.transform)).first;
+      it = base_from_sensor_.emplace(frame, tf2::transformToEigen(ts)).first;
     } catch (const tf2::TransformException& ex) {
       ROS_WARN_THROTTLE(2.0, "map_correction: no transform %s <- %s: %s", params_.base_frame.c_str(),
                         frame.c_str(), ex.what());
@@ -337,7 +214,7 @@ void MapCorrectionNode::processPendingScan() {
   Eigen::Isometry3d odom_from_base;
   try {
     odom_from_base =
-        toEigen(tf_buffer_->lookupTransform(params_.odom_frame, params_.base_frame, stamp).transform);
+        tf2::transformToEigen(tf_buffer_->lookupTransform(params_.odom_frame, params_.base_frame, stamp));
   } catch (const tf2::TransformException& ex) {
     // Wait for the EKF to catch up, but not forever.
     if ((ros::Time::now() - stamp).toSec() > 0.5) {
@@ -424,16 +301,10 @@ void MapCorrectionNode::timerCallback(const ros::TimerEvent&) {
 }
 
 void MapCorrectionNode::publishTransform() {
-  const Eigen::Isometry2d& t = core_->mapFromOdom();
-  geometry_msgs::TransformStamped tf;
+  geometry_msgs::TransformStamped tf = tf2::eigenToTransform(lift(core_->mapFromOdom()));
   tf.header.stamp = ros::Time::now() + ros::Duration(params_.transform_tolerance);
   tf.header.frame_id = params_.map_frame;
   tf.child_frame_id = params_.odom_frame;
-  tf.transform.translation.x = t.translation().x();
-  tf.transform.translation.y = t.translation().y();
-  const double yaw = yawOf(t);
-  tf.transform.rotation.z = std::sin(0.5 * yaw);
-  tf.transform.rotation.w = std::cos(0.5 * yaw);
   tf_broadcaster_.sendTransform(tf);
 }
 

@@ -2,10 +2,11 @@ import math
 
 import pytest
 
+from rbd_geometry.goal import Goal
 from rbd_pos_controller.control_law import Gains
 from rbd_pos_controller.controller import PositionController
 from rbd_pos_controller.fsm import MOTION_STATES, TRANSITIONS, Event, State
-from rbd_pos_controller.goal import Goal, GoalRejectedError
+from rbd_pos_controller.goal import GoalRejectedError
 from rbd_pos_controller.kinematic_sim import KinematicRobot
 from rbd_pos_controller.params import Params
 

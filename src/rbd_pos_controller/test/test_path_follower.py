@@ -5,11 +5,12 @@ import math
 
 import pytest
 
+from rbd_geometry.goal import Goal
 from rbd_pos_controller.closed_loop import run_goals, run_path
 from rbd_pos_controller.control_law import Gains, wrap_angle
 from rbd_pos_controller.controller import PositionController
 from rbd_pos_controller.fsm import State
-from rbd_pos_controller.goal import Goal, GoalRejectedError
+from rbd_pos_controller.goal import GoalRejectedError
 from rbd_pos_controller.params import Params
 from rbd_pos_controller.path_follower import FollowerParams, PathFollower
 

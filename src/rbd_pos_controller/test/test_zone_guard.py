@@ -8,9 +8,10 @@ import math
 
 import pytest
 
+from rbd_geometry.goal import Goal
 from rbd_pos_controller.controller import PositionController
 from rbd_pos_controller.fsm import State
-from rbd_pos_controller.goal import Goal, GoalRejectedError
+from rbd_pos_controller.goal import GoalRejectedError
 from rbd_pos_controller.kinematic_sim import KinematicRobot
 from rbd_pos_controller.zone_guard import BACK, FRONT, LEFT, RIGHT, ZoneGuard, cap_speed, sides_towards
 

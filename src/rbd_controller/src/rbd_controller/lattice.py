@@ -15,7 +15,7 @@ Each motion is timed at the fastest speed (of ``speed`` x 0.5^n, then ``min_spee
 zone stays free along it; the search itself runs in the slowest speed's space. Near obstacles the
 path is slow (the robot standing close to the box after a stop can still leave), away from them
 fast. ``LatticePlan.speeds`` gives the speed of each pose's motion: the follower must not be faster
-there (:func:`speed_ahead`). Why a numpy lattice and not OMPL's SE2
+there (:func:`rbd_controller.lattice_plan.speed_ahead`). Why a numpy lattice and not OMPL's SE2
 space: the rbd_controller README, "Detour planner".
 """
 
@@ -27,68 +27,14 @@ from typing import Any, Callable, List, Optional, Sequence, Tuple
 import numpy as np
 
 from rbd_controller.arena import Arena
-from rbd_controller.detour import MAX_DETOUR_SPAN, GridMap, dilate, finite_points
-from rbd_controller.footprint import ZoneGrowth, motion_zone, sample_path, swept_hits
+from rbd_controller.cspace import CSpace, Window
+from rbd_controller.detour import MAX_DETOUR_SPAN, GridMap, finite_points
+from rbd_controller.footprint import ZoneGrowth, motion_zone
+from rbd_controller.lattice_plan import LatticePlan, Pose, path_length
+from rbd_geometry.rotation import wrap_angle
 
-Pose = Tuple[float, float, float]
-Window = Tuple[float, float, int, int]  # x0, y0 [m], width, height [cells]
-#: The exact check of a pose the grid flags keeps this much more around the zone: the sweep between two
-#: samples (<= 0.02 m, on the spot <= 0.01 rad apart) [m]. Map cells are checked by corners and centre.
-EXACT_MARGIN = 0.015
 #: Walking on a path, the follower's yaw rate may exceed speed x curvature by this share of its limit.
 STEER_ALLOWANCE = 0.25
-
-
-def wrap(angle: float) -> float:
-    """Angle wrapped to [-pi, pi)."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
-
-
-class LatticePlan:
-    """A planner answer.
-
-    Attributes:
-        ok: a path was found.
-        poses: (x, y, yaw) to follow, without the start, the goal last.
-        length: path length [m].
-        direct: straight start-goal distance [m].
-        reason: why it failed (or a summary).
-        speed: the fastest speed of the path [m/s] (0 when not ok).
-        zone: the rectangle (FRONT, LEFT, BACK, RIGHT) [m] for that speed.
-        speeds: per pose, the speed the motion into it is planned for [m/s]: near obstacles the
-            path is slower (a smaller zone), away from them faster.
-        zones: per pose, the rectangle kept free along the motion into it.
-        expanded: search expansions.
-        seconds: planning time (process time) [s].
-    """
-
-    def __init__(self, ok: bool, poses: List[Pose], length: float, direct: float, reason: str, speed: float = 0.0,
-                 zone: Sequence[float] = (), expanded: int = 0, seconds: float = 0.0) -> None:
-        self.ok = ok
-        self.poses = poses
-        self.length = length
-        self.direct = direct
-        self.reason = reason
-        self.speed = speed
-        self.zone = tuple(zone)
-        self.expanded = expanded
-        self.seconds = seconds
-        self.speeds = []  # type: List[float]
-        self.zones = []  # type: List[Tuple[float, float, float, float]]
-
-    def __repr__(self) -> str:
-        """Readable form for logs."""
-        return "LatticePlan(ok=%s, %d poses, %.2f m vs %.2f m direct at %.2f m/s, %s)" % (
-            self.ok, len(self.poses), self.length, self.direct, self.speed, self.reason)
-
-
-def path_length(start: Sequence[float], poses: Sequence[Sequence[float]]) -> float:
-    """Length of the polyline start -> poses [m]."""
-    total, prev = 0.0, start
-    for p in poses:
-        total += math.hypot(p[0] - prev[0], p[1] - prev[1])
-        prev = p
-    return total
 
 
 class LatticePlanner:
@@ -227,8 +173,8 @@ class LatticePlanner:
         if len(start) != 3 or len(goal) != 3 or not all(math.isfinite(float(v)) for v in list(start) + list(goal)):
             return LatticePlan(False, [], 0.0, math.nan, "start or goal not a finite (x, y, yaw): %r -> %r"
                                % (start, goal))
-        start = (float(start[0]), float(start[1]), wrap(float(start[2])))
-        goal = (float(goal[0]), float(goal[1]), wrap(float(goal[2])))
+        start = (float(start[0]), float(start[1]), wrap_angle(float(start[2])))
+        goal = (float(goal[0]), float(goal[1]), wrap_angle(float(goal[2])))
         direct = math.hypot(goal[0] - start[0], goal[1] - start[1])
         if direct > MAX_DETOUR_SPAN:
             return LatticePlan(False, [], 0.0, direct, "goal %.1f m away: beyond %.0f m" % (direct, MAX_DETOUR_SPAN))
@@ -263,7 +209,8 @@ class LatticePlanner:
         plan.speeds = seg_speeds
         path = [start] + poses
         plan.zones = [self.turn_zone_for(v, age) if math.hypot(b[0] - a[0], b[1] - a[1]) < 1e-9 else
-                      self.walk_zone_for(v, wrap(b[2] - a[2]) / max(math.hypot(b[0] - a[0], b[1] - a[1]), 1e-9), age)
+                      self.walk_zone_for(v, wrap_angle(b[2] - a[2]) / max(math.hypot(b[0] - a[0], b[1] - a[1]), 1e-9),
+                                         age)
                       for a, b, v in zip(path, path[1:], seg_speeds)]
         return plan
 
@@ -361,14 +308,14 @@ class LatticePlanner:
             out.append(prims)
         return out
 
-    def _level(self, spaces: List["CSpace"], check: Callable[["CSpace"], bool]) -> int:
+    def _level(self, spaces: List[CSpace], check: Callable[[CSpace], bool]) -> int:
         """Index of the fastest space in which check(space) holds; len(spaces) if none."""
         for i, space in enumerate(spaces):
             if check(space):
                 return i
         return len(spaces)
 
-    def _search(self, spaces: List["CSpace"], speeds: List[float], start: Pose,
+    def _search(self, spaces: List[CSpace], speeds: List[float], start: Pose,
                 goal: Pose) -> Tuple[Optional[List[Pose]], List[float], int]:
         """Hybrid A* in the slowest speed's space; each motion is timed at the fastest speed it is free for."""
         nb = self.headings
@@ -384,7 +331,7 @@ class LatticePlanner:
         # The start's own heading may lie between bins: turn on the spot to the nearest bin first.
         first = (start[0], start[1], k0)
         nodes = [(start, None, 0.0)]  # (pose, parent index, speed of the motion into it)
-        if abs(wrap(start[2] - k0 * self.bin)) > 1e-9:
+        if abs(wrap_angle(start[2] - k0 * self.bin)) > 1e-9:
             turn = [start, (start[0], start[1], k0 * self.bin)]
             lvl = self._level(spaces, lambda sp: sp.free_path(turn))
             if lvl == len(spaces):
@@ -401,7 +348,7 @@ class LatticePlanner:
                 continue
             closed.add(key)
             expanded += 1
-            pose = (x, y, wrap(k * self.bin))
+            pose = (x, y, wrap_angle(k * self.bin))
             if expanded % 2 == 1 or math.hypot(goal[0] - x, goal[1] - y) < 1.0:
                 shot = self._shot(spaces, speeds, pose, goal)
                 if shot is not None:
@@ -424,7 +371,7 @@ class LatticePlanner:
                 if not math.isfinite(h):
                     continue
                 cost = prims[lvl][k][j][3]
-                nodes.append(((nx, ny, wrap(nk * self.bin)), idx, speeds[lvl]))
+                nodes.append(((nx, ny, wrap_angle(nk * self.bin)), idx, speeds[lvl]))
                 heapq.heappush(heap, (g + cost + h, g + cost, len(nodes) - 1, (nx, ny, nk)))
         return None, [], expanded
 
@@ -438,7 +385,7 @@ class LatticePlanner:
             idx = parent
         return poses[::-1][1:], vs[::-1][1:]  # without the start
 
-    def _shot(self, spaces: List["CSpace"], speeds: List[float], pose: Pose,
+    def _shot(self, spaces: List[CSpace], speeds: List[float], pose: Pose,
               goal: Pose) -> Optional[Tuple[List[Pose], List[float]]]:
         """Turn on the spot towards the goal, walk straight, turn to the goal's heading: free or None."""
         dist = math.hypot(goal[0] - pose[0], goal[1] - pose[1])
@@ -454,310 +401,10 @@ class LatticePlanner:
             return None
         out, vs = [], []
         for prev, p in zip(path, path[1:]):
-            if abs(p[0] - prev[0]) + abs(p[1] - prev[1]) < 1e-9 and abs(wrap(p[2] - prev[2])) < 1e-3:
+            if abs(p[0] - prev[0]) + abs(p[1] - prev[1]) < 1e-9 and abs(wrap_angle(p[2] - prev[2])) < 1e-3:
                 continue  # no turn needed
             out.append(p)
             vs.append(speeds[self._level(spaces, lambda sp, seg=(prev, p): sp.free_path(seg))])
         if not out:
             out, vs = [goal], [speeds[-1]]
         return out, vs
-
-
-class CSpace:
-    """Per heading bin, the cells where the robot's centre would hold an obstacle in the zone.
-
-    Args:
-        window: (x0, y0, width, height) of the grid [m, m, cells, cells].
-        obstacles: H x W booleans.
-        zone: the rectangle (FRONT, LEFT, BACK, RIGHT) [m].
-        bin_width: heading bin [rad].
-        headings: number of bins.
-        arena: the centre stays inside (None: anywhere in the window).
-        resolution: cell size [m].
-        kernels: cache of the rotated rectangles' cell offsets, shared between plans.
-        points: the obstacles as points (N x 2) for the exact check of poses the grid flags (None:
-            the centres of the obstacle cells).
-        turn_zone: the zone while turning on the spot (checked exactly; None: zone).
-        walk_zone: curvature [1/m] -> the zone while walking on it (checked exactly where the grid,
-            built for ``zone``, the largest, flags a pose); None: zone.
-    """
-
-    def __init__(self, window: Window, obstacles: np.ndarray, zone: Sequence[float], bin_width: float, headings: int,
-                 arena: Optional[Arena] = None, resolution: float = 0.05, kernels: Optional[dict] = None,
-                 points: Optional[np.ndarray] = None, turn_zone: Optional[Sequence[float]] = None,
-                 walk_zone: Optional[Callable[[float], Sequence[float]]] = None) -> None:
-        self.x0, self.y0, self.w, self.h = window[:4]
-        h, w = obstacles.shape
-        res = self.res = float(resolution)
-        self.bin = bin_width
-        self.headings = headings
-        self.blocked = np.zeros((headings, h, w), dtype=bool)
-        self.obstacles = obstacles
-        self.zone = tuple(round(z, 6) for z in zone)
-        self.kernels = kernels if kernels is not None else {}
-        self.turn_zone = tuple(turn_zone) if turn_zone is not None else self.zone
-        self.walk_zone = walk_zone
-        self.outside = np.zeros((h, w), dtype=bool)
-        if arena is not None:
-            xs = self.x0 + (np.arange(w) + 0.5) * res
-            ys = self.y0 + (np.arange(h) + 0.5) * res
-            gx, gy = np.meshgrid(xs, ys)
-            self.outside = ~arena.contains_many(np.stack([gx.ravel(), gy.ravel()], axis=1)).reshape(h, w)
-        occ = np.argwhere(obstacles)
-        if points is None:
-            points = np.stack([self.x0 + (occ[:, 1] + 0.5) * res, self.y0 + (occ[:, 0] + 0.5) * res], axis=1)
-        self.points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        self._occ = occ
-        self._built = np.zeros(headings, dtype=bool)  # bins are built when first looked up
-
-    def _build(self, k: int) -> None:
-        layer = self.blocked[k]
-        h, w = layer.shape
-        if len(self._occ):
-            kernel = self._kernel(k)
-            if len(self._occ) * len(kernel) <= 300000:  # few obstacle cells: stamp the rectangle on each
-                cells = (self._occ[:, None, :] - kernel[None, :, :]).reshape(-1, 2)
-                ok = (cells[:, 0] >= 0) & (cells[:, 0] < h) & (cells[:, 1] >= 0) & (cells[:, 1] < w)
-                layer[cells[ok, 0], cells[ok, 1]] = True
-            else:  # walls: dilate by the rectangle's two sides in turn (Minkowski sum), then by a cell
-                self._build_by_sides(k, layer)
-        layer |= self.outside
-        self._built[k] = True
-
-    def _build_by_sides(self, k: int, layer: np.ndarray) -> None:
-        res = self.res
-        grow = 1.5 * res
-        f, left, b, right = (z + grow for z in self.zone)
-        for frac in np.linspace(-0.5, 0.5, 5):
-            th = (k + frac) * self.bin
-            c, s = math.cos(th), math.sin(th)
-            u = np.linspace(-b, f, max(2, int(math.ceil((f + b) / (0.5 * res))) + 1))
-            v = np.linspace(-right, left, max(2, int(math.ceil((left + right) / (0.5 * res))) + 1))
-            # The robot at p holds an obstacle at o when o - p lies in the rectangle: p in o - R.
-            side_u = set(zip(np.rint(-u * s / res).astype(int).tolist(), np.rint(-u * c / res).astype(int).tolist()))
-            side_v = set(zip(np.rint(-v * c / res).astype(int).tolist(), np.rint(v * s / res).astype(int).tolist()))
-            # Padded: an obstacle's first shift may leave the window and the second bring it back.
-            pad = int(math.ceil(max(f, b, left, right) / res)) + 2
-            src = np.pad(self.obstacles, pad)
-            tmp = np.zeros_like(src)
-            for dr, dc in side_u:
-                _shift_or(tmp, src, dr, dc)
-            full = np.zeros_like(src)
-            for dr, dc in side_v:
-                _shift_or(full, tmp, dr, dc)
-            layer |= full[pad:-pad, pad:-pad]
-        # Rounding each side's offsets on its own: the sum may be a cell off.
-        grown = layer.copy()
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                _shift_or(grown, layer, dr, dc)
-        layer[...] = grown
-
-    def _kernel(self, k: int) -> np.ndarray:
-        key = (self.zone, self.res, self.headings, k)
-        if key not in self.kernels:
-            if len(self.kernels) > 4 * self.headings * 8:
-                self.kernels.clear()
-            self.kernels[key] = self._make_kernel(k)
-        return self.kernels[key]
-
-    def _make_kernel(self, k: int) -> np.ndarray:
-        """(drow, dcol) offsets from the robot's cell to every cell its zone may touch in bin k.
-
-        The rectangle is grown by 1.5 cells (robot and obstacle anywhere in their cells) and rotated
-        over the bin's whole span.
-        """
-        res = self.res
-        grow = 1.5 * res
-        f, left, b, right = (z + grow for z in self.zone)
-        u = np.linspace(-b, f, max(2, int(math.ceil((f + b) / (0.5 * res))) + 1))
-        v = np.linspace(-right, left, max(2, int(math.ceil((left + right) / (0.5 * res))) + 1))
-        bu, bv = np.meshgrid(u, v)
-        bu, bv = bu.ravel(), bv.ravel()
-        reach = int(math.ceil(math.hypot(max(f, b), max(left, right)) / res)) + 1
-        stamp = np.zeros((2 * reach + 1, 2 * reach + 1), dtype=bool)
-        for frac in np.linspace(-0.5, 0.5, 5):
-            th = (k + frac) * self.bin
-            c, s = math.cos(th), math.sin(th)
-            dx, dy = c * bu - s * bv, s * bu + c * bv
-            stamp[np.rint(dy / res).astype(np.int64) + reach, np.rint(dx / res).astype(np.int64) + reach] = True
-        return np.argwhere(stamp) - reach
-
-    def _lookup(self, xs: np.ndarray, ys: np.ndarray, hs: np.ndarray, zone: Optional[Sequence[float]] = None) -> bool:
-        c = np.floor((xs - self.x0) / self.res).astype(np.int64)
-        r = np.floor((ys - self.y0) / self.res).astype(np.int64)
-        if ((c < 0) | (r < 0) | (c >= self.w) | (r >= self.h)).any() or self.outside[r, c].any():
-            return False
-        k = np.rint(np.asarray(hs) / self.bin).astype(np.int64) % self.headings
-        missing = ~self._built[k]
-        if missing.any():
-            for kk in set(k[missing].tolist()):
-                self._build(kk)
-        hit = self.blocked[k, r, c]
-        if not hit.any():
-            return True
-        # The grid is conservative by 1.5 cells and a bin: judge the flagged samples exactly.
-        return self._exact_free_in(xs[hit], ys[hit], np.asarray(hs)[hit], self.zone if zone is None else zone)
-
-    def _exact_free_in(self, xs: np.ndarray, ys: np.ndarray, hs: np.ndarray, zone: Sequence[float]) -> bool:
-        pts = self.points
-        if not len(pts):
-            return True
-        reach = math.hypot(max(zone[0], zone[2]), max(zone[1], zone[3])) + EXACT_MARGIN
-        near = ((pts[:, 0] > xs.min() - reach) & (pts[:, 0] < xs.max() + reach) & (pts[:, 1] > ys.min() - reach)
-                & (pts[:, 1] < ys.max() + reach))
-        pts = pts[near]
-        if not len(pts):
-            return True
-        f, left, b, right = (z + EXACT_MARGIN for z in zone)
-        c, s = np.cos(hs)[:, None], np.sin(hs)[:, None]
-        dx, dy = pts[None, :, 0] - xs[:, None], pts[None, :, 1] - ys[:, None]
-        bx, by = c * dx + s * dy, -s * dx + c * dy
-        return not bool(((bx < f) & (bx > -b) & (by < left) & (by > -right)).any())
-
-    def free_pose(self, pose: Sequence[float]) -> bool:
-        """True if the zone of a robot at pose holds no obstacle cell."""
-        return self._lookup(np.array([pose[0]]), np.array([pose[1]]), np.array([pose[2]]))
-
-    def free_samples(self, x: float, y: float, samples: np.ndarray, curvature: float = 0.0) -> bool:
-        """True if every relative sample (dx, dy, heading) from (x, y) is free (walking zone of the curvature)."""
-        zone = self.walk_zone(curvature) if self.walk_zone is not None else None
-        return self._lookup(x + samples[:, 0], y + samples[:, 1], samples[:, 2], zone)
-
-    def free_turn(self, x: float, y: float, headings: np.ndarray) -> bool:
-        """True if turning on the spot at (x, y) through the headings keeps the turning zone free."""
-        if not self._lookup(np.array([x]), np.array([y]), np.array([headings[0]]) * 0.0 + headings[0]):
-            # (outside the window or the arena, or the pose itself is blocked for walking: judge exactly)
-            c = int(math.floor((x - self.x0) / self.res))
-            r = int(math.floor((y - self.y0) / self.res))
-            if not (0 <= c < self.w and 0 <= r < self.h) or self.outside[r, c]:
-                return False
-        n = len(headings)
-        return self._exact_free_in(np.full(n, x), np.full(n, y), np.asarray(headings, dtype=np.float64), self.turn_zone)
-
-    def free_path(self, poses: Sequence[Sequence[float]]) -> bool:
-        """True if the path (linear between poses, turns on the spot) is free along its sweep."""
-        for a, b in zip(poses, poses[1:]):
-            if math.hypot(b[0] - a[0], b[1] - a[1]) < 1e-9:
-                turn = sample_path([a, b], angle_step=0.01)
-                if not self.free_turn(a[0], a[1], turn[:, 2]):
-                    return False
-                continue
-            s = sample_path([a, b], step=0.02, angle_step=0.01)
-            curvature = wrap(b[2] - a[2]) / math.hypot(b[0] - a[0], b[1] - a[1])
-            if not self._lookup(s[:, 0], s[:, 1], s[:, 2],
-                                self.walk_zone(curvature) if self.walk_zone is not None else None):
-                return False
-        return True
-
-    def heuristic(self, goal: Sequence[float], speed: float) -> Callable[[float, float], float]:
-        """A function (x, y) -> lower bound of the time to the goal [s] (inf where unreachable).
-
-        Distances on a 2x coarser grid (8-connected Dijkstra from the goal) through the cells whose centre
-        is farther from every obstacle cell than the zone's narrowest half (less 2 cells): a pose with
-        any heading closer than that holds the obstacle. Never above the truth.
-        """
-        inner = int(math.floor(min(self.zone) / self.res)) - 2
-        free = ~(dilate(self.obstacles, inner) if inner > 0 else self.obstacles) & ~self.outside
-        h, w = free.shape
-        ch, cw = (h + 1) // 2, (w + 1) // 2
-        pad = np.zeros((ch * 2, cw * 2), dtype=bool)
-        pad[:h, :w] = free
-        coarse = pad.reshape(ch, 2, cw, 2).any(axis=(1, 3))
-        cres = 2.0 * self.res
-        gr = int((goal[1] - self.y0) / cres)
-        gc = int((goal[0] - self.x0) / cres)
-        dist = np.full((ch, cw), math.inf)
-        if 0 <= gr < ch and 0 <= gc < cw:
-            coarse[gr, gc] = True
-            dist_l = dist.tolist()
-            free_l = coarse.tolist()
-            dist_l[gr][gc] = 0.0
-            heap = [(0.0, gr, gc)]
-            moves = [(-1, 0, 1.0), (1, 0, 1.0), (0, -1, 1.0), (0, 1, 1.0), (-1, -1, 1.4142), (-1, 1, 1.4142),
-                     (1, -1, 1.4142), (1, 1, 1.4142)]
-            while heap:
-                d, r, c = heapq.heappop(heap)
-                if d > dist_l[r][c]:
-                    continue
-                for dr, dc, step in moves:
-                    nr, nc = r + dr, c + dc
-                    if 0 <= nr < ch and 0 <= nc < cw and free_l[nr][nc]:
-                        nd = d + step
-                        if nd < dist_l[nr][nc]:
-                            dist_l[nr][nc] = nd
-                            heapq.heappush(heap, (nd, nr, nc))
-            dist = np.array(dist_l)
-        x0, y0 = self.x0, self.y0
-
-        def heur(x: float, y: float) -> float:
-            r, c = int((y - y0) / cres), int((x - x0) / cres)
-            if not (0 <= r < ch and 0 <= c < cw):
-                return math.inf
-            # One coarse cell diagonal of slack keeps it a lower bound.
-            cells = max(0.0, dist[r, c] - 1.5)
-            return max(cells * cres, math.hypot(goal[0] - x, goal[1] - y)) / speed
-
-        return heur
-
-
-def speed_ahead(plan: LatticePlan, index: int, lookahead: int = 3) -> float:
-    """The speed limit for following plan.poses from pose index on: the slowest of the next poses [m/s]."""
-    vs = plan.speeds[max(0, index): max(0, index) + max(1, lookahead)]
-    return min(vs) if vs else 0.0
-
-
-def progress_index(plan: LatticePlan, pose: Sequence[float], current: int = 0, reached: float = 0.15) -> int:
-    """Index of the plan's next pose for a robot at pose, never behind current.
-
-    A pose is passed when the robot is within ``reached`` of it, or closer to the segment after it
-    than to the segment before it (and past its start).
-    """
-    poses = plan.poses
-    i = max(0, current)
-    while i < len(poses) - 1:
-        a = poses[i - 1] if i > 0 else poses[0]
-        b, c = poses[i], poses[i + 1]
-        if math.hypot(pose[0] - b[0], pose[1] - b[1]) <= reached and math.hypot(c[0] - b[0], c[1] - b[1]) > 1e-9:
-            i += 1
-            continue
-        u2, d2 = _segment(pose, b, c)
-        _, d1 = _segment(pose, a, b)
-        if u2 > 0.0 and d2 < d1:
-            i += 1
-            continue
-        break
-    return i
-
-
-def remaining_clear(plan: LatticePlan, progress: int, pose: Sequence[float], points: Sequence[Sequence[float]],
-                    threshold: int = 1) -> bool:
-    """True if the rest of the plan, from the robot's pose, keeps fewer than threshold points in its zones.
-
-    The zones are the plan's own, per motion, swept along it.
-    """
-    pts = finite_points(points)
-    if not len(pts) or progress >= len(plan.poses):
-        return True
-    path = [tuple(pose[:3])] + list(plan.poses[progress:])
-    for zone, a, b in zip(plan.zones[progress:], path, path[1:]):
-        if swept_hits([a, b], zone, pts) >= threshold:
-            return False
-    return True
-
-
-def _segment(p: Sequence[float], a: Sequence[float], b: Sequence[float]) -> Tuple[float, float]:
-    """(projection parameter in [0, 1], distance) of p on the segment a-b."""
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    len2 = dx * dx + dy * dy
-    u = 0.0 if len2 <= 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2))
-    return u, math.hypot(a[0] + u * dx - p[0], a[1] + u * dy - p[1])
-
-
-def _shift_or(out: np.ndarray, src: np.ndarray, dr: int, dc: int) -> None:
-    """out[r, c] |= src[r - dr, c - dc] where both are inside."""
-    h, w = src.shape
-    if abs(dr) >= h or abs(dc) >= w:
-        return
-    out[max(0, dr):h + min(0, dr), max(0, dc):w + min(0, dc)] |= src[max(0, -dr):h - max(0, dr),
-                                                                     max(0, -dc):w - max(0, dc)]

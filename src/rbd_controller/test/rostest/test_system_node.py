@@ -13,6 +13,7 @@ from nav_msgs.msg import Odometry, Path
 from std_msgs.msg import Bool, String
 from std_srvs.srv import SetBool
 
+from rbd_geometry.rotation import quat_to_rpy, yaw_of
 from rbd_msgs.msg import ControllerState, PathQueue
 from rbd_testkit import stays_unchanged, wait_for
 from rbd_testkit.ros import RosoutWatcher, run_rostest
@@ -23,10 +24,6 @@ STILL = 1e-3  # |velocity| below this counts as standing still [m/s, rad/s]
 GESTURE_TOPIC = "/rbd_gestrec/gesture"
 WRONG_TOPIC = "/rbd_gestrec/gesture_typo"  # for the companion test of the negative checks
 HOLD = 1.0  # a gesture ignored: nothing may happen for this long after it was proven to arrive [s]
-
-
-def yaw_of(q):
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
 class World:
@@ -62,8 +59,7 @@ class World:
             self.applied.append((time.monotonic(), msg.linear.x, msg.linear.y, msg.angular.z))
 
     def on_odometry(self, msg):
-        q = msg.pose.pose.orientation
-        pitch = math.asin(max(-1.0, min(1.0, 2.0 * (q.w * q.y - q.z * q.x))))
+        pitch = quat_to_rpy(msg.pose.pose.orientation)[1]
         self.body = Vector3(0.0, pitch, 0.0)
         self.on_velocity(msg.twist.twist)
 

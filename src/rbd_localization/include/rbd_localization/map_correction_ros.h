@@ -14,50 +14,15 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
-#include <limits>
 #include <map>
 #include <memory>
 #include <string>
 
 #include "rbd_localization/map_correction.h"
+#include "rbd_localization/map_correction_params.h"
 #include "rbd_localization/scan_slice.h"
 
 namespace rbd_localization {
-
-/// Node parameters besides the MapCorrection ones (see README).
-struct MapCorrectionNodeParams {
-  std::string map_frame = "map";
-  std::string odom_frame = "odom";
-  std::string base_frame = "base_link";
-  double max_match_rate = 10.0;          ///< [Hz] scans matched at most this often
-  int max_points = 360;                  ///< scan decimated to about this many points
-  double min_range = 0.3;                ///< [m] OS1 blind zone
-  double max_range = 20.0;               ///< [m]
-  double transform_publish_rate = 50.0;  ///< [Hz] map -> odom
-  double transform_tolerance = 0.1;      ///< [s] map -> odom is stamped this far ahead
-  double pose_timeout = 0.5;             ///< [s] no pose output from odometry older than this
-  double map_publish_interval = 2.0;     ///< [s]
-  double scan_timeout = 1.0;             ///< [s] diagnostics: scans stale after this
-  bool correction_enabled = true;        ///< false: map -> odom stays identity (comparison runs)
-  /// Input: "scan" (LaserScan on `scan`) or "points" (PointCloud2 on `points`, sliced here).
-  std::string input = "scan";
-  double slice_z_min = 0.0;  ///< [m] above base_frame (levelled): cloud points kept for the 2D slice
-  double slice_z_max = 0.4;  ///< [m]
-  int slice_bins = 720;      ///< azimuth bins of the slice (nearest point per bin)
-  /// map_server YAML of a saved map: localization mode in it. Empty: mapping mode.
-  std::string map_file;
-  /// Home pose in the loaded map [m, m, rad] (where the robot starts); NaN: the map's sidecar
-  /// home, else (0, 0, 0).
-  double home_x = std::numeric_limits<double>::quiet_NaN();
-  double home_y = std::numeric_limits<double>::quiet_NaN();
-  double home_yaw = std::numeric_limits<double>::quiet_NaN();
-  std::string map_save_dir = ".";     ///< ~save_map writes here (read at each call)
-  std::string map_save_name = "map";  ///< ... as NAME.pgm, NAME.yaml, NAME.rbdmap
-};
-
-/// Reads node + MapCorrection parameters; false with reason on invalid values.
-bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams* node,
-                             MapCorrection::Params* core, std::string* error);
 
 class MapCorrectionNode {
  public:

@@ -22,6 +22,7 @@ from nav_msgs.msg import OccupancyGrid, Odometry
 from sensor_msgs.msg import LaserScan
 from tf2_msgs.msg import TFMessage
 
+from rbd_geometry.rotation import wrap_angle, yaw_of, yaw_to_quat
 from rbd_testkit.ros import run_rostest
 
 WALLS = np.array([
@@ -147,7 +148,7 @@ class MapCorrectionTest(unittest.TestCase):
             tf.header.frame_id = "odom"
             tf.child_frame_id = "base_link"
             tf.transform.translation.x, tf.transform.translation.y = ox, oy
-            tf.transform.rotation.z, tf.transform.rotation.w = math.sin(oyaw / 2), math.cos(oyaw / 2)
+            _, _, tf.transform.rotation.z, tf.transform.rotation.w = yaw_to_quat(oyaw)
             cls.tf_pub.sendTransform(tf)
             od = Odometry()
             od.header = tf.header
@@ -195,9 +196,7 @@ class MapCorrectionTest(unittest.TestCase):
 
     def pose_error(self, msg):
         _, x, y, yaw = self.truth_at(msg.header.stamp.to_sec())
-        q = msg.pose.orientation
-        est_yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-        dyaw = math.atan2(math.sin(est_yaw - yaw), math.cos(est_yaw - yaw))
+        dyaw = wrap_angle(yaw_of(msg.pose.orientation) - yaw)
         return math.hypot(msg.pose.position.x - x, msg.pose.position.y - y), abs(dyaw)
 
     def test_final_pose_is_corrected(self):

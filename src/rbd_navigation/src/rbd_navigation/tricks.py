@@ -10,6 +10,9 @@ human-readable ``name`` that the GUI shows in its "next five moves" list.
 import math
 from typing import Any, Dict, List, Mapping
 
+from rbd_geometry.goal import Goal
+from rbd_geometry.rotation import wrap_angle
+
 STEP_KEYS = ("name", "x", "y", "yaw", "roll", "pitch", "body_height")
 #: Body limits of the A1 (rbd_msgs/SetBodyPose comments): roll/pitch [rad], height [m].
 ROLL_PITCH_LIMIT = 0.75
@@ -23,66 +26,18 @@ class TrickError(ValueError):
     """Raised when a tricks file or a request is invalid."""
 
 
-class Step:
-    """One step of a trick, relative to the robot's pose at request time."""
+class Step(Goal):
+    """One step of a trick: a goal relative to the robot's pose at request time.
 
-    __slots__ = STEP_KEYS
+    ``x``/``y`` are offsets in the robot's frame [m], ``yaw`` a heading change [rad]; roll, pitch
+    and body_height are absolute (as in :class:`rbd_geometry.goal.Goal`); ``name`` is required.
+    """
 
-    def __init__(
-        self,
-        name: str,
-        x: float = 0.0,
-        y: float = 0.0,
-        yaw: float = 0.0,
-        roll: float = 0.0,
-        pitch: float = 0.0,
-        body_height: float = 0.0,
-    ) -> None:
-        self.name = name
-        self.x = x
-        self.y = y
-        self.yaw = yaw
-        self.roll = roll
-        self.pitch = pitch
-        self.body_height = body_height
+    __slots__ = ()
 
     def __repr__(self) -> str:
         """Readable form for logs and test failures."""
         return "Step(%s)" % ", ".join("%s=%r" % (k, getattr(self, k)) for k in STEP_KEYS)
-
-
-class Goal:
-    """An absolute goal: position [m], heading [rad], body attitude [rad] and height [m]."""
-
-    __slots__ = ("name", "x", "y", "yaw", "roll", "pitch", "body_height")
-
-    def __init__(
-        self, name: str, x: float, y: float, yaw: float, roll: float, pitch: float, body_height: float
-    ) -> None:
-        self.name = name
-        self.x = x
-        self.y = y
-        self.yaw = yaw
-        self.roll = roll
-        self.pitch = pitch
-        self.body_height = body_height
-
-    def __repr__(self) -> str:
-        """Readable form for logs and test failures."""
-        return "Goal(%r, x=%.3f, y=%.3f, yaw=%.3f, roll=%.3f, pitch=%.3f, body_height=%.3f)" % (
-            self.name,
-            self.x,
-            self.y,
-            self.yaw,
-            self.roll,
-            self.pitch,
-            self.body_height,
-        )
-
-
-def wrap_angle(angle: float) -> float:
-    """Return angle wrapped to [-pi, pi)."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def _number(value: Any, where: str) -> float:
@@ -129,7 +84,7 @@ def parse_step(raw: Any, where: str) -> Step:
             "%s.body_height = %g m outside the A1 range [%g, %g] m"
             % (where, values["body_height"], BODY_HEIGHT_MIN, BODY_HEIGHT_MAX)
         )
-    return Step(name.strip(), **values)
+    return Step(name=name.strip(), **values)
 
 
 def parse_tricks(data: Any) -> Dict[str, List[Step]]:
@@ -181,13 +136,13 @@ def expand(steps: List[Step], x: float, y: float, yaw: float) -> List[Goal]:
     for step in steps:
         goals.append(
             Goal(
-                step.name,
                 x + c * step.x - s * step.y,
                 y + s * step.x + c * step.y,
                 wrap_angle(yaw + step.yaw),
-                step.roll,
-                step.pitch,
-                step.body_height,
+                roll=step.roll,
+                pitch=step.pitch,
+                body_height=step.body_height,
+                name=step.name,
             )
         )
     return goals

@@ -3,9 +3,9 @@
 import math
 from typing import Callable, Optional, Sequence
 
+from rbd_geometry.goal import Goal
 from rbd_pos_controller.controller import PositionController
 from rbd_pos_controller.fsm import State
-from rbd_pos_controller.goal import Goal
 from rbd_pos_controller.kinematic_sim import KinematicRobot
 from rbd_pos_controller.params import Params
 from rbd_pos_controller.runlog import RunLog

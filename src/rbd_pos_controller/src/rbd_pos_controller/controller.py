@@ -9,9 +9,10 @@ LiDAR slowdown scale applies to every motion but GUARDED.
 import math
 from typing import Callable, Optional, Sequence
 
+from rbd_geometry.goal import Goal
 from rbd_pos_controller.control_law import Errors, Twist2D, hold_command, linear_command, rotation_command, wrap_angle
 from rbd_pos_controller.fsm import MOTION_STATES, STATUS, STOP_STATES, TRANSITIONS, Event, State
-from rbd_pos_controller.goal import Goal, GoalRejectedError
+from rbd_pos_controller.goal import GoalRejectedError
 from rbd_pos_controller.params import Params
 from rbd_pos_controller.path_follower import PathFollower, check_path
 from rbd_pos_controller.zone_guard import ZoneGuard, cap_speed
