@@ -198,6 +198,22 @@ def test_wave_needs_swings_a_one_way_swipe_left_is_no_wave():
         assert checks.check("wave", w, 1.2) == "", cycles
 
 
+def test_a_hand_wandering_back_and_forth_by_half_its_size_is_no_wave():
+    # issue 26, row 6 (176 x 132, a hand of 11 px): a wandering hand went right 0.5, back 0.35 and
+    # right again 0.45 hand sizes in 1.2 s, without turning, and fired 'wave' (0.83); a palm wave
+    # sweeps the hand by about its size or more (elbow or shoulder), a smaller one is a wrist wave
+    main_waves = 0
+    for seed in range(5):
+        w = _window("static", seed)
+        size = features.hand_size(w[0])
+        u = np.linspace(0.0, 1.0, len(w))
+        x = np.interp(u, [0.0, 0.3, 0.65, 1.0], [0.0, 0.55, 0.1, 0.6]) * size
+        w[:, :, 0] += x[:, None]
+        assert checks.check("wave", w, 1.2).endswith("swings < 2"), seed
+        main_waves += features.swings(features.palm_path(w)[0][:, 0], 0.35) >= 2  # main's check: a wave
+    assert main_waves >= 2
+
+
 def test_a_wave_from_the_wrist_swings_the_hand_not_the_palm():
     # a hand turning +-30 degrees about its wrist 2.5 times, the palm nearly still
     base = _window("static", 0)
