@@ -98,21 +98,86 @@ def _moved(hand, dx):
     return out
 
 
-@pytest.mark.parametrize("onward, same_track", [(+1, True), (-1, False), (0, False)])
+@pytest.mark.parametrize("onward, same_track", [(+1, True), (-1, False), (0, True)])
 def test_a_fast_hand_found_again_farther_on_continues_only_the_way_it_moved(onward, same_track):
     # a hand (size ~48 px) starting a swipe at 10 px per frame, blurred out of view for 0.27 s,
     # found again 12 hand sizes on: beyond the plain limit (2.5 + 30 * 0.27 = 10.5), so only its
-    # motion before the loss joins it -- not a still hand, not a jump back against the motion
+    # motion before the loss joins it -- not a jump back against the motion; a hand at rest that
+    # vanished (a swipe blurred from its start) is joined in any direction (see the tests below)
     hand = _still_hand(3, 4, at=(320.0, 240.0))[0]
     size = tracks.palm_and_size(hand)[1]
     ht = tracks.HandTracks(max_gap_s=0.5)
     for i in range(12):
         ht.update(i / 30.0, [_moved(hand, 10.0 * max(0, i - 9) * abs(onward))])
     first = ht.tracks[0]
+    for i in range(12, 19):
+        ht.update(i / 30.0, [])  # no hand: blurred out of the detector's sight
     jump = 12.0 * size * (onward if onward else 1)
     ht.update(19 / 30.0, [_moved(hand, first.palm[0] - tracks.palm_and_size(hand)[0][0] + jump)])
     assert (ht.tracks == [first] and len(first.frames) == 13) == same_track
     assert len(ht.tracks) == (1 if same_track else 2)
+
+
+def _mirrored(hand):
+    """The same hand seen mirrored (the visitor's other hand), at the same place."""
+    out = np.array(hand, dtype=np.float64)
+    cx = tracks.palm_and_size(out)[0][0]
+    out[:, 0] = 2.0 * cx - out[:, 0]
+    return out
+
+
+def _vanish_and_jump(hand, jump_sizes, between):
+    """A still hand for 0.4 s, then ``between`` (a list of hand lists) for the frames of the loss, then the jump."""
+    size = tracks.palm_and_size(hand)[1]
+    ht = tracks.HandTracks(max_gap_s=0.5)
+    for i in range(12):
+        ht.update(i / 30.0, [hand])
+    first = ht.tracks[0]
+    for i, hands in enumerate(between):
+        ht.update((12 + i) / 30.0, hands)
+    return ht, first, _moved(hand, jump_sizes * size)
+
+
+def test_a_still_hand_that_vanished_is_found_again_where_a_blurred_swipe_ends():
+    # issue 26, row 3: a swipe blurred from its very start -- the hand is at rest, then no hand
+    # at all for 5 frames, then the same hand 11 hand sizes to the right (the swipe's end);
+    # the tracks of main started a new track there, too short for a window before the arm went down
+    hand = _still_hand(3, 4, at=(100.0, 240.0))[0]
+    ht, first, there = _vanish_and_jump(hand, 11.0, [[]] * 5)
+    ht.update(17 / 30.0, [there])
+    assert ht.tracks == [first] and len(first.frames) == 13
+    assert tracks.chirality(hand) * tracks.chirality(there) > 0
+
+
+def test_a_detector_switching_to_another_hand_or_a_mirrored_hand_is_no_jump():
+    hand = _still_hand(3, 4, at=(100.0, 240.0))[0]
+    assert abs(tracks.chirality(hand)) > tracks.CHIRALITY_CLEAR
+    # the detector reports another hand in the very next frame (it never vanished): a new track
+    ht, first, there = _vanish_and_jump(hand, 4.0, [])
+    ht.update(12 / 30.0, [there])
+    assert len(ht.tracks) == 2 and len(first.frames) == 12
+    # the hand vanished, but a mirrored hand (the visitor's other hand) appears: a new track
+    ht, first, there = _vanish_and_jump(hand, 11.0, [[]] * 5)
+    ht.update(17 / 30.0, [_mirrored(there)])
+    assert len(ht.tracks) == 2 and len(first.frames) == 12
+    # two new hands at once: which one would it be? neither
+    ht, first, there = _vanish_and_jump(hand, 11.0, [[]] * 5)
+    other = np.array(there)
+    other[:, 1] -= 300.0  # above it, far from both
+    ht.update(17 / 30.0, [there, other])
+    assert len(first.frames) == 12
+
+
+def test_a_swipe_never_seen_in_motion_fires(shipped_model):
+    # the hand rests, vanishes for 0.17 s (the blurred swipe) and rests 11 hand sizes to the right
+    hand = _still_hand(4, 4, at=(80.0, 240.0))[0]
+    size = tracks.palm_and_size(hand)[1]
+    frames = [(i / 30.0, hand) for i in range(20)] + [((20 + i) / 30.0, None) for i in range(5)]
+    frames += [((25 + i) / 30.0, _moved(hand, 11.0 * size)) for i in range(30)]
+    assert _fired(shipped_model, frames) == ["swipe_right"]
+    # the same with the hand found again where it was (it only blinked): nothing
+    frames = [(t, None if kp is None else hand) for t, kp in frames]
+    assert _fired(shipped_model, frames) == []
 
 
 def _window(kind, seed):
@@ -131,6 +196,22 @@ def test_wave_needs_swings_a_one_way_swipe_left_is_no_wave():
         x = rng.uniform(0.6, 1.4) * size * np.sin(2 * np.pi * cycles * np.linspace(0.0, 1.0, len(w)))
         w[:, :, 0] += x[:, None]
         assert checks.check("wave", w, 1.2) == "", cycles
+
+
+def test_a_hand_wandering_back_and_forth_by_half_its_size_is_no_wave():
+    # issue 26, row 6 (176 x 132, a hand of 11 px): a wandering hand went right 0.5, back 0.35 and
+    # right again 0.45 hand sizes in 1.2 s, without turning, and fired 'wave' (0.83); a palm wave
+    # sweeps the hand by about its size or more (elbow or shoulder), a smaller one is a wrist wave
+    main_waves = 0
+    for seed in range(5):
+        w = _window("static", seed)
+        size = features.hand_size(w[0])
+        u = np.linspace(0.0, 1.0, len(w))
+        x = np.interp(u, [0.0, 0.3, 0.65, 1.0], [0.0, 0.55, 0.1, 0.6]) * size
+        w[:, :, 0] += x[:, None]
+        assert checks.check("wave", w, 1.2).endswith("swings < 2"), seed
+        main_waves += features.swings(features.palm_path(w)[0][:, 0], 0.35) >= 2  # main's check: a wave
+    assert main_waves >= 2
 
 
 def test_a_wave_from_the_wrist_swings_the_hand_not_the_palm():

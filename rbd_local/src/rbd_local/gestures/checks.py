@@ -33,8 +33,12 @@ REST_MOTION = 0.4
 REST_S = 0.12
 #: Least number of swings back for a wave.
 MIN_SWINGS = 2
-#: Palm swing amplitude of a wave [hand sizes] and the hand's turn about the wrist [deg].
-SWING_PALM = 0.35
+#: Palm swing of a wave, from one extreme to the next [hand sizes], and the hand's turn about the
+#: wrist [deg]. A palm wave swings the forearm about the elbow (or the arm about the shoulder) and
+#: sweeps the hand by about its own size or more (both clip generators: 1-3 hand sizes); a smaller
+#: back-and-forth of the palm is a wandering hand (issue 26: 0.35-0.5 hand sizes fired 'wave' at
+#: low resolution) -- a small real wave is a wave from the wrist, which the turn counts.
+SWING_PALM = 0.7
 SWING_TURN_DEG = 12.0
 #: Least net heading turn of a circle [turns].
 MIN_TURNS = 0.6

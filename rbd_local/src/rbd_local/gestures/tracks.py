@@ -10,7 +10,11 @@ hand to the other. So the recognizer and teach mode do not take "the" hand of a 
   :data:`MAX_SPEED`); a hand far from every track starts a track of its own, so a jump to
   another hand never looks like a swipe. A lost hand found again farther on (up to
   :data:`MAX_SPEED_ONWARD`) continues its track only when it was already moving that way before
-  it was lost (a fast swipe blurs out of view mid-motion) and its size is about the same;
+  it was lost (a fast swipe blurs out of view mid-motion) and its size is about the same. A hand
+  that *vanished* (frames with no hand that could be it: a swipe blurred from its very start, the
+  hand at rest before it) and is found again farther on, the only new hand, continues its track
+  too, at the same size and not mirrored (:meth:`Track.rejoins`); a detector that jumps to
+  another hand without a frame between never does;
 - a track that has not been seen for more than ``max_gap_s`` (0.5 s) ends; a shorter loss is
   bridged: the window's frames are resampled in time (:func:`features.resample`), which fills
   the gap by straight-line interpolation of every key point between the frames before and after;
@@ -23,6 +27,10 @@ ROS-free, numpy only.
 import numpy as np
 
 from rbd_local.gestures.hand import MIDDLE_MCP, NUM_LANDMARKS, PALM, WRIST
+
+#: Index and little finger bases (MediaPipe's numbering), for the hand's mirror sense.
+INDEX_MCP = 5
+PINKY_MCP = 17
 
 #: Largest jump of the palm between two frames of the same hand [hand sizes], plus MAX_SPEED * dt.
 MAX_JUMP = 2.5
@@ -37,6 +45,9 @@ ONWARD_SPEED = 2.0
 ONWARD_COS = 0.7
 #: Most a hand's size may change across such a jump (ratio).
 ONWARD_SIZE_RATIO = 1.5
+#: A hand whose mirror sense (:func:`chirality`) is clearer than this either way is not taken for a
+#: hand of the other sense.
+CHIRALITY_CLEAR = 0.25
 #: Most hands followed at once.
 MAX_TRACKS = 2
 #: Longest loss of a hand that is bridged [s].
@@ -72,6 +83,19 @@ def palm_and_size(hand: np.ndarray) -> tuple:
     return xy[list(PALM)].mean(axis=0), float(np.linalg.norm(xy[MIDDLE_MCP] - xy[WRIST]))
 
 
+def chirality(hand: np.ndarray) -> float:
+    """The hand's mirror sense in the image: the turn from the index to the little finger base about the wrist.
+
+    Positive for one sense (a right palm facing the camera, or a left hand's back), negative for
+    the mirrored one, near 0 for a hand seen edge-on; in units of the hand size squared. A hand
+    keeps its sign while it moves and rolls; a swap to the visitor's other hand usually flips it.
+    """
+    xy = np.asarray(hand, dtype=np.float64)[:, :2]
+    a, b = xy[INDEX_MCP] - xy[WRIST], xy[PINKY_MCP] - xy[WRIST]
+    size2 = float(np.sum((xy[MIDDLE_MCP] - xy[WRIST]) ** 2))
+    return float(a[0] * b[1] - a[1] * b[0]) / max(size2, 1e-9)
+
+
 #: A hand has come to rest when its palm moved at most this much [hand sizes] over REST_S.
 REST_MOTION = 0.3
 REST_S = 0.15
@@ -102,7 +126,7 @@ class Track:
     begins before ``settled_t`` with the hand held at its place of rest until then.
     """
 
-    __slots__ = ("times", "frames", "first_t", "palm", "size", "settled_t", "_entry")
+    __slots__ = ("times", "frames", "first_t", "palm", "size", "settled_t", "_entry", "vanished")
 
     def __init__(self, t: float, hand: np.ndarray) -> None:
         """Start a track with its first frame."""
@@ -112,6 +136,8 @@ class Track:
         self.palm, self.size = palm_and_size(hand)
         self.settled_t = None
         self._entry = [(float(t), self.palm)]
+        #: whether, since this hand was last seen, a frame showed no hand that could have been it
+        self.vanished = False
 
     @property
     def last_t(self) -> float:
@@ -120,6 +146,7 @@ class Track:
 
     def add(self, t: float, hand: np.ndarray) -> None:
         """Append one frame."""
+        self.vanished = False
         self.times.append(float(t))
         self.frames.append(hand)
         palm, size = palm_and_size(hand)
@@ -169,6 +196,35 @@ class Track:
         if speed < ONWARD_SPEED or dist > MAX_JUMP + MAX_SPEED_ONWARD * dt:
             return False
         return float(np.dot(v, jump)) >= ONWARD_COS * speed * dist
+
+    def rejoins(self, t: float, hand: np.ndarray) -> bool:
+        """Whether a new hand found after this hand vanished is this hand again, farther on.
+
+        A swipe blurred from its very start loses the hand while it is still at rest (no motion
+        before the loss for :meth:`onward`) and MediaPipe finds it again where the swipe ends.
+        It is taken for this hand when the hand *vanished* (a frame since it was last seen had no
+        hand that could be it, so the detector did not merely switch to another hand), the found
+        hand is within :data:`MAX_SPEED_ONWARD`, about as large (:data:`ONWARD_SIZE_RATIO`) and
+        not mirrored (:func:`chirality`), and, if this hand was moving before the loss, the jump
+        is the way it moved.
+        """
+        if not self.vanished:
+            return False
+        palm, size = palm_and_size(hand)
+        dt = t - self.last_t
+        if dt <= 0 or self.size <= 0 or size <= 0 or max(size, self.size) / min(size, self.size) > ONWARD_SIZE_RATIO:
+            return False
+        if float(np.linalg.norm(palm - self.palm)) / self.size > MAX_JUMP + MAX_SPEED_ONWARD * dt:
+            return False
+        c0, c1 = chirality(self.frames[-1]), chirality(hand)
+        if min(abs(c0), abs(c1)) > CHIRALITY_CLEAR and c0 * c1 < 0:
+            return False
+        if len(self.frames) >= 2 and self.times[-1] > self.times[-2]:
+            v = (self.palm - palm_and_size(self.frames[-2])[0]) / (self.times[-1] - self.times[-2]) / self.size
+            speed = float(np.linalg.norm(v))
+            if speed >= ONWARD_SPEED:
+                return self.onward(t, palm, size)
+        return True
 
     def travel(self) -> float:
         """Palm path length over the kept frames [hand sizes]."""
@@ -222,16 +278,24 @@ class HandTracks:
             used_t.add(j)
             self.tracks[j].add(t, hands[i])
             touched.append(self.tracks[j])
-        for i, hand in enumerate(hands):
-            if i in used_h:
-                continue
+        new = [i for i in range(len(hands)) if i not in used_h]
+        lost = [tr for tr in self.tracks if tr not in touched and tr.rejoins(t, hands[new[0]])] if len(new) == 1 else []
+        if len(lost) == 1:  # the only new hand is the one that vanished, found farther on
+            lost[0].add(t, hands[new[0]])
+            touched.append(lost[0])
+            used_h.add(new[0])
+            new = []
+        for tr in self.tracks:
+            if tr not in touched and not new:
+                tr.vanished = True  # no hand of this frame can be it: it is out of the detector's sight
+        for i in new:
             if len(self.tracks) >= self.max_tracks:
                 # the stalest track that got nothing now makes room
                 free = [tr for tr in self.tracks if tr not in touched]
                 if not free:
                     continue
                 self.tracks.remove(min(free, key=lambda tr: tr.last_t))
-            tr = Track(t, hand)
+            tr = Track(t, hands[i])
             self.tracks.append(tr)
             touched.append(tr)
         return touched
