@@ -81,6 +81,7 @@ def workspace(tmp_path):
 def test_every_rbd_package_is_a_package():
     expected = {"robodog", "rbd_msgs", "rbd_lidar", "rbd_controller", "rbd_pos_controller", "rbd_localization",
                 "rbd_navigation", "rbd_gestrec", "rbd_bridge", "rbd_a1_driver", "rbd_sim", "rbd_bringup",
+                "rbd_description", "rbd_preflight",
                 "rbd_wire_oracle", "rbd_testkit", "rbd_geometry"}
     assert set(PACKAGES) == expected
 

@@ -35,16 +35,17 @@ def test_rospack_lists_every_package():
     names = set(out.split())
     # rospack skips metapackages (robodog); every rbd package must be there.
     expected = {"rbd_msgs", "rbd_lidar", "rbd_controller", "rbd_pos_controller", "rbd_localization",
-                "rbd_navigation", "rbd_gestrec", "rbd_bridge", "rbd_a1_driver", "rbd_sim", "rbd_bringup", "rbd_testkit"}
+                "rbd_navigation", "rbd_gestrec", "rbd_bridge", "rbd_a1_driver", "rbd_sim", "rbd_bringup",
+                "rbd_description", "rbd_preflight", "rbd_testkit"}
     assert expected <= names, expected - names
 
 
 def test_preflight_check_status_constants_are_the_status_words():
     """The constants are what a consumer compares ``status`` with (ROS 1 string constants take the rest of the line).
 
-    The values come from the generated class, as rospy users see them; the words are rbd_bringup's preflight's.
+    The values come from the generated class, as rospy users see them; the words are rbd_preflight's.
     """
-    from rbd_bringup import preflight
+    import rbd_preflight as preflight
     from rbd_msgs.msg import PreflightCheck
 
     got = (PreflightCheck.PASS, PreflightCheck.FAIL, PreflightCheck.SKIP)

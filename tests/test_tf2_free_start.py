@@ -5,7 +5,7 @@ Python 3. A ``sitecustomize`` on PYTHONPATH makes ``import tf2_py`` fail the sam
 Python node of the robot's safety path (driver, controller, position controller, navigation,
 gesture receiver, bridge, and ``static_tf`` for the mounts) is started with it and must register
 with the master and stay up. (The zone, rbd_lidar, is C++: tf2_py is not involved.) Nodes that
-need tf2_py instead stop with a FATAL naming the fix: rbd_bringup's preflight does.
+need tf2_py instead stop with a FATAL naming the fix: rbd_preflight's preflight does.
 """
 
 import os
@@ -69,7 +69,8 @@ NODES = {  # node name -> command (navigation and the gesture receiver need thei
     "rbd_navigation": ["roslaunch", "rbd_navigation", "rbd_navigation.launch"],
     "rbd_gestrec": ["roslaunch", "rbd_gestrec", "rbd_gestrec.launch"],
     "tf2free_rbd_bridge": ["rosrun", "rbd_bridge", "rbd_bridge", "_address:=127.0.0.1", "_port:=%d" % free_port()],
-    "tf2free_static_tf": ["rosrun", "rbd_bringup", "static_tf", "0.1", "0", "0.2", "0", "0", "0", "base_link", "os1"],
+    "tf2free_static_tf": ["rosrun", "rbd_description", "static_tf", "0.1", "0", "0.2", "0", "0", "0",
+                          "base_link", "os1"],
 }
 
 
@@ -100,6 +101,6 @@ def test_safety_path_nodes_start_without_tf2_py(ros_env, blocked_env):
 
 
 def test_preflight_stops_with_a_fatal_that_names_the_fix(ros_env, blocked_env):
-    code, out = _run(ros_env, ["rosrun", "rbd_bringup", "preflight", "--duration", "1"], blocked_env)
+    code, out = _run(ros_env, ["rosrun", "rbd_preflight", "preflight", "--duration", "1"], blocked_env)
     assert code != 0, out
     assert "tf2_ros does not import" in out and "geometry2 from source" in out, out

@@ -3,7 +3,7 @@
 
 - `rviz_audience.png`: RViz's audience view on the running simulated system, with a visitor
   standing in the collision zone (intruding points in red);
-- `rviz_a1.png`: the same view close to the robot: the A1 model (rbd_bringup's URDF) with its
+- `rviz_a1.png`: the same view close to the robot: the A1 model (rbd_description's URDF) with its
   legs from /joint_states, the OS1 on its back mount and the ZED2, from config/mounts.yaml;
 - `gui_sim.png`: the laptop app's operator window (rbd_local's `rbd-gui`) connected through the
   bridge to the running simulated system while the robot executes the `walk` trick (state

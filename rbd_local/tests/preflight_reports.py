@@ -1,7 +1,7 @@
 """Preflight reports as the robot's bridge sends them (rbd_msgs/PreflightReport as rosbridge JSON).
 
 Built by hand from the message definitions in ``src/rbd_msgs`` and the check lines of
-rbd_bringup's README (names, values, hints of the kind the robot writes); rbd_local's own parser
+rbd_preflight's README (names, values, hints of the kind the robot writes); rbd_local's own parser
 is not used. :func:`msg_fields` reads the field names from the ``.msg`` files so a test can
 prove these dicts have exactly the robot's fields.
 """

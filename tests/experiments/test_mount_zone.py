@@ -18,7 +18,7 @@ import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-SHIPPED = os.path.join(ROOT, "src", "rbd_bringup", "config", "mounts.yaml")
+SHIPPED = os.path.join(ROOT, "src", "rbd_description", "config", "mounts.yaml")
 THESIS_TOLERANCE = 0.08  # Fig. 23: the boundary within +-80 mm of the set distance
 SAME_BOUNDARY = 0.02  # the two mounts' boundaries agree to this; moving the zone with the sensor shifts them 0.08 m
 TARGET_SURFACE = 1.2  # mount_zone.py: target surface this far ahead of the body [m]

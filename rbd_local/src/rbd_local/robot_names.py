@@ -16,7 +16,7 @@ CAMERA_TOPIC = "/zed2/zed_node/left/image_rect_color/compressed"
 CAMERA_TYPE = "sensor_msgs/CompressedImage"
 #: rbd_navigation's tricks (its private parameter, loaded from config/tricks.yaml).
 TRICKS_PARAM = "/rbd_navigation/tricks"
-#: rbd_bringup's preflight_server (node ``/preflight``): runs the checks on demand (read-only).
+#: rbd_preflight's preflight_server (node ``/preflight``): runs the checks on demand (read-only).
 PREFLIGHT_SERVICE = "/preflight/run"
 PREFLIGHT_SERVICE_TYPE = "rbd_msgs/RunPreflight"
 #: The last report, latched.

@@ -14,10 +14,13 @@ import subprocess
 
 import pytest
 import roslaunch.config
+import rospkg
 import yaml
 
 PKG = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LAUNCH = os.path.join(PKG, "launch")
+#: the shipped calibration file, as the launch files find it (rbd_description)
+MOUNTS = os.path.join(rospkg.RosPack().get_path("rbd_description"), "config", "mounts.yaml")
 
 
 _DUMPS = {}
@@ -65,7 +68,7 @@ def test_sim_launch_uses_the_simulator_tuned_profile():
 
 
 def test_robot_and_sim_share_the_mounts_file_and_the_zone_origin():
-    mounts = os.path.join(PKG, "config", "mounts.yaml")
+    mounts = MOUNTS
     with open(mounts) as fh:
         data = yaml.safe_load(fh)
     sim, robot = dump_params("sim.launch"), dump_params("robot.launch")

@@ -58,7 +58,7 @@ def publishes(topic):
 
 
 def preflight(env, duration=3.0):
-    out = subprocess.run(["rosrun", "rbd_bringup", "preflight", "--json", "--duration", str(duration)],  # noqa: UP022
+    out = subprocess.run(["rosrun", "rbd_preflight", "preflight", "--json", "--duration", str(duration)],  # noqa: UP022
                          env=env.env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
                          timeout=90)
     report = json.loads(out.stdout)

@@ -1,8 +1,8 @@
 """robot.launch (through split.launch) and laptop.launch brought up for real, with stand-in inputs.
 
 One private master for the module. The robot's hardware is stood in for by rbd_sim: the mock A1
-as the SDK's LCM server (its own LCM port) and the simulated OS1/ZED2 where config/mounts.yaml
-says; ouster-ros and zed-ros-wrapper by the recording stand-in packages (conftest.py), because
+as the SDK's LCM server (its own LCM port) and the simulated OS1/ZED2 where the mounts file
+(rbd_description) says; ouster-ros and zed-ros-wrapper by the recording stand-in packages (conftest.py), because
 robot.launch runs with drivers:=true. split.launch starts robot.launch on the "robot" machine,
 here this host (address 127.0.0.1, this user: roslaunch runs it locally). laptop.launch then runs
 RViz under Xvfb against the same master.
@@ -21,6 +21,7 @@ import subprocess
 import numpy as np
 import pytest
 import rosgraph
+import rospkg
 import rospy
 import tf2_ros
 import yaml
@@ -32,8 +33,7 @@ from std_msgs.msg import String
 from rbd_msgs.msg import CollisionState
 from rbd_testkit import RosEnv, free_port, stop_process, wait_for, wait_for_port
 
-PKG = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-MOUNTS = os.path.join(PKG, "config", "mounts.yaml")
+MOUNTS = os.path.join(rospkg.RosPack().get_path("rbd_description"), "config", "mounts.yaml")
 NAMES = ["%s_%s_joint" % (leg, j) for leg in ("FR", "FL", "RR", "RL") for j in ("hip", "thigh", "calf")]
 EXPECTED_NODES = {"/rbd_a1_driver", "/rbd_lidar", "/ekf_localization", "/map_correction", "/robot_state_publisher",
                   "/joint_state_fallback", "/cloud_decimator", "/rbd_controller", "/rbd_pos_controller",
@@ -100,7 +100,7 @@ class Robot:
         self.listener = tf2_ros.TransformListener(self.tf)
 
     def on_diag(self, msg):
-        self.diag.extend((rospy.get_time(), s) for s in msg.status if s.name == "rbd_bringup: joint states")
+        self.diag.extend((rospy.get_time(), s) for s in msg.status if s.name == "rbd_description: joint states")
 
     def on_joints(self, msg):
         self.joint_senders.append((rospy.get_time(), msg._connection_header["callerid"]))

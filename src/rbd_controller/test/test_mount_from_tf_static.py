@@ -44,7 +44,8 @@ else:
 
 
 def test_blocking_points_are_placed_through_the_static_mount(ros_env):
-    ros_env.start(["rosrun", "rbd_bringup", "static_tf", "0.1", "0", "0.2", "1.5707963", "0", "0", "base_link", "os1"],
+    ros_env.start(["rosrun", "rbd_description", "static_tf", "0.1", "0", "0.2", "1.5707963", "0", "0",
+                   "base_link", "os1"],
                   name="static_tf")
     controller = ros_env.start(["rosrun", "rbd_controller", "rbd_controller"], name="rbd_controller")
     probe = ros_env.start([sys.executable, "-c", PROBE], name="probe", capture=True)

@@ -1,4 +1,4 @@
-"""The operator window's Preflight panel: is the real robot ready? (rbd_bringup's preflight, issue 16).
+"""The operator window's Preflight panel: is the real robot ready? (rbd_preflight's preflight, issue 16).
 
 The panel never touches the network itself. It is given
 

@@ -135,7 +135,7 @@ class ServiceCalls:
         except RosTimeoutError as exc:
             raise ConnectionError("%s did not answer within %.1f s" % (PREFLIGHT_SERVICE, timeout)) from exc
         except Exception as exc:  # ServiceException: missing or refused; or a broken connection
-            raise ValueError("%s failed: %s (is rbd_bringup's preflight_server running and the service in the "
+            raise ValueError("%s failed: %s (is rbd_preflight's preflight_server running and the service in the "
                              "bridge's allow-list?)" % (PREFLIGHT_SERVICE, exc)) from exc
         report = response.get("report") if hasattr(response, "get") else None  # a ServiceResponse (UserDict)
         return preflight_report_from_msg(report)

@@ -1,1 +1,1 @@
-"""RoboDog system bringup: launch files, RViz configs, robot model and system-level metrics."""
+"""RoboDog system bringup: the audience's thinned cloud, recording, the demo's metrics and report (ROS-free)."""

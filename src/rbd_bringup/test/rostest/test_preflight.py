@@ -39,9 +39,10 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, TransformStamped
 from sensor_msgs.msg import PointCloud2, PointField
 
+import rbd_preflight as preflight
 import rbd_testkit
-from rbd_bringup import preflight, preflight_collect
 from rbd_msgs.msg import CollisionState
+from rbd_preflight import collect
 from rbd_testkit.ros import run_rostest
 
 RAW_POINTS = "/preflight_test/sim_points"
@@ -193,7 +194,7 @@ class Preflight(unittest.TestCase):
         self.assertTrue(wait_for(fresh, timeout), "zone / localization not fresh again")
 
     def preflight(self):
-        rows, _obs = preflight_collect.run(DURATION)
+        rows, _obs = collect.run(DURATION)
         table = preflight.render(rows)
         rospy.loginfo("preflight:\n%s", table)
         return rows, table
@@ -244,7 +245,7 @@ class Preflight(unittest.TestCase):
         self.assertTrue(wait_for(lambda: self.diag and self.diag[-1].get("estop_gate_armed") == "true", 30.0))
 
         # The command itself on the healthy system: every line passes, exit 0; both hosts' clocks read.
-        proc = subprocess.run(["rosrun", "rbd_bringup", "preflight", "--json", "--duration", str(DURATION)],  # noqa: UP022
+        proc = subprocess.run(["rosrun", "rbd_preflight", "preflight", "--json", "--duration", str(DURATION)],  # noqa: UP022
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True, timeout=120)
         report = json.loads(proc.stdout)
         table = "\n".join("%(status)s %(name)s %(value)s %(hint)s" % r for r in report["rows"])

@@ -122,7 +122,7 @@ class SimSmoke(Zed2JumpFault, unittest.TestCase):
         buf = tf2_ros.Buffer()
         tf2_ros.TransformListener(buf)
         mount = buf.lookup_transform("base_link", "os_sensor", rospy.Time(0), rospy.Duration(10.0)).transform
-        with open(os.path.join(rospkg.RosPack().get_path("rbd_bringup"), "config", "mounts.yaml")) as fh:
+        with open(os.path.join(rospkg.RosPack().get_path("rbd_description"), "config", "mounts.yaml")) as fh:
             xyz = yaml.safe_load(fh)["os_sensor"]["xyz"]
         t = mount.translation
         for got, want in zip((t.x, t.y, t.z), xyz):

@@ -5,7 +5,7 @@ from typing import Optional, Sequence, Tuple
 
 import numpy as np
 
-from rbd_bringup.preflight.facts import (
+from rbd_preflight.facts import (
     A1_DIAG_NAME,
     A1_HIGH_CMD_SIZE,
     A1_STATE_SIZES,
@@ -16,8 +16,8 @@ from rbd_bringup.preflight.facts import (
     OUSTER_POINT_STEP,
     size_name,
 )
-from rbd_bringup.preflight.model import FAIL, PASS, SKIP, Limits, Observation
-from rbd_bringup.preflight.rates import diag_float, fmt_rate, last_diag, rate_check
+from rbd_preflight.model import FAIL, PASS, SKIP, Limits, Observation
+from rbd_preflight.rates import diag_float, fmt_rate, last_diag, rate_check
 
 
 def check_a1_state(obs: Observation, lim: Limits) -> Tuple[str, str, str]:

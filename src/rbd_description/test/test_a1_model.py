@@ -1,4 +1,4 @@
-"""rbd_bringup.a1_model and a1_urdf: the A1 URDF against the public facts, the mounts file's checks.
+"""rbd_description.a1_model and a1_urdf: the A1 URDF against the public facts, the mounts file's checks.
 
 The expected values are written here from their sources, not taken from a1_model: dimensions of
 unitree_ros a1_description (xacro/const.xacro: leg_offset_x 0.1805, leg_offset_y 0.047,
@@ -15,8 +15,8 @@ import xml.etree.ElementTree as ET
 import pytest
 import yaml
 
-from rbd_bringup import a1_model
-from rbd_bringup.a1_model import MountError, load_mounts, parse_mounts, robot_urdf, standing_pose
+from rbd_description import a1_model
+from rbd_description.a1_model import MountError, load_mounts, parse_mounts, robot_urdf, standing_pose
 
 PKG = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MOUNTS = os.path.join(PKG, "config", "mounts.yaml")
@@ -149,13 +149,13 @@ def test_extra_mounts_may_hang_below_other_mounts():
 
 
 def test_a1_urdf_command_line(tmp_path):
-    out = subprocess.run(["rosrun", "rbd_bringup", "a1_urdf", MOUNTS], stdout=subprocess.PIPE,  # noqa: UP022 (3.6)
+    out = subprocess.run(["rosrun", "rbd_description", "a1_urdf", MOUNTS], stdout=subprocess.PIPE,  # noqa: UP022 (3.6)
                          stderr=subprocess.PIPE, universal_newlines=True, timeout=60)
     assert out.returncode == 0, out.stderr
     assert ET.fromstring(out.stdout.split("\n", 1)[1]).get("name") == "a1"
     bad = tmp_path / "bad.yaml"
     bad.write_text("os_sensor: {parent: base_link, xyz: [0, 0], rpy: [0, 0, 0]}\n")
-    out = subprocess.run(["rosrun", "rbd_bringup", "a1_urdf", str(bad)], stdout=subprocess.PIPE,  # noqa: UP022 (3.6)
+    out = subprocess.run(["rosrun", "rbd_description", "a1_urdf", str(bad)], stdout=subprocess.PIPE,  # noqa: UP022 (3.6)
                          stderr=subprocess.PIPE, universal_newlines=True, timeout=60)
     assert out.returncode == 1
     assert "bad.yaml: os_sensor.xyz must be a list of 3 numbers" in out.stderr

@@ -3,8 +3,8 @@
 import math
 from typing import List, Optional, Sequence, Tuple
 
-from rbd_bringup.preflight.model import FAIL, PASS, SKIP, Observation, Row, passed
 from rbd_geometry.rotation import quat_to_rpy
+from rbd_preflight.model import FAIL, PASS, SKIP, Observation, Row, passed
 
 
 def format_mount(transform: object) -> str:

@@ -1,4 +1,4 @@
-"""rbd_bringup.preflight (ROS-free): each check against observations built here.
+"""rbd_preflight (ROS-free): each check against observations built here.
 
 The facts of the real drivers come from ../shared/INTERFACES.md, written in this file as literal
 tables (the ouster-ros point of point_type original, the A1 SDK packet sizes), never taken from
@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from rbd_bringup import preflight as pf
+import rbd_preflight as pf
 
 #: INTERFACES.md §1, ouster-ros point_type original: name, PointField datatype, offset.
 OUSTER_ORIGINAL = [("x", 7, 0), ("y", 7, 4), ("z", 7, 8), ("intensity", 7, 16), ("t", 6, 20),
@@ -202,9 +202,9 @@ def test_collector_reads_the_localized_flag_and_the_map_correction_mode():
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
     from std_msgs.msg import Bool
 
-    from rbd_bringup import preflight_collect
+    from rbd_preflight import collect
 
-    c = preflight_collect.Collector(duration=0.1, tap_lcm=False, measure_clocks=False)
+    c = collect.Collector(duration=0.1, tap_lcm=False, measure_clocks=False)
     assert c.obs.localized is None and c.obs.map_mode is None
     other = DiagnosticStatus(name="ekf_localization: Filter", values=[KeyValue("mode", "something else")])
     ours = DiagnosticStatus(name="map_correction: Map correction",

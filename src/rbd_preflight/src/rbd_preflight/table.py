@@ -2,7 +2,7 @@
 
 from typing import List, Optional
 
-from rbd_bringup.preflight.graph_checks import (
+from rbd_preflight.graph_checks import (
     check_bridge,
     check_clocks,
     check_floor,
@@ -13,8 +13,8 @@ from rbd_bringup.preflight.graph_checks import (
     check_tf_zed2,
     check_zone,
 )
-from rbd_bringup.preflight.model import FAIL, PASS, SKIP, Limits, Observation, Row
-from rbd_bringup.preflight.sensor_checks import (
+from rbd_preflight.model import FAIL, PASS, SKIP, Limits, Observation, Row
+from rbd_preflight.sensor_checks import (
     check_a1_cmd,
     check_a1_layout,
     check_a1_state,

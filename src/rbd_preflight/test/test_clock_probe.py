@@ -1,4 +1,4 @@
-"""rbd_bringup.clock_probe: a host's clock from the HTTP Date of its XML-RPC servers (no ROS).
+"""rbd_preflight.clock_probe: a host's clock from the HTTP Date of its XML-RPC servers (no ROS).
 
 Against real HTTP servers on 127.0.0.1: Python's own XML-RPC server (what rospy, roslaunch and
 rosmaster serve) for the Date header's presence, and a server whose Date runs a known skew ahead,
@@ -13,7 +13,7 @@ import xmlrpc.server
 
 import pytest
 
-from rbd_bringup import clock_probe
+from rbd_preflight import clock_probe
 
 
 class _Threading(socketserver.ThreadingMixIn, http.server.HTTPServer):

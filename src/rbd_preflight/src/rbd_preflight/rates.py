@@ -4,7 +4,7 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-from rbd_bringup.preflight.model import FAIL, PASS, Observation, Stream
+from rbd_preflight.model import FAIL, PASS, Observation, Stream
 
 
 def fmt_rate(stream: Stream) -> str:

@@ -1,6 +1,6 @@
 """Preflight's collector: watches the running ROS graph and fills a ``preflight.Observation``.
 
-A thin rospy adapter; every decision is in :mod:`rbd_bringup.preflight`. It needs an initialised
+A thin rospy adapter; every decision is in :mod:`rbd_preflight`. It needs an initialised
 rospy node (the ``preflight`` command and the ``preflight_server`` node make one). What it does
 during one run (``duration`` seconds, 3 by default):
 
@@ -11,7 +11,7 @@ during one run (``duration`` seconds, 3 by default):
   and looks the mounts and the feet up in a tf2 buffer at the end;
 - taps LCM_High_State / LCM_High_Cmd on the driver's LCM URL when the ``lcm`` module is there and
   the URL is reachable from this host (the packet sizes on the wire, not the driver's belief);
-- meanwhile reads the clock of every other host of the graph (``rbd_bringup.clock_probe``) and
+- meanwhile reads the clock of every other host of the graph (``rbd_preflight.clock_probe``) and
   asks rbd_bridge who is connected.
 
 Everything it subscribes is dropped again at the end, so the full cloud is read only while a
@@ -35,8 +35,9 @@ from sensor_msgs.msg import Imu, PointCloud2
 from std_msgs.msg import Bool, String
 from tf2_msgs.msg import TFMessage
 
-from rbd_bringup import clock_probe, preflight
+import rbd_preflight as preflight
 from rbd_msgs.msg import CollisionState
+from rbd_preflight import clock_probe
 
 try:
     import tf2_ros

@@ -4,12 +4,12 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from rbd_bringup.preflight.facts import FEET, FOOT_RADIUS
-from rbd_bringup.preflight.floor import floor_check
-from rbd_bringup.preflight.model import FAIL, PASS, SKIP, Limits, Observation
-from rbd_bringup.preflight.rates import fmt_rate, rate_check
-from rbd_bringup.preflight.render import format_mount
 from rbd_geometry.rotation import quat_to_matrix
+from rbd_preflight.facts import FEET, FOOT_RADIUS
+from rbd_preflight.floor import floor_check
+from rbd_preflight.model import FAIL, PASS, SKIP, Limits, Observation
+from rbd_preflight.rates import fmt_rate, rate_check
+from rbd_preflight.render import format_mount
 
 
 def _check_frame(obs: Observation, frame: str, hint: str) -> Tuple[str, str, str]:
@@ -21,14 +21,14 @@ def _check_frame(obs: Observation, frame: str, hint: str) -> Tuple[str, str, str
 
 def check_tf_lidar(obs: Observation, lim: Limits) -> Tuple[str, str, str]:
     """TF base_link -> os_sensor (the LiDAR's mount)."""
-    return _check_frame(obs, obs.lidar_frame,
-                        "robot_state_publisher with rbd_bringup's robot_description (a1_urdf + mounts.yaml) must run")
+    return _check_frame(obs, obs.lidar_frame, "robot_state_publisher with rbd_description's robot_description "
+                        "(a1_urdf + mounts.yaml) must run")
 
 
 def check_tf_zed2(obs: Observation, lim: Limits) -> Tuple[str, str, str]:
     """TF base_link -> zed2_camera_center (the ZED2's mount)."""
-    return _check_frame(obs, obs.zed2_frame,
-                        "robot_state_publisher with rbd_bringup's robot_description (a1_urdf + mounts.yaml) must run")
+    return _check_frame(obs, obs.zed2_frame, "robot_state_publisher with rbd_description's robot_description "
+                        "(a1_urdf + mounts.yaml) must run")
 
 
 def tf_clashes(edges: Sequence[Tuple[str, str, str, bool]]) -> List[str]:

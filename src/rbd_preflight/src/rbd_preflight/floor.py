@@ -5,8 +5,8 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-from rbd_bringup.preflight.facts import NOMINAL_BODY_HEIGHT
-from rbd_bringup.preflight.model import FAIL, PASS, Limits
+from rbd_preflight.facts import NOMINAL_BODY_HEIGHT
+from rbd_preflight.model import FAIL, PASS, Limits
 
 
 def fit_plane(points: np.ndarray, threshold: float = 0.03, iterations: int = 150,
@@ -96,7 +96,7 @@ def floor_check(points_base: np.ndarray, contacts: Optional[np.ndarray], limits:
         where = "high" if offset > 0 else "low"
         return (FAIL, value,
                 "the LiDAR's floor is %.0f mm too %s: the os_sensor z in the mounts file is %.0f mm too %s "
-                "(or the body height is off); measure the mount again (rbd_bringup README, Mounts)"
+                "(or the body height is off); measure the mount again (rbd_description README, Mounts)"
                 % (abs(offset) * 1000, where, abs(offset) * 1000, where), numbers)
     if tilt > limits.floor_max_tilt_deg:
         return (FAIL, value, "the LiDAR's floor is tilted: check the os_sensor roll/pitch in the mounts file", numbers)

@@ -1,8 +1,8 @@
-"""rbd_bringup.joint_fallback: the standing pose is shown only while nobody else publishes joint states."""
+"""rbd_description.joint_fallback: the standing pose is shown only while nobody else publishes joint states."""
 
 import pytest
 
-from rbd_bringup.joint_fallback import OK, WARN, JointStateWatch
+from rbd_description.joint_fallback import OK, WARN, JointStateWatch
 
 
 def test_publishes_from_start_until_the_robot_speaks_and_again_when_it_falls_silent():

@@ -1,0 +1,5 @@
+# Do not run directly: catkin_python_setup() calls it.
+from catkin_pkg.python_setup import generate_distutils_setup
+from setuptools import setup
+
+setup(**generate_distutils_setup(packages=["rbd_preflight"], package_dir={"": "src"}))
