@@ -89,10 +89,11 @@ def _clip_code_version(photo_paths: list[str]) -> str:
 
     import mediapipe
 
-    from rbd_local.gestures import detector, photo_clip
+    from rbd_local.gestures import detector, motions, photo_clip
 
     h = hashlib.sha256(mediapipe.__version__.encode())
-    for path in [realclips.__file__, photo_clip.__file__, detector.__file__, evaluation.__file__] + list(photo_paths):
+    code = [realclips.__file__, motions.__file__, photo_clip.__file__, detector.__file__, evaluation.__file__]
+    for path in code + list(photo_paths):
         with open(path, "rb") as fh:
             h.update(fh.read())
     return h.hexdigest()[:16]
