@@ -31,7 +31,9 @@ ZoneParams grownZone(const ZoneParams& base, double vx, double vy, double wz, co
 
 CloudAge classifyCloudAge(double age, double stamp, double last_judged, double max_age) {
   if (!(stamp > 0.0) || !std::isfinite(age) || !(age <= max_age)) return CloudAge::TOO_OLD;
-  if (last_judged > 0.0 && stamp < last_judged) return CloudAge::OUT_OF_ORDER;
+  // Overtaken by a younger cloud judged before it. A newest judged capture later than now
+  // (stamp + age) means the clock went back (a replay restarted): nothing to compare with.
+  if (last_judged > 0.0 && stamp < last_judged && last_judged <= stamp + age) return CloudAge::OUT_OF_ORDER;
   return CloudAge::JUDGE;
 }
 

@@ -541,9 +541,10 @@ TEST(CriticalZone, CloudAgeDecidesWhatIsJudged) {
   EXPECT_EQ(classifyCloudAge(0.3, 100.0, 99.9, 0.3), CloudAge::JUDGE);     // at the limit
   EXPECT_EQ(classifyCloudAge(0.31, 100.0, 99.9, 0.3), CloudAge::TOO_OLD);  // older than the stale limit
   EXPECT_EQ(classifyCloudAge(NAN, 100.0, 99.9, 0.3), CloudAge::TOO_OLD);
-  EXPECT_EQ(classifyCloudAge(0.1, 0.0, 99.9, 0.3), CloudAge::TOO_OLD);  // no stamp: unknown age
-  EXPECT_EQ(classifyCloudAge(0.1, 99.8, 99.9, 0.3), CloudAge::OUT_OF_ORDER);
-  EXPECT_EQ(classifyCloudAge(0.1, 99.9, 99.9, 0.3), CloudAge::JUDGE);  // the same capture again
+  EXPECT_EQ(classifyCloudAge(0.1, 0.0, 99.9, 0.3), CloudAge::TOO_OLD);         // no stamp: unknown age
+  EXPECT_EQ(classifyCloudAge(0.15, 99.8, 99.9, 0.3), CloudAge::OUT_OF_ORDER);  // overtaken
+  EXPECT_EQ(classifyCloudAge(0.1, 50.0, 99.9, 0.3), CloudAge::JUDGE);          // the clock went back 50 s
+  EXPECT_EQ(classifyCloudAge(0.1, 99.9, 99.9, 0.3), CloudAge::JUDGE);          // the same capture again
 }
 
 // Zone distances measured from a body point: a LiDAR 0.08 m behind it (and 0.02 m to the right)

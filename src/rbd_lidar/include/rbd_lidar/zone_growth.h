@@ -35,7 +35,8 @@ enum class CloudAge {
 };
 
 // `age` = now - stamp [s]; `stamp` and `last_judged` are capture stamps [s] (0 = none: a cloud
-// without a stamp has an unknown age and is TOO_OLD; last_judged 0 = nothing judged yet).
+// without a stamp has an unknown age and is TOO_OLD; last_judged 0 = nothing judged yet). A
+// last_judged later than now (stamp + age: the clock went back, a replay restarted) is ignored.
 CloudAge classifyCloudAge(double age, double stamp, double last_judged, double max_age);
 
 // Keeps a stopped motion's growth until its collision is released. A collision latched while the
