@@ -51,7 +51,8 @@ def grown_zone(zone: Sequence[float], vx: float, vy: float, wz: float, growth: Z
         vy: commanded sideways velocity [m/s].
         wz: commanded yaw rate [rad/s].
         growth: rbd_lidar's growth parameters.
-        age: extra delay before a stop acts [s] (the age of the cloud judged), added to reaction_time.
+        age: the age of the cloud judged [s]: distance walked unseen, added on top of the capped
+            reaction growth as rbd_lidar adds it (a non-finite or negative age counts as 0).
 
     Returns:
         The grown zone (FRONT, LEFT, BACK, RIGHT) [m].
@@ -61,15 +62,14 @@ def grown_zone(zone: Sequence[float], vx: float, vy: float, wz: float, growth: Z
         return front, left, back, right
     if not all(math.isfinite(v) for v in (vx, vy, wz)):
         vx = vy = wz = 0.0
-    t = growth.reaction_time + (max(0.0, age) if math.isfinite(age) else 0.0)
-    cap = growth.max_growth
-    turn = abs(wz) * growth.rotation_lever * t
-    return (
-        front + min(cap, max(0.0, vx) * t + turn),
-        left + min(cap, max(0.0, vy) * t + turn),
-        back + min(cap, max(0.0, -vx) * t + turn),
-        right + min(cap, max(0.0, -vy) * t + turn),
-    )
+    a = max(0.0, age) if math.isfinite(age) else 0.0
+    turn = abs(wz) * growth.rotation_lever
+
+    def grow(speed: float) -> float:
+        s = max(0.0, speed) + turn  # speed towards the side [m/s]
+        return min(growth.max_growth, s * growth.reaction_time) + s * a
+
+    return front + grow(vx), left + grow(vy), back + grow(-vx), right + grow(-vy)
 
 
 def motion_zone(zone: Sequence[float], speed: float, turn_rate: float, growth: ZoneGrowth, margin: float = 0.0,
