@@ -148,7 +148,7 @@ class LidarNode {
     hold_zone_ = c.hold_when_stopped;
     stale_periods_ = c.stale_periods;
     scan_rate_ = c.scan_rate;
-    motion_.max_age = stale_periods_ / scan_rate_;  // the oldest cloud judged: the stale limit
+    motion_.max_age = c.max_cloud_age;  // the oldest cloud judged (not the stale limit: README)
     pparams_.hysteresis_scans = static_cast<unsigned>(c.hysteresis_scans);
     pparams_.scan_time = 1.0 / scan_rate_;
     pipeline_.setParams(pparams_);
@@ -257,10 +257,13 @@ class LidarNode {
     std_msgs::Float32 age_msg;
     age_msg.data = static_cast<float>(age);
     age_pub_.publish(age_msg);
+    // age_aware false is the rule before issue 27 (every cloud judged, its age ignored), kept only
+    // to measure the difference.
     const CloudAge verdict =
-        classifyCloudAge(age, cloud->header.stamp.toSec(), last_judged_, motion_.max_age);
+        age_aware_ ? classifyCloudAge(age, cloud->header.stamp.toSec(), last_judged_, motion_.max_age)
+                   : CloudAge::JUDGE;
     if (verdict != CloudAge::JUDGE) {  // not a valid cloud: the stale fail-safe stops without fresh ones
-      ROS_WARN_THROTTLE(5.0, "rbd_lidar: cloud %.3f s old (stale limit %.3f s)%s: not judged", age,
+      ROS_WARN_THROTTLE(5.0, "rbd_lidar: cloud %.3f s old (max_cloud_age %.3f s)%s: not judged", age,
                         motion_.max_age,
                         verdict == CloudAge::OUT_OF_ORDER ? ", captured before one already judged" : "");
       return;

@@ -227,13 +227,14 @@ class SimLateTest(unittest.TestCase):
             node_ages = list(self.node_ages)
             stale = sum(1 for _, _, s in self.states if s)
         late = sum(1 for a in ages if a > self.late_delay - 0.02) / max(1, len(ages))
-        judged = [a for a in node_ages if a <= 0.3]
+        max_age = float(rospy.get_param("/rbd_lidar/max_cloud_age", 0.5))
+        judged = [a for a in node_ages if a <= max_age]  # (overtaken clouds are not judged either)
         front = statistics.median(fronts) if fronts else float("nan")
         print(
             "\nLATE_RESULT age_aware=%s drop_clearance_m=%.3f approach_clearance_m=%.3f speed_at_drop=%.3f "
             "drop_to_stop_s=%.2f zone_front_walking_m=%.3f (%d markers; rest+speed*reaction=%.3f) "
             "cloud_age_min=%.3f p50=%.3f max=%.3f late_fraction=%.2f node_judged_age_p50=%.3f "
-            "not_judged=%d/%d stale_states=%d"
+            "older_than_max_cloud_age=%d/%d stale_states=%d"
             % (self.age_aware, drop_clearance, approach_clearance, speed_at_drop, t_stop - t_drop, front,
                len(fronts), REST_FRONT + SPEED * REACTION, min(ages), statistics.median(ages), max(ages), late,
                statistics.median(judged) if judged else float("nan"), len(node_ages) - len(judged), len(node_ages),
