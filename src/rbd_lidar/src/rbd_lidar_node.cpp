@@ -266,6 +266,7 @@ class LidarNode {
       ROS_WARN_THROTTLE(5.0, "rbd_lidar: cloud %.3f s old (max_cloud_age %.3f s)%s: not judged", age,
                         motion_.max_age,
                         verdict == CloudAge::OUT_OF_ORDER ? ", captured before one already judged" : "");
+      ++(verdict == CloudAge::OUT_OF_ORDER ? overtaken_ : too_old_);
       return;
     }
     last_judged_ = cloud->header.stamp.toSec();
@@ -300,6 +301,7 @@ class LidarNode {
     } else {
       last_valid_ = now;
       stale_ = false;
+      too_old_ = overtaken_ = 0;
       if (pipeline_.modelResidual() > 0.03) {
         ROS_WARN_THROTTLE(30.0, "rbd_lidar: the cloud's xyz differs from the beam model by %.0f mm",
                           pipeline_.modelResidual() * 1000.0);
@@ -326,15 +328,20 @@ class LidarNode {
     if ((now - last_valid_).toSec() <= timeout) return;
     // Publish the stale state once per scan period.
     if (stale_ && (now - last_stale_pub_).toSec() < 1.0 / scan_rate_) return;
+    // Whether clouds came but were not judged (too old / overtaken) or none came at all: the two
+    // causes of a stale stop are told apart in the log and the state's reason.
+    const std::string refused = " (" + std::to_string(too_old_) + " older than max_cloud_age, " +
+                                std::to_string(overtaken_) + " overtaken)";
     if (!stale_) {
-      ROS_ERROR("rbd_lidar: no valid cloud for %.2f s (%d periods): collision (stale)",
-                (now - last_valid_).toSec(), stale_periods_);
+      ROS_ERROR("rbd_lidar: no valid cloud for %.2f s (%d periods)%s: collision (stale)",
+                (now - last_valid_).toSec(), stale_periods_, refused.c_str());
     }
     stale_ = true;
     last_stale_pub_ = now;
     rbd_msgs::CollisionState st;
-    pipeline_.fail(true, "stale: no valid cloud for " + std::to_string((now - last_valid_).toSec()) + " s",
-                   &st);
+    pipeline_.fail(
+        true, "stale: no valid cloud for " + std::to_string((now - last_valid_).toSec()) + " s" + refused,
+        &st);
     st.header.stamp = now;
     st.header.frame_id = last_frame_;
     publishState(st);
@@ -411,9 +418,10 @@ class LidarNode {
   ZoneParams zone_;
   MotionParams motion_;
   bool velocity_aware_ = true;
-  bool age_aware_ = true;     // the growth adds the judged cloud's age to reaction_time
-  double last_judged_ = 0.0;  // capture stamp of the newest cloud judged [s]
-  bool hold_zone_ = true;     // a collision found in a motion's grown zone holds that zone while stopped
+  bool age_aware_ = true;                 // the growth adds the judged cloud's age to reaction_time
+  double last_judged_ = 0.0;              // capture stamp of the newest cloud judged [s]
+  unsigned too_old_ = 0, overtaken_ = 0;  // clouds not judged since the last valid one
+  bool hold_zone_ = true;  // a collision found in a motion's grown zone holds that zone while stopped
   ZoneHold hold_;
   int stale_periods_ = 3;
   double scan_rate_ = 10.0;
