@@ -252,20 +252,16 @@ class LidarNode {
 
   void cloudCb(const sensor_msgs::PointCloud2ConstPtr& cloud) {
     const ros::Time now = ros::Time::now();
-    // The age of this cloud: the robot has moved for that long since the world looked like it.
-    const double age = (now - cloud->header.stamp).toSec();
+    const double age = (now - cloud->header.stamp).toSec();  // the robot has moved that long unseen
     std_msgs::Float32 age_msg;
     age_msg.data = static_cast<float>(age);
     age_pub_.publish(age_msg);
-    // age_aware false is the rule before issue 27 (every cloud judged, its age ignored), kept only
-    // to measure the difference.
     const CloudAge verdict =
         age_aware_ ? classifyCloudAge(age, cloud->header.stamp.toSec(), last_judged_, motion_.max_age)
                    : CloudAge::JUDGE;
     if (verdict != CloudAge::JUDGE) {  // not a valid cloud: the stale fail-safe stops without fresh ones
       ROS_WARN_THROTTLE(5.0, "rbd_lidar: cloud %.3f s old (max_cloud_age %.3f s)%s: not judged", age,
-                        motion_.max_age,
-                        verdict == CloudAge::OUT_OF_ORDER ? ", captured before one already judged" : "");
+                        motion_.max_age, verdict == CloudAge::OUT_OF_ORDER ? ", overtaken" : "");
       ++(verdict == CloudAge::OUT_OF_ORDER ? overtaken_ : too_old_);
       return;
     }
@@ -324,24 +320,19 @@ class LidarNode {
   void staleCb(const ros::TimerEvent&) {
     const ros::Time now = ros::Time::now();
     if (now.isZero()) return;
-    const double timeout = stale_periods_ / scan_rate_;
-    if ((now - last_valid_).toSec() <= timeout) return;
+    const double gap = (now - last_valid_).toSec();
+    if (gap <= stale_periods_ / scan_rate_) return;
     // Publish the stale state once per scan period.
     if (stale_ && (now - last_stale_pub_).toSec() < 1.0 / scan_rate_) return;
-    // Whether clouds came but were not judged (too old / overtaken) or none came at all: the two
-    // causes of a stale stop are told apart in the log and the state's reason.
-    const std::string refused = " (" + std::to_string(too_old_) + " older than max_cloud_age, " +
-                                std::to_string(overtaken_) + " overtaken)";
+    const std::string refused =
+        " (" + std::to_string(too_old_) + " too old, " + std::to_string(overtaken_) + " overtaken)";
     if (!stale_) {
-      ROS_ERROR("rbd_lidar: no valid cloud for %.2f s (%d periods)%s: collision (stale)",
-                (now - last_valid_).toSec(), stale_periods_, refused.c_str());
+      ROS_ERROR("rbd_lidar: no valid cloud for %.2f s%s: collision (stale)", gap, refused.c_str());
     }
     stale_ = true;
     last_stale_pub_ = now;
     rbd_msgs::CollisionState st;
-    pipeline_.fail(
-        true, "stale: no valid cloud for " + std::to_string((now - last_valid_).toSec()) + " s" + refused,
-        &st);
+    pipeline_.fail(true, "stale: no valid cloud for " + std::to_string(gap) + " s" + refused, &st);
     st.header.stamp = now;
     st.header.frame_id = last_frame_;
     publishState(st);
@@ -418,8 +409,8 @@ class LidarNode {
   ZoneParams zone_;
   MotionParams motion_;
   bool velocity_aware_ = true;
-  bool age_aware_ = true;                 // the growth adds the judged cloud's age to reaction_time
-  double last_judged_ = 0.0;              // capture stamp of the newest cloud judged [s]
+  bool age_aware_ = true;     // false: every cloud judged, age ignored (the old rule, to measure it)
+  double last_judged_ = 0.0;  // capture stamp of the newest cloud judged [s]
   unsigned too_old_ = 0, overtaken_ = 0;  // clouds not judged since the last valid one
   bool hold_zone_ = true;  // a collision found in a motion's grown zone holds that zone while stopped
   ZoneHold hold_;
