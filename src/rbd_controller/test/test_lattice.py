@@ -54,6 +54,8 @@ def test_grown_zone_is_rbd_lidars_rule():
     assert grown_zone(ZONE, math.nan, 0.0, 0.0, g) == ZONE
     # A late cloud: the growth time is reaction + age.
     assert np.allclose(grown_zone(ZONE, 0.3, 0.0, 0.0, g, age=0.3), (1.0, 0.35, 0.55, 0.35))
+    # the age is distance walked unseen: on top of the capped reaction growth (rbd_lidar's zone_growth)
+    assert np.allclose(grown_zone(ZONE, 5.0, 0.0, 0.0, g, age=0.1), (0.70 + 0.50 + 0.50, 0.35, 0.55, 0.35))
     assert grown_zone(ZONE, 0.3, 0.0, 0.0, ZoneGrowth(enabled=False)) == ZONE
 
 

@@ -40,6 +40,7 @@ class LidarNode {
     state_pub_ = pnh_.advertise<rbd_msgs::CollisionState>("state", 10);
     marker_pub_ = pnh_.advertise<visualization_msgs::Marker>("zone_marker", 2, true);
     speed_pub_ = pnh_.advertise<std_msgs::Float32>("speed_scale", 10);
+    age_pub_ = pnh_.advertise<std_msgs::Float32>("cloud_age", 10);
     server_.reset(new dynamic_reconfigure::Server<ZoneConfig>(pnh_));
     server_->setCallback([this](ZoneConfig& c, uint32_t level) { reconfigure(c, level); });
     last_valid_ = ros::Time::now();
@@ -143,9 +144,11 @@ class LidarNode {
     motion_.rotation_lever = c.rotation_lever;
     motion_.max_growth = c.max_growth;
     velocity_aware_ = c.velocity_aware;
+    age_aware_ = c.age_aware;
     hold_zone_ = c.hold_when_stopped;
     stale_periods_ = c.stale_periods;
     scan_rate_ = c.scan_rate;
+    motion_.max_age = c.max_cloud_age;  // the oldest cloud judged (not the stale limit: README)
     pparams_.hysteresis_scans = static_cast<unsigned>(c.hysteresis_scans);
     pparams_.scan_time = 1.0 / scan_rate_;
     pipeline_.setParams(pparams_);
@@ -249,6 +252,20 @@ class LidarNode {
 
   void cloudCb(const sensor_msgs::PointCloud2ConstPtr& cloud) {
     const ros::Time now = ros::Time::now();
+    const double age = (now - cloud->header.stamp).toSec();  // the robot has moved that long unseen
+    std_msgs::Float32 age_msg;
+    age_msg.data = static_cast<float>(age);
+    age_pub_.publish(age_msg);
+    const CloudAge verdict =
+        age_aware_ ? classifyCloudAge(age, cloud->header.stamp.toSec(), last_judged_, motion_.max_age)
+                   : CloudAge::JUDGE;
+    if (verdict != CloudAge::JUDGE) {  // not a valid cloud: the stale fail-safe stops without fresh ones
+      ROS_WARN_THROTTLE(5.0, "rbd_lidar: cloud %.3f s old (max_cloud_age %.3f s)%s: not judged", age,
+                        motion_.max_age, verdict == CloudAge::OUT_OF_ORDER ? ", overtaken" : "");
+      ++(verdict == CloudAge::OUT_OF_ORDER ? overtaken_ : too_old_);
+      return;
+    }
+    last_judged_ = cloud->header.stamp.toSec();
     const SensorPose pose = currentPose(cloud->header.frame_id);
     // Zone distances from the body's zone origin: the LiDAR's offset from it, in the level frame.
     Eigen::Vector2d offset(0.0, 0.0);
@@ -265,7 +282,7 @@ class LidarNode {
     ZoneParams zone = base;
     bool moving = false;
     if (velocity_aware_ && !cmd_time_.isZero() && (now - cmd_time_).toSec() < cmd_timeout_) {
-      zone = grownZone(base, cmd_.linear.x, cmd_.linear.y, cmd_.angular.z, motion_);
+      zone = grownZone(base, cmd_.linear.x, cmd_.linear.y, cmd_.angular.z, motion_, age_aware_ ? age : 0.0);
       moving = std::fabs(cmd_.linear.x) > 1e-3 || std::fabs(cmd_.linear.y) > 1e-3 ||
                std::fabs(cmd_.angular.z) > 1e-3;
     }
@@ -280,6 +297,7 @@ class LidarNode {
     } else {
       last_valid_ = now;
       stale_ = false;
+      too_old_ = overtaken_ = 0;
       if (pipeline_.modelResidual() > 0.03) {
         ROS_WARN_THROTTLE(30.0, "rbd_lidar: the cloud's xyz differs from the beam model by %.0f mm",
                           pipeline_.modelResidual() * 1000.0);
@@ -302,19 +320,19 @@ class LidarNode {
   void staleCb(const ros::TimerEvent&) {
     const ros::Time now = ros::Time::now();
     if (now.isZero()) return;
-    const double timeout = stale_periods_ / scan_rate_;
-    if ((now - last_valid_).toSec() <= timeout) return;
+    const double gap = (now - last_valid_).toSec();
+    if (gap <= stale_periods_ / scan_rate_) return;
     // Publish the stale state once per scan period.
     if (stale_ && (now - last_stale_pub_).toSec() < 1.0 / scan_rate_) return;
+    const std::string refused =
+        " (" + std::to_string(too_old_) + " too old, " + std::to_string(overtaken_) + " overtaken)";
     if (!stale_) {
-      ROS_ERROR("rbd_lidar: no valid cloud for %.2f s (%d periods): collision (stale)",
-                (now - last_valid_).toSec(), stale_periods_);
+      ROS_ERROR("rbd_lidar: no valid cloud for %.2f s%s: collision (stale)", gap, refused.c_str());
     }
     stale_ = true;
     last_stale_pub_ = now;
     rbd_msgs::CollisionState st;
-    pipeline_.fail(true, "stale: no valid cloud for " + std::to_string((now - last_valid_).toSec()) + " s",
-                   &st);
+    pipeline_.fail(true, "stale: no valid cloud for " + std::to_string(gap) + " s" + refused, &st);
     st.header.stamp = now;
     st.header.frame_id = last_frame_;
     publishState(st);
@@ -382,7 +400,7 @@ class LidarNode {
   tf2_ros::TransformListener tf_listener_;
   std::unique_ptr<dynamic_reconfigure::Server<ZoneConfig>> server_;
   ros::Subscriber cloud_sub_, cmd_sub_, odom_sub_, imu_sub_;
-  ros::Publisher critical_pub_, slice_pub_, scan_pub_, state_pub_, marker_pub_, speed_pub_;
+  ros::Publisher critical_pub_, slice_pub_, scan_pub_, state_pub_, marker_pub_, speed_pub_, age_pub_;
   ros::Timer stale_timer_;
 
   ScanPipeline pipeline_;
@@ -391,6 +409,9 @@ class LidarNode {
   ZoneParams zone_;
   MotionParams motion_;
   bool velocity_aware_ = true;
+  bool age_aware_ = true;     // false: every cloud judged, age ignored (the old rule, to measure it)
+  double last_judged_ = 0.0;  // capture stamp of the newest cloud judged [s]
+  unsigned too_old_ = 0, overtaken_ = 0;  // clouds not judged since the last valid one
   bool hold_zone_ = true;  // a collision found in a motion's grown zone holds that zone while stopped
   ZoneHold hold_;
   int stale_periods_ = 3;

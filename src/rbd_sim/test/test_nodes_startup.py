@@ -34,3 +34,10 @@ def test_bad_mount_in_the_calibration_file_is_a_clear_startup_error(ros_env):
                                     timeout=40)
     assert code == 1, log
     assert "mount os_sensor.xyz must be 3 numbers" in log, log
+
+
+def test_bad_late_cloud_parameter_is_a_clear_startup_error(ros_env):
+    code, log = ros_env.run_to_exit(["rosrun", "rbd_sim", "os1_sim", "_world:=lab", "_cloud_delay:=0.15",
+                                     "_late_fraction:=1.5", "_late_delay:=0.3"], timeout=40)
+    assert code == 1, log
+    assert "late_fraction must be in [0, 1]" in log, log

@@ -1,12 +1,11 @@
 """The stop zone as the robot's footprint: rbd_lidar's rectangle, grown for a motion. ROS-free.
 
-rbd_lidar (C++, ``critical_zone.cpp`` ``grownZone``) grows each side of the stop zone by the
-commanded speed towards it times ``reaction_time``, every side by ``|wz| * rotation_lever *
-reaction_time`` while turning, each growth capped at ``max_growth``. :func:`grown_zone` is the same
-rule on the same parameters (the node reads them from rbd_lidar's namespace); the unit test
-``test_footprint.py`` checks it against the numbers of rbd_lidar's own gtest. A late cloud is one
-more delay before a stop acts, so the growth time here is ``reaction_time + age`` (issue 27,
-"safe with late data"); rbd_lidar itself judges with ``age`` = 0.
+rbd_lidar (C++, ``zone_growth.cpp`` ``grownZone``) grows each side of the stop zone by
+``min(max_growth, s * reaction_time) + s * age``, ``s`` = the commanded speed towards that side +
+``|wz| * rotation_lever``, ``age`` = the age of the cloud judged, bounded by rbd_lidar's
+``max_cloud_age`` (0.5 s; older clouds are not judged at all). :func:`grown_zone` is the same rule
+on the same parameters; ``test_footprint.py`` checks it against the numbers of rbd_lidar's own
+gtest (issue 27, "safe with late data").
 
 Sides are ordered as rbd_msgs/CollisionState's: FRONT, LEFT, BACK, RIGHT (like AvoidParams.zone).
 """
@@ -25,14 +24,17 @@ class ZoneGrowth:
     Args:
         reaction_time: [s].
         rotation_lever: [m].
-        max_growth: cap per side [m].
+        max_growth: cap per side of the reaction-time growth [m].
         enabled: rbd_lidar's velocity_aware (False: the zone never grows).
+        max_age: rbd_lidar's max_cloud_age, the oldest cloud judged [s]: bounds the age term.
     """
 
     def __init__(
-        self, reaction_time: float = 0.7, rotation_lever: float = 0.30, max_growth: float = 0.50, enabled: bool = True
+        self, reaction_time: float = 0.7, rotation_lever: float = 0.30, max_growth: float = 0.50, enabled: bool = True,
+        max_age: float = 0.5,
     ) -> None:
-        values = (("reaction_time", reaction_time), ("rotation_lever", rotation_lever), ("max_growth", max_growth))
+        values = (("reaction_time", reaction_time), ("rotation_lever", rotation_lever), ("max_growth", max_growth),
+                  ("max_age", max_age))
         for name, v in values:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ValueError("%s must be a finite number >= 0, got %r" % (name, v))
@@ -40,6 +42,7 @@ class ZoneGrowth:
         self.rotation_lever = float(rotation_lever)
         self.max_growth = float(max_growth)
         self.enabled = bool(enabled)
+        self.max_age = float(max_age)
 
 
 def grown_zone(zone: Sequence[float], vx: float, vy: float, wz: float, growth: ZoneGrowth, age: float = 0.0) -> Zone:
@@ -51,7 +54,9 @@ def grown_zone(zone: Sequence[float], vx: float, vy: float, wz: float, growth: Z
         vy: commanded sideways velocity [m/s].
         wz: commanded yaw rate [rad/s].
         growth: rbd_lidar's growth parameters.
-        age: extra delay before a stop acts [s] (the age of the cloud judged), added to reaction_time.
+        age: the age of the cloud judged [s]: distance walked unseen, added on top of the capped
+            reaction growth as rbd_lidar adds it. As there, NaN or more than ``growth.max_age``
+            counts as ``max_age`` (unknown means worst) and a negative age as 0.
 
     Returns:
         The grown zone (FRONT, LEFT, BACK, RIGHT) [m].
@@ -61,15 +66,14 @@ def grown_zone(zone: Sequence[float], vx: float, vy: float, wz: float, growth: Z
         return front, left, back, right
     if not all(math.isfinite(v) for v in (vx, vy, wz)):
         vx = vy = wz = 0.0
-    t = growth.reaction_time + (max(0.0, age) if math.isfinite(age) else 0.0)
-    cap = growth.max_growth
-    turn = abs(wz) * growth.rotation_lever * t
-    return (
-        front + min(cap, max(0.0, vx) * t + turn),
-        left + min(cap, max(0.0, vy) * t + turn),
-        back + min(cap, max(0.0, -vx) * t + turn),
-        right + min(cap, max(0.0, -vy) * t + turn),
-    )
+    a = growth.max_age if math.isnan(age) else min(growth.max_age, max(0.0, age))
+    turn = abs(wz) * growth.rotation_lever
+
+    def grow(speed: float) -> float:
+        s = max(0.0, speed) + turn  # speed towards the side [m/s]
+        return min(growth.max_growth, s * growth.reaction_time) + s * a
+
+    return front + grow(vx), left + grow(vy), back + grow(-vx), right + grow(-vy)
 
 
 def motion_zone(zone: Sequence[float], speed: float, turn_rate: float, growth: ZoneGrowth, margin: float = 0.0,
