@@ -314,30 +314,12 @@ class TwoHosts:
 
     def stop_delay(self, t0, t1, hold):
         """Delay after t0 of the first ground-truth rest lasting >= hold (up to t1); None if none."""
-        start = None
-        for t, p in self.probe.get("T", t0, t1):
-            if float(p[0]) >= STILL:
-                start = None
-                continue
-            if start is None:
-                start = t
-            if t - start >= hold:
-                return start - t0
-        return None
+        start = first_rest(((t, float(p[0])) for t, p in self.probe.get("T", t0, t1)), hold)
+        return None if start is None else start - t0
 
     def rest_stamp(self, t0, hold):
         """Publisher stamp of the first ground-truth rest lasting >= hold after t0 (by stamps)."""
-        start = None
-        for _t, p in self.probe.get("T", t0):
-            speed, stamp = float(p[0]), float(p[1])
-            if speed >= STILL:
-                start = None
-                continue
-            if start is None:
-                start = stamp
-            if stamp - start >= hold:
-                return start
-        return None
+        return first_rest(((float(p[1]), float(p[0])) for _t, p in self.probe.get("T", t0)), hold)
 
     def estop(self, engage, timeout):
         """The app's e-stop call; returns (sent, returned, ok) or fails if the call never returns."""
@@ -368,6 +350,20 @@ class TwoHosts:
         for p in self.peers:
             assert p.alive(), "%s died (log %s)" % (p.name, p.log.name)
         assert self.launch.poll() is None, "roslaunch on the robot exited"
+
+
+def first_rest(samples, hold):
+    """Start time of the first run of (time, speed) samples below STILL lasting >= hold; None if none."""
+    start = None
+    for t, speed in samples:
+        if speed >= STILL:
+            start = None
+            continue
+        if start is None:
+            start = t
+        if t - start >= hold:
+            return start
+    return None
 
 
 def record(**result):
