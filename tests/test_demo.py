@@ -11,8 +11,12 @@ test_replay.py records with the same ``rosrun rbd_bringup record`` and replays i
 
 import json
 import os
+import signal
 import subprocess
 import sys
+import uuid
+
+from rbd_testkit.process import kill_pids, pids_with_env
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TRICKS = ["walk", "spin", "wiggle", "lie_down", "bow"]
@@ -21,13 +25,40 @@ TRICKS = ["walk", "spin", "wiggle", "lie_down", "bow"]
 WITH_BAG = bool(os.environ.get("RBD_AVOIDANCE_EXPERIMENTS"))
 
 
+def run_demo(args, timeout):
+    """Run tools/demo_scenario.py ARGS; on a timeout stop it and every process of its stack.
+
+    The scenario starts its master and roslaunch in sessions of their own, so killing the script
+    alone would leave the simulated stack running: it gets SIGINT first (its own clean-up stops
+    the stack), and whatever still carries this run's environment mark is killed after that.
+
+    Returns:
+        The CompletedProcess (stdout with stderr); the returncode is negative after a timeout.
+    """
+    mark = uuid.uuid4().hex
+    env = dict(os.environ, RBD_TEST_DEMO_RUN=mark)
+    proc = subprocess.Popen([sys.executable, os.path.join(ROOT, "tools", "demo_scenario.py")] + args, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    try:
+        stdout, _ = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGINT)
+        try:
+            stdout, _ = proc.communicate(timeout=40.0)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            stdout, _ = proc.communicate()
+        stdout += "\n[test_demo: timed out after %.0f s; stopped]" % timeout
+    finally:
+        kill_pids(pids_with_env("RBD_TEST_DEMO_RUN", mark))
+    return subprocess.CompletedProcess(proc.args, proc.returncode, stdout)
+
+
 def test_demo_scenario(tmp_path):
     out = tmp_path / "demo"
     tricks = TRICKS + (["stroll"] if WITH_BAG else [])
-    proc = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "demo_scenario.py"), "--out", str(out),
-                           "--columns", "512", "--tricks", ",".join(tricks), "--record-seconds", "0"]
-                          + ([] if WITH_BAG else ["--bag", ""]),
-                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=600)
+    proc = run_demo(["--out", str(out), "--columns", "512", "--tricks", ",".join(tricks), "--record-seconds", "0"]
+                    + ([] if WITH_BAG else ["--bag", ""]), timeout=600)
     assert (out / "report.json").exists(), proc.stdout[-5000:]
     report = json.loads((out / "report.json").read_text())
     assert report["collisions_with_people"] == 0, report
