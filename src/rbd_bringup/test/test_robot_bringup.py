@@ -100,7 +100,7 @@ class Robot:
         self.listener = tf2_ros.TransformListener(self.tf)
 
     def on_diag(self, msg):
-        self.diag.extend((rospy.get_time(), s) for s in msg.status if s.name == "rbd_description: joint states")
+        self.diag.extend((rospy.get_time(), s) for s in msg.status if s.name == "joint_state_fallback: joint states")
 
     def on_joints(self, msg):
         self.joint_senders.append((rospy.get_time(), msg._connection_header["callerid"]))

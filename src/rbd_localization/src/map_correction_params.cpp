@@ -1,13 +1,24 @@
 #include "rbd_localization/map_correction_params.h"
 
+#include <ros/param.h>
+
 #include <cmath>
 #include <string>
+#include <vector>
+
+#include "rbd_localization/param_reader.h"
 
 namespace rbd_localization {
 
 namespace {
 
 bool positive(double v) { return v > 0.0 && std::isfinite(v); }
+
+// One reader per field type, so that each parameter is one line below.
+bool read(ParamReader* r, const std::string& key, double* out) { return r->number(key, out); }
+bool read(ParamReader* r, const std::string& key, int* out) { return r->integer(key, out); }
+bool read(ParamReader* r, const std::string& key, bool* out) { return r->boolean(key, out); }
+bool read(ParamReader* r, const std::string& key, std::string* out) { return r->text(key, out); }
 
 }  // namespace
 
@@ -57,65 +68,68 @@ bool validateMapCorrectionParams(const MapCorrectionNodeParams& n, const MapCorr
   return true;
 }
 
-bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams* n, MapCorrection::Params* c,
-                             std::string* error) {
-  pnh.param<std::string>("map_frame", n->map_frame, n->map_frame);
-  pnh.param<std::string>("odom_frame", n->odom_frame, n->odom_frame);
-  pnh.param<std::string>("base_frame", n->base_frame, n->base_frame);
-  pnh.param("max_match_rate", n->max_match_rate, n->max_match_rate);
-  pnh.param("max_points", n->max_points, n->max_points);
-  pnh.param("min_range", n->min_range, n->min_range);
-  pnh.param("max_range", n->max_range, n->max_range);
-  pnh.param("transform_publish_rate", n->transform_publish_rate, n->transform_publish_rate);
-  pnh.param("transform_tolerance", n->transform_tolerance, n->transform_tolerance);
-  pnh.param("pose_timeout", n->pose_timeout, n->pose_timeout);
-  pnh.param("map_publish_interval", n->map_publish_interval, n->map_publish_interval);
-  pnh.param("scan_timeout", n->scan_timeout, n->scan_timeout);
-  pnh.param("correction_enabled", n->correction_enabled, n->correction_enabled);
-  pnh.param<std::string>("input", n->input, n->input);
-  pnh.param("slice_z_min", n->slice_z_min, n->slice_z_min);
-  pnh.param("slice_z_max", n->slice_z_max, n->slice_z_max);
-  pnh.param("slice_bins", n->slice_bins, n->slice_bins);
-  pnh.param<std::string>("map_file", n->map_file, n->map_file);
-  pnh.param("home_x", n->home_x, n->home_x);
-  pnh.param("home_y", n->home_y, n->home_y);
-  pnh.param("home_yaw", n->home_yaw, n->home_yaw);
-  pnh.param<std::string>("map_save_dir", n->map_save_dir, n->map_save_dir);
-  pnh.param<std::string>("map_save_name", n->map_save_name, n->map_save_name);
-  pnh.param("initial_mapping_duration", c->initial_mapping_duration, c->initial_mapping_duration);
-  pnh.param("initial_mapping_min_scans", c->initial_mapping_min_scans, c->initial_mapping_min_scans);
-  pnh.param("map_update_interval", c->map_update_interval, c->map_update_interval);
-  pnh.param("map_update_weight", c->map_update_weight, c->map_update_weight);
-  pnh.param("min_inlier_ratio", c->min_inlier_ratio, c->min_inlier_ratio);
-  pnh.param("max_rms", c->max_rms, c->max_rms);
-  pnh.param("min_inliers", c->min_inliers, c->min_inliers);
-  pnh.param("min_translation_information", c->min_translation_information, c->min_translation_information);
-  pnh.param("max_jump_translation", c->max_jump_translation, c->max_jump_translation);
-  pnh.param("max_jump_rotation", c->max_jump_rotation, c->max_jump_rotation);
-  pnh.param("max_correction_speed", c->max_correction_speed, c->max_correction_speed);
-  pnh.param("max_correction_angular_speed", c->max_correction_angular_speed, c->max_correction_angular_speed);
-  pnh.param("max_correction_step", c->max_correction_step, c->max_correction_step);
-  pnh.param("map_update_min_translation", c->map_update_min_translation, c->map_update_min_translation);
-  pnh.param("map_update_min_rotation", c->map_update_min_rotation, c->map_update_min_rotation);
-  pnh.param("max_correction_step_rotation", c->max_correction_step_rotation, c->max_correction_step_rotation);
-  pnh.param("resolution", c->map.resolution, c->map.resolution);
-  pnh.param("map_size", c->map.size, c->map.size);
-  pnh.param("map_max_size", c->map.max_size, c->map.max_size);
-  pnh.param("static_time", c->map.static_time, c->map.static_time);
-  pnh.param("clear_interval", c->clear_interval, c->clear_interval);
-  pnh.param("clear_weight", c->clear_weight, c->clear_weight);
-  pnh.param("clear_end_margin", c->clear_end_margin, c->clear_end_margin);
-  pnh.param("clear_min_incidence", c->clear_min_incidence, c->clear_min_incidence);
-  pnh.param("search_translation", c->search_translation, c->search_translation);
-  pnh.param("search_rotation", c->search_rotation, c->search_rotation);
-  pnh.param("localized_scans", c->localized_scans, c->localized_scans);
-  pnh.param("localized_translation", c->localized_translation, c->localized_translation);
-  pnh.param("localized_rotation", c->localized_rotation, c->localized_rotation);
-  pnh.param("max_iterations", c->matcher.max_iterations, c->matcher.max_iterations);
-  pnh.param("outlier_distance_start", c->matcher.outlier_distance_start, c->matcher.outlier_distance_start);
-  pnh.param("outlier_distance", c->matcher.outlier_distance_end, c->matcher.outlier_distance_end);
-  pnh.param("inlier_distance", c->matcher.inlier_distance, c->matcher.inlier_distance);
+bool parseMapCorrectionParams(const XmlRpc::XmlRpcValue& ns, MapCorrectionNodeParams* n,
+                              MapCorrection::Params* c, std::vector<std::string>* warnings,
+                              std::string* error) {
+  ParamReader r(ns, warnings, error, "");
+  const bool read_all =
+      read(&r, "map_frame", &n->map_frame) && read(&r, "odom_frame", &n->odom_frame) &&
+      read(&r, "base_frame", &n->base_frame) && read(&r, "max_match_rate", &n->max_match_rate) &&
+      read(&r, "max_points", &n->max_points) && read(&r, "min_range", &n->min_range) &&
+      read(&r, "max_range", &n->max_range) &&
+      read(&r, "transform_publish_rate", &n->transform_publish_rate) &&
+      read(&r, "transform_tolerance", &n->transform_tolerance) &&
+      read(&r, "pose_timeout", &n->pose_timeout) &&
+      read(&r, "map_publish_interval", &n->map_publish_interval) &&
+      read(&r, "scan_timeout", &n->scan_timeout) && read(&r, "correction_enabled", &n->correction_enabled) &&
+      read(&r, "input", &n->input) && read(&r, "slice_z_min", &n->slice_z_min) &&
+      read(&r, "slice_z_max", &n->slice_z_max) && read(&r, "slice_bins", &n->slice_bins) &&
+      read(&r, "map_file", &n->map_file) && read(&r, "home_x", &n->home_x) &&
+      read(&r, "home_y", &n->home_y) && read(&r, "home_yaw", &n->home_yaw) &&
+      read(&r, "map_save_dir", &n->map_save_dir) && read(&r, "map_save_name", &n->map_save_name) &&
+      read(&r, "initial_mapping_duration", &c->initial_mapping_duration) &&
+      read(&r, "initial_mapping_min_scans", &c->initial_mapping_min_scans) &&
+      read(&r, "map_update_interval", &c->map_update_interval) &&
+      read(&r, "map_update_weight", &c->map_update_weight) &&
+      read(&r, "min_inlier_ratio", &c->min_inlier_ratio) && read(&r, "max_rms", &c->max_rms) &&
+      read(&r, "min_inliers", &c->min_inliers) &&
+      read(&r, "min_translation_information", &c->min_translation_information) &&
+      read(&r, "max_jump_translation", &c->max_jump_translation) &&
+      read(&r, "max_jump_rotation", &c->max_jump_rotation) &&
+      read(&r, "max_correction_speed", &c->max_correction_speed) &&
+      read(&r, "max_correction_angular_speed", &c->max_correction_angular_speed) &&
+      read(&r, "max_correction_step", &c->max_correction_step) &&
+      read(&r, "map_update_min_translation", &c->map_update_min_translation) &&
+      read(&r, "map_update_min_rotation", &c->map_update_min_rotation) &&
+      read(&r, "max_correction_step_rotation", &c->max_correction_step_rotation) &&
+      read(&r, "resolution", &c->map.resolution) && read(&r, "map_size", &c->map.size) &&
+      read(&r, "map_max_size", &c->map.max_size) && read(&r, "static_time", &c->map.static_time) &&
+      read(&r, "clear_interval", &c->clear_interval) && read(&r, "clear_weight", &c->clear_weight) &&
+      read(&r, "clear_end_margin", &c->clear_end_margin) &&
+      read(&r, "clear_min_incidence", &c->clear_min_incidence) &&
+      read(&r, "search_translation", &c->search_translation) &&
+      read(&r, "search_rotation", &c->search_rotation) && read(&r, "localized_scans", &c->localized_scans) &&
+      read(&r, "localized_translation", &c->localized_translation) &&
+      read(&r, "localized_rotation", &c->localized_rotation) &&
+      read(&r, "max_iterations", &c->matcher.max_iterations) &&
+      read(&r, "outlier_distance_start", &c->matcher.outlier_distance_start) &&
+      read(&r, "outlier_distance", &c->matcher.outlier_distance_end) &&
+      read(&r, "inlier_distance", &c->matcher.inlier_distance);
+  if (!read_all) return false;
+  const std::vector<std::string> unknown = r.unread();
+  if (!unknown.empty()) {
+    std::string list;
+    for (const std::string& k : unknown) list += (list.empty() ? "" : ", ") + k;
+    warnings->push_back("unknown parameters, ignored: " + list);
+  }
   return validateMapCorrectionParams(*n, *c, error);
+}
+
+bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams* n, MapCorrection::Params* c,
+                             std::vector<std::string>* warnings, std::string* error) {
+  XmlRpc::XmlRpcValue ns;
+  if (!ros::param::get(pnh.getNamespace(), ns)) ns = XmlRpc::XmlRpcValue();
+  return parseMapCorrectionParams(ns, n, c, warnings, error);
 }
 
 }  // namespace rbd_localization

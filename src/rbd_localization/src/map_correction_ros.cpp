@@ -42,7 +42,10 @@ MapCorrectionNode::MapCorrectionNode(const ros::NodeHandle& nh, const ros::NodeH
 
 bool MapCorrectionNode::init(std::string* error) {
   MapCorrection::Params core;
-  if (!loadMapCorrectionParams(pnh_, &params_, &core, error)) return false;
+  std::vector<std::string> warnings;
+  const bool params_ok = loadMapCorrectionParams(pnh_, &params_, &core, &warnings, error);
+  for (const std::string& w : warnings) ROS_WARN("map_correction: %s", w.c_str());
+  if (!params_ok) return false;
   core_.reset(new MapCorrection(core));
   if (!params_.map_file.empty()) {
     std::unique_ptr<OccupancyMap> loaded;

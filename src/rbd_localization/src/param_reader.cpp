@@ -58,8 +58,9 @@ std::string formatNumber(double v) {
   return os.str();
 }
 
-ParamReader::ParamReader(const XmlRpcValue& ns, std::vector<std::string>* warnings, std::string* error)
-    : warnings_(warnings), error_(error) {
+ParamReader::ParamReader(const XmlRpcValue& ns, std::vector<std::string>* warnings, std::string* error,
+                         const std::string& peer)
+    : warnings_(warnings), error_(error), peer_(peer) {
   XmlRpcValue copy = ns;  // begin()/end() are non-const in older xmlrpcpp (Melodic)
   if (copy.getType() == XmlRpcValue::TypeStruct) {
     for (auto it = copy.begin(); it != copy.end(); ++it) values_[it->first] = it->second;
@@ -94,9 +95,10 @@ bool ParamReader::number(const std::string& key, double* out) {
       if (parseNumberText(static_cast<std::string&>(c), &d)) {
         warn(key + " is " + describeValue(c) +
              " (YAML 1.1 reads a number such as 1e-2, without '.' and sign in " +
-             "the exponent, as text); read as " + formatNumber(d) +
-             ". robot_localization would ignore it and use its default; write it as 1.0e-2 to be read alike "
-             "by both.");
+             "the exponent, as text); read as " + formatNumber(d) + ". " +
+             (peer_.empty() ? std::string("Write it as 1.0e-2 to have it read as a number.")
+                            : peer_ + " would ignore it and use its default; write it as 1.0e-2 to be read "
+                                      "alike by both."));
         *out = d;
         return true;
       }
@@ -126,7 +128,7 @@ bool ParamReader::boolean(const std::string& key, bool* out) {
   XmlRpcValue c = *v;
   if (c.getType() != XmlRpcValue::TypeBoolean) {
     return fail(key + " must be true or false, got " + describeValue(c) +
-                " (robot_localization would silently use its default)");
+                (peer_.empty() ? std::string() : " (" + peer_ + " would silently use its default)"));
   }
   *out = static_cast<bool&>(c);
   return true;

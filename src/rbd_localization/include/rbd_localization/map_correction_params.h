@@ -3,10 +3,12 @@
 #ifndef RBD_LOCALIZATION_MAP_CORRECTION_PARAMS_H
 #define RBD_LOCALIZATION_MAP_CORRECTION_PARAMS_H
 
+#include <XmlRpcValue.h>
 #include <ros/node_handle.h>
 
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "rbd_localization/map_correction.h"
 
@@ -47,10 +49,19 @@ struct MapCorrectionNodeParams {
 bool validateMapCorrectionParams(const MapCorrectionNodeParams& node, const MapCorrection::Params& core,
                                  std::string* error);
 
-/// Reads node + MapCorrection parameters from pnh over the defaults in node and core, then
-/// validateMapCorrectionParams; false with reason on invalid values.
+/// Reads node + MapCorrection parameters from a private namespace as the parameter server
+/// delivers it (an XmlRpc struct) over the defaults in node and core, with rbd_localization's
+/// ParamReader (as the EKF's parameters: a value of the wrong type is an error, a number written
+/// as text is read with a warning, unknown keys are listed in one warning), then
+/// validateMapCorrectionParams. ROS-free (no master); false with the reason on an invalid value.
+bool parseMapCorrectionParams(const XmlRpc::XmlRpcValue& ns, MapCorrectionNodeParams* node,
+                              MapCorrection::Params* core, std::vector<std::string>* warnings,
+                              std::string* error);
+
+/// parseMapCorrectionParams on pnh's namespace, fetched from the parameter server.
 bool loadMapCorrectionParams(const ros::NodeHandle& pnh, MapCorrectionNodeParams* node,
-                             MapCorrection::Params* core, std::string* error);
+                             MapCorrection::Params* core, std::vector<std::string>* warnings,
+                             std::string* error);
 
 }  // namespace rbd_localization
 

@@ -28,7 +28,10 @@ std::string formatNumber(double v);
 /// false after setting the error (fail()) when the value cannot be used.
 class ParamReader {
  public:
-  ParamReader(const XmlRpc::XmlRpcValue& ns, std::vector<std::string>* warnings, std::string* error);
+  /// `peer`: the reader the messages compare with (what it would do with a text number or a
+  /// non-boolean); empty: no comparison in the messages.
+  ParamReader(const XmlRpc::XmlRpcValue& ns, std::vector<std::string>* warnings, std::string* error,
+              const std::string& peer = "robot_localization");
 
   bool has(const std::string& key) const { return values_.count(key) > 0; }
   /// The value of key (marked as read), or nullptr when it is not set.
@@ -57,6 +60,7 @@ class ParamReader {
   std::set<std::string> read_;
   std::vector<std::string>* warnings_;
   std::string* error_;
+  std::string peer_;
 };
 
 }  // namespace rbd_localization
