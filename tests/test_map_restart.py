@@ -7,7 +7,10 @@ falls to <= 0.05 m / 2 deg within 5 s of the first sensor data and stays there, 
 was false before and turns true, preflight's "Localized in the map" passes once localized; then
 loops of the thesis path steered on the localization's pose (``RBD_LOC_SIM_LOOPS``, default 1)
 each end within 0.05 m of their start on ground truth. With ``RBD_MAP_BOX_SECONDS`` (e.g. 150) a
-box is left in front of the robot that long and the map saved again equals the loaded one.
+box is left in front of the robot that long and the map saved again equals the loaded one. With
+``RBD_MAP_CROWD_SECONDS`` (e.g. 8) five visitors stand 1.0-1.4 m around the robot from the start of
+the mapping run that long and leave: they were in the working map while they stood, and none of
+the cells they stood on is occupied in the saved map (most are free).
 
 `make test-long` only (README "Tests"): two stack starts, 16 s of mapping, 12 s standing and
 the loops are about 150 s for one loop, over make test's 60 s allowance for a new test.
@@ -26,14 +29,16 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCRIPT = os.path.join(ROOT, "src", "rbd_localization", "test", "rostest", "map_restart.py")
 LOOPS = int(os.environ.get("RBD_LOC_SIM_LOOPS", "1"))
 BOX_SECONDS = float(os.environ.get("RBD_MAP_BOX_SECONDS", "0"))
+CROWD_SECONDS = float(os.environ.get("RBD_MAP_CROWD_SECONDS", "0"))
 
 
-@pytest.mark.timeout(600 + 120 * LOOPS + int(BOX_SECONDS))
+@pytest.mark.timeout(600 + 120 * LOOPS + int(BOX_SECONDS + CROWD_SECONDS))
 def test_restart_in_saved_map_converges_and_loops_close(tmp_path):
     out = tmp_path / "run"
     proc = subprocess.run([sys.executable, SCRIPT, "--out", str(out), "--loops", str(LOOPS),
-                           "--box-seconds", str(BOX_SECONDS)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                          universal_newlines=True, timeout=540 + 120 * LOOPS + BOX_SECONDS)
+                           "--box-seconds", str(BOX_SECONDS), "--crowd-seconds", str(CROWD_SECONDS)],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True,
+                          timeout=540 + 120 * LOOPS + BOX_SECONDS + CROWD_SECONDS)
     assert proc.returncode == 0 and (out / "report.json").exists(), proc.stdout[-6000:]
     report = json.loads((out / "report.json").read_text())
     # the map files of map_server's format and the sidecar
@@ -61,3 +66,11 @@ def test_restart_in_saved_map_converges_and_loops_close(tmp_path):
         assert box["placed"] and box["save_exit"] == 0, box
         assert box["compare"]["same_shape"] and box["compare"]["occupied"] > 500, box
         assert box["compare"]["occupied_changed"] == 0 and box["compare"]["free_changed"] == 0, box
+    if CROWD_SECONDS:
+        crowd = report["crowd"]
+        # they stood in the working map (the start-up mapping cannot tell them from walls) ...
+        assert sum(n > 0 for n in crowd["working_map_occupied"]) >= 4, crowd
+        # ... and left no trace in the saved one: nothing occupied where they stood, mostly free
+        for member in crowd["cells"]:
+            assert member["occupied"] == 0, crowd
+            assert member["free"] >= 0.8 * member["cells"], crowd

@@ -15,6 +15,9 @@ master for both runs:
    /rbd_localization/pose (sim_loops.py's steering, ``steer="corrected"``, each loop settled
    back onto home after its last turn, which creeps); each loop's end is compared with its start
    on ground truth and with the localization's pose.
+0. Optionally (``crowd_seconds`` > 0), in the mapping run: a crowd of five person-sized cylinders
+   (``/rbd_sim/place_obstacle``) stands around the robot from its start for that long, then goes;
+   the saved map is read with map_server's semantics and the cells they stood on are checked.
 4. Optionally (``box_seconds`` > 0): a box left in front of the robot for that long, then the map
    is saved again and compared with the loaded one cell by cell (map_server semantics).
 
@@ -41,6 +44,12 @@ CONVERGED_M, CONVERGED_DEG, CONVERGE_WITHIN_S = 0.05, 2.0, 5.0
 DEFAULT_PLACE = (-0.8 * math.cos(math.radians(45.0)), 0.8 * math.sin(math.radians(45.0)), math.radians(40.0))
 #: s the mapping run stands before saving: the walls must stay occupied for static_time (10 s).
 MAPPING_STAND_S = 16.0
+#: The crowd at start (crowd_seconds > 0): (x, y) around home [m] (home frame), radius 0.25 m. Kept
+#: off the lab's people paths; 1.0-1.4 m from the robot, as visitors around a starting robot.
+CROWD = ((1.2, 0.3), (0.5, 1.1), (-1.0, 0.7), (-1.1, -0.5), (0.3, -1.2))
+CROWD_RADIUS = 0.25
+#: s the mapping run stands after the crowd left: static_time (10 s) + clearing.
+AFTER_CROWD_S = 15.0
 #: s the localization run stands (measuring convergence) before the loops start.
 STAND_S = 12.0
 
@@ -164,8 +173,50 @@ def compare_maps(a_yaml, b_yaml):
             "occupied_changed": int((occ_a != occ_b).sum()), "free_changed": int((free_a != free_b).sum())}
 
 
+def crowd_cells(map_yaml, crowd_world):
+    """Per crowd member: cells of its footprint in a saved map (map_server semantics): occupied / free / all."""
+    import numpy as np
+    from map_correction_test import read_map_server
+
+    occ, free, xy = read_map_server(map_yaml)
+    rows, cols = np.indices(occ.shape)
+    x, y = xy((rows, cols))
+    out = []
+    for cx, cy in crowd_world:
+        disk = np.hypot(x - cx, y - cy) <= CROWD_RADIUS
+        near = np.hypot(x - cx, y - cy) <= CROWD_RADIUS + 0.1
+        out.append({"xy": [cx, cy], "cells": int(disk.sum()), "occupied": int((occ & near).sum()),
+                    "free": int((free & disk).sum())})
+    return out
+
+
+def grid_occupied_near(grid, points, radius):
+    """Occupied cells (value >= 65, map_server's occupied_thresh) of an OccupancyGrid within radius of each point."""
+    import numpy as np
+
+    info = grid.info
+    data = np.asarray(grid.data, dtype=np.int16).reshape(info.height, info.width)
+    rows, cols = np.indices(data.shape)
+    # the node's grid is axis-aligned (origin orientation identity)
+    x = info.origin.position.x + (cols + 0.5) * info.resolution
+    y = info.origin.position.y + (rows + 0.5) * info.resolution
+    return [int(((data >= 65) & (np.hypot(x - px, y - py) <= radius)).sum()) for px, py in points]
+
+
+def place_crowd(rospy, crowd_world, remove=False):
+    """Put the crowd's cylinders into the simulated world (or take them away)."""
+    from rbd_msgs.srv import PlaceObstacle
+
+    rospy.wait_for_service("/rbd_sim/place_obstacle", 60.0)
+    place = rospy.ServiceProxy("/rbd_sim/place_obstacle", PlaceObstacle)
+    for i, (cx, cy) in enumerate(crowd_world):
+        res = place(name="crowd_at_start_%d" % i, x=cx, y=cy, radius=CROWD_RADIUS, height=1.75, remove=remove)
+        if not res.success:
+            raise RuntimeError("place_obstacle: %s" % res.message)
+
+
 def run(out_dir, loops=1, world="lab", seed=1, columns=512, first_start=(0.0, 0.0, 0.0), place=DEFAULT_PLACE,
-        box_seconds=0.0, log_dir=None):
+        box_seconds=0.0, crowd_seconds=0.0, log_dir=None):
     """The whole experiment (see the module docstring); returns the report (dict)."""
     from rbd_testkit import RosEnv, restore_sigint
     from rbd_testkit.process import stop_process
@@ -182,10 +233,29 @@ def run(out_dir, loops=1, world="lab", seed=1, columns=512, first_start=(0.0, 0.
         # --- 1. mapping run -----------------------------------------------------------------------
         t = time.monotonic()
         stack = launch(env, "mapping_run", world, seed, columns, first_start)
+        crowd_world = [compose(first_start, (cx, cy, 0.0))[:2] for cx, cy in CROWD]
+        if crowd_seconds > 0:  # there before the first scan: placed as soon as the world serves
+            place_crowd(rospy, crowd_world)
+            report["crowd"] = {"placed_at": rospy.get_time(), "seconds": crowd_seconds}
         runner = sim_loops.Runner(map_origin=first_start, steer="corrected")
         if not runner.wait_ready(120.0):
             raise RuntimeError("mapping run: no ground truth / pose / odometry\n" + env.tails())
-        rospy.sleep(MAPPING_STAND_S)
+        if crowd_seconds > 0:
+            from nav_msgs.msg import OccupancyGrid
+
+            grids = []
+            map_sub = rospy.Subscriber("/map", OccupancyGrid, grids.append, queue_size=2)
+            report["crowd"]["first_pose_at"] = rospy.get_time()
+            rospy.sleep(crowd_seconds)
+            map_sub.unregister()
+            # the working map while they stood (map frame == home: the first start is the map origin)
+            crowd_map = [(cx, cy) for cx, cy in CROWD]
+            report["crowd"]["working_map_occupied"] = grid_occupied_near(grids[-1], crowd_map, CROWD_RADIUS + 0.1) \
+                if grids else None
+            place_crowd(rospy, crowd_world, remove=True)
+            rospy.sleep(AFTER_CROWD_S)
+        else:
+            rospy.sleep(MAPPING_STAND_S)
         code, out = save_map(env, out_dir, "lab")
         report["save"] = {"exit": code, "output": out.strip()[-500:]}
         if code != 0:
@@ -193,6 +263,8 @@ def run(out_dir, loops=1, world="lab", seed=1, columns=512, first_start=(0.0, 0.
         stop_process(stack, timeout=20.0)
         report["mapping_run_s"] = time.monotonic() - t
         map_file = os.path.join(out_dir, "lab.yaml")
+        if crowd_seconds > 0:  # the saved map is in the map frame: the crowd relative to home
+            report["crowd"]["cells"] = crowd_cells(map_file, list(CROWD))
         # --- 2. localization run, placed away from home -------------------------------------------------
         t = time.monotonic()
         placed = compose(first_start, place)
@@ -268,10 +340,12 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--columns", type=int, default=512)
     ap.add_argument("--box-seconds", type=float, default=0.0, help="leave a box in front this long, then save again")
+    ap.add_argument("--crowd-seconds", type=float, default=0.0,
+                    help="a crowd stands around the robot this long from the start of the mapping run")
     args = ap.parse_args()
     report = run(args.out, loops=args.loops, world=args.world, seed=args.seed, columns=args.columns,
-                 box_seconds=args.box_seconds)
-    summary = {k: report.get(k) for k in ("convergence", "preflight_localized", "home_reached", "box")}
+                 box_seconds=args.box_seconds, crowd_seconds=args.crowd_seconds)
+    summary = {k: report.get(k) for k in ("convergence", "preflight_localized", "home_reached", "box", "crowd")}
     summary["loops"] = [{"loop": e["loop"], "truth_closure": e["truth_closure"], "corrected": e["corrected"]}
                         for e in report.get("loops", [])]
     print(json.dumps(summary, indent=1))
