@@ -10,7 +10,9 @@ each end within 0.05 m of their start on ground truth. With ``RBD_MAP_BOX_SECOND
 box is left in front of the robot that long and the map saved again equals the loaded one. With
 ``RBD_MAP_CROWD_SECONDS`` (e.g. 8) five visitors stand 1.0-1.4 m around the robot from the start of
 the mapping run that long and leave: they were in the working map while they stood, and none of
-the cells they stood on is occupied in the saved map (most are free).
+the cells they stood on is occupied in the saved map (most are free). First (``RBD_MAP_FAR_CHECK``,
+default 1) a restart placed 2 m / 150 deg from home, outside the start search: ``localized`` stays
+false and preflight's "Localized in the map" line fails with "not localized in the map".
 
 `make test-long` only (README "Tests"): two stack starts, 16 s of mapping, 12 s standing and
 the loops are about 150 s for one loop, over make test's 60 s allowance for a new test.
@@ -30,13 +32,15 @@ SCRIPT = os.path.join(ROOT, "src", "rbd_localization", "test", "rostest", "map_r
 LOOPS = int(os.environ.get("RBD_LOC_SIM_LOOPS", "1"))
 BOX_SECONDS = float(os.environ.get("RBD_MAP_BOX_SECONDS", "0"))
 CROWD_SECONDS = float(os.environ.get("RBD_MAP_CROWD_SECONDS", "0"))
+FAR_CHECK = os.environ.get("RBD_MAP_FAR_CHECK", "1") == "1"
 
 
 @pytest.mark.timeout(600 + 120 * LOOPS + int(BOX_SECONDS + CROWD_SECONDS))
 def test_restart_in_saved_map_converges_and_loops_close(tmp_path):
     out = tmp_path / "run"
     proc = subprocess.run([sys.executable, SCRIPT, "--out", str(out), "--loops", str(LOOPS),
-                           "--box-seconds", str(BOX_SECONDS), "--crowd-seconds", str(CROWD_SECONDS)],
+                           "--box-seconds", str(BOX_SECONDS), "--crowd-seconds", str(CROWD_SECONDS)]
+                          + (["--far-check"] if FAR_CHECK else []),
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True,
                           timeout=540 + 120 * LOOPS + BOX_SECONDS + CROWD_SECONDS)
     assert proc.returncode == 0 and (out / "report.json").exists(), proc.stdout[-6000:]
@@ -44,6 +48,11 @@ def test_restart_in_saved_map_converges_and_loops_close(tmp_path):
     # the map files of map_server's format and the sidecar
     for ext in ("pgm", "yaml", "rbdmap"):
         assert (out / ("lab." + ext)).stat().st_size > 0
+    if FAR_CHECK:  # placed 2 m / 150 deg from home, outside the start search: never localized
+        far = report["far"]
+        assert far["localized_values"] and not any(far["localized_values"]), far
+        assert far["preflight_localized"]["status"] == "FAIL", far
+        assert "not localized in the map" in far["preflight_localized"]["value"], far
     c = report["convergence"]
     # the robot really started away from home: the first poses were off by the placement
     assert c["first_error"][0] > 0.5 or c["first_error"][1] > 30.0, c

@@ -11,6 +11,8 @@ master for both runs:
    ``first_start``) against /rbd_localization/pose (map): the time from the first sensor data until
    the error is <= 0.05 m / 2 deg for good, when /rbd_localization/localized turned true (and
    that it was false before), preflight's "Localized in the map" line once localized.
+   Optionally (``far_check``), before it: a run placed ``FAR_PLACE`` from home, outside the start
+   search, where the robot cannot localize: ``localized`` stays false and preflight's line FAILs.
 3. Loops: the robot walks home and round the thesis path ``loops`` times, steered on
    /rbd_localization/pose (sim_loops.py's steering, ``steer="corrected"``, each loop settled
    back onto home after its last turn, which creeps); each loop's end is compared with its start
@@ -42,6 +44,10 @@ import sim_loops  # noqa: E402
 CONVERGED_M, CONVERGED_DEG, CONVERGE_WITHIN_S = 0.05, 2.0, 5.0
 #: The brief's placement: 0.8 m / 40 deg from home (x, y [m], yaw [rad] relative to home).
 DEFAULT_PLACE = (-0.8 * math.cos(math.radians(45.0)), 0.8 * math.sin(math.radians(45.0)), math.radians(40.0))
+#: Placement outside the start search (search_translation 1.2 m): 2.0 m / 150 deg from home.
+FAR_PLACE = (1.6, -1.2, math.radians(150.0))
+#: s the far run waits for a localization that must not come.
+FAR_WAIT_S = 10.0
 #: s the mapping run stands before saving: the walls must stay occupied for static_time (10 s).
 MAPPING_STAND_S = 16.0
 #: The crowd at start (crowd_seconds > 0): (x, y) around home [m] (home frame), radius 0.25 m. Kept
@@ -216,7 +222,7 @@ def place_crowd(rospy, crowd_world, remove=False):
 
 
 def run(out_dir, loops=1, world="lab", seed=1, columns=512, first_start=(0.0, 0.0, 0.0), place=DEFAULT_PLACE,
-        box_seconds=0.0, crowd_seconds=0.0, log_dir=None):
+        box_seconds=0.0, crowd_seconds=0.0, far_check=False, log_dir=None):
     """The whole experiment (see the module docstring); returns the report (dict)."""
     from rbd_testkit import RosEnv, restore_sigint
     from rbd_testkit.process import stop_process
@@ -265,8 +271,26 @@ def run(out_dir, loops=1, world="lab", seed=1, columns=512, first_start=(0.0, 0.
         map_file = os.path.join(out_dir, "lab.yaml")
         if crowd_seconds > 0:  # the saved map is in the map frame: the crowd relative to home
             report["crowd"]["cells"] = crowd_cells(map_file, list(CROWD))
-        # --- 2. localization run, placed away from home -------------------------------------------------
         t = time.monotonic()
+        # --- 2a. placed outside the start search: never localized, preflight refuses -----------------
+        if far_check:
+            far = compose(first_start, FAR_PLACE)
+            runner = sim_loops.Runner(map_origin=first_start)
+            watch = Watch(runner)
+            stack = launch(env, "far_run", world, seed, columns, far, map_file)
+            if not runner.wait_ready(120.0):
+                raise RuntimeError("far run: no ground truth / pose / odometry\n" + env.tails())
+            rospy.sleep(FAR_WAIT_S)
+            row = preflight_localized_row(env)
+            with watch.lock:
+                values = [v for _, v in watch.localized]
+                last = watch.samples[-1] if watch.samples else None
+            watch.close()
+            stop_process(stack, timeout=20.0)
+            report["far"] = {"place_from_home": [FAR_PLACE[0], FAR_PLACE[1], math.degrees(FAR_PLACE[2])],
+                             "localized_values": values, "preflight_localized": row,
+                             "last_error": None if last is None else [last[1], last[2]]}
+        # --- 2. localization run, placed away from home -------------------------------------------------
         placed = compose(first_start, place)
         report["placed_world"] = [placed[0], placed[1], math.degrees(placed[2])]
         runner = sim_loops.Runner(map_origin=first_start, steer="corrected")
@@ -283,11 +307,13 @@ def run(out_dir, loops=1, world="lab", seed=1, columns=512, first_start=(0.0, 0.
         with watch.lock:
             samples = list(watch.samples)
             localized = list(watch.localized)
-            t0 = watch.first_sensor
+            # the first sensor data this process saw, or the first pose if that came earlier (the
+            # subscription to /ouster/imu may connect after the node's first scans)
+            t0 = min([watch.first_sensor] + [sm[0] for sm in samples[:1]])
         watch.close()
         first_pose = samples[0] if samples else None
         report["convergence"] = {
-            "first_sensor_stamp": t0,
+            "t0_stamp": t0,
             "first_pose_after_s": None if first_pose is None else first_pose[0] - t0,
             "first_error": None if first_pose is None else [first_pose[1], first_pose[2]],
             "converged_after_s": converge_time(samples, t0),
@@ -342,10 +368,13 @@ def main():
     ap.add_argument("--box-seconds", type=float, default=0.0, help="leave a box in front this long, then save again")
     ap.add_argument("--crowd-seconds", type=float, default=0.0,
                     help="a crowd stands around the robot this long from the start of the mapping run")
+    ap.add_argument("--far-check", action="store_true",
+                    help="first restart placed outside the start search: localized must stay false")
     args = ap.parse_args()
     report = run(args.out, loops=args.loops, world=args.world, seed=args.seed, columns=args.columns,
-                 box_seconds=args.box_seconds, crowd_seconds=args.crowd_seconds)
-    summary = {k: report.get(k) for k in ("convergence", "preflight_localized", "home_reached", "box", "crowd")}
+                 box_seconds=args.box_seconds, crowd_seconds=args.crowd_seconds, far_check=args.far_check)
+    summary = {k: report.get(k) for k in ("convergence", "preflight_localized", "home_reached", "box", "crowd",
+                                          "far")}
     summary["loops"] = [{"loop": e["loop"], "truth_closure": e["truth_closure"], "corrected": e["corrected"]}
                         for e in report.get("loops", [])]
     print(json.dumps(summary, indent=1))
