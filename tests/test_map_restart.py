@@ -11,8 +11,9 @@ box is left in front of the robot that long and the map saved again equals the l
 ``RBD_MAP_CROWD_SECONDS`` (e.g. 8) five visitors stand 1.0-1.4 m around the robot from the start of
 the mapping run that long and leave: they were in the working map while they stood, and none of
 the cells they stood on is occupied in the saved map (most are free). First (``RBD_MAP_FAR_CHECK``,
-default 1) a restart placed 2 m / 150 deg from home, outside the start search: ``localized`` stays
-false and preflight's "Localized in the map" line fails with "not localized in the map".
+default 1) the whole system (rbd_bringup sim.launch) placed 1.96 m / 90 deg from home, outside the
+start search: ``localized`` stays false, the controller refuses the gesture "spin" (no state
+change, no motion) and preflight's "Localized in the map" line fails with "not localized in the map".
 
 `make test-long` only (README "Tests"): two stack starts, 16 s of mapping, 12 s standing and
 the loops are about 150 s for one loop, over make test's 60 s allowance for a new test.
@@ -48,11 +49,15 @@ def test_restart_in_saved_map_converges_and_loops_close(tmp_path):
     # the map files of map_server's format and the sidecar
     for ext in ("pgm", "yaml", "rbdmap"):
         assert (out / ("lab." + ext)).stat().st_size > 0
-    if FAR_CHECK:  # placed 2 m / 150 deg from home, outside the start search: never localized
+    if FAR_CHECK:  # placed 1.96 m / 90 deg from home, outside the start search: never localized
         far = report["far"]
         assert far["localized_values"] and not any(far["localized_values"]), far
         assert far["preflight_localized"]["status"] == "FAIL", far
         assert "not localized in the map" in far["preflight_localized"]["value"], far
+        g = far["gesture"]  # the controller: refused, no trick started, the robot did not move
+        assert any("spin" in r and "not localized in the map" in r for r in g["refusals"]), g
+        assert g["states_after_gesture"] == [], g
+        assert g["moved"] < 0.02, g
     c = report["convergence"]
     # the robot really started away from home: the first poses were off by the placement
     assert c["first_error"][0] > 0.5 or c["first_error"][1] > 30.0, c

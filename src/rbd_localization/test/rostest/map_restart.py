@@ -11,8 +11,10 @@ master for both runs:
    ``first_start``) against /rbd_localization/pose (map): the time from the first sensor data until
    the error is <= 0.05 m / 2 deg for good, when /rbd_localization/localized turned true (and
    that it was false before), preflight's "Localized in the map" line once localized.
-   Optionally (``far_check``), before it: a run placed ``FAR_PLACE`` from home, outside the start
-   search, where the robot cannot localize: ``localized`` stays false and preflight's line FAILs.
+   Optionally (``far_check``), before it: the whole system (rbd_bringup ``sim.launch``) placed
+   ``FAR_PLACE`` from home, outside the start search, where the robot cannot localize:
+   ``localized`` stays false, the controller refuses the gesture "spin" after the e-stop is
+   released (its warning, no state change, no motion) and preflight's line FAILs.
 3. Loops: the robot walks home and round the thesis path ``loops`` times, steered on
    /rbd_localization/pose (sim_loops.py's steering, ``steer="corrected"``, each loop settled
    back onto home after its last turn, which creeps); each loop's end is compared with its start
@@ -44,8 +46,12 @@ import sim_loops  # noqa: E402
 CONVERGED_M, CONVERGED_DEG, CONVERGE_WITHIN_S = 0.05, 2.0, 5.0
 #: The brief's placement: 0.8 m / 40 deg from home (x, y [m], yaw [rad] relative to home).
 DEFAULT_PLACE = (-0.8 * math.cos(math.radians(45.0)), 0.8 * math.sin(math.radians(45.0)), math.radians(40.0))
-#: Placement outside the start search (search_translation 1.2 m): 2.0 m / 150 deg from home.
-FAR_PLACE = (1.6, -1.2, math.radians(150.0))
+#: Placement outside the start search (search_translation 1.2 m / search_rotation 0.9 rad): 1.96 m
+#: from home, turned 90 deg, clear of the lab's people and furniture (the collision zone stays free).
+#: Not (1.6, -1.2, 150 deg): there the search locks onto the lab's near 180-degree twin of the pose
+#: (0.4, 1.2, -30 deg), inside the search, and reports localized at 2.7 m / 180 deg off (measured
+#: 2026-11-29; rbd_localization README "On the simulator").
+FAR_PLACE = (-1.9, 0.5, -math.pi / 2)
 #: s the far run waits for a localization that must not come.
 FAR_WAIT_S = 10.0
 #: s the mapping run stands before saving: the walls must stay occupied for static_time (10 s).
@@ -144,6 +150,40 @@ def preflight_localized_row(env):
     return {"error": "no 'Localized in the map' row", "rows": rows}
 
 
+def refused_gesture(rospy, runner):
+    """Release the e-stop, send the gesture "spin" while not localized; what the controller did.
+
+    Returns {"states": states seen, "refusals": its warnings naming the gesture, "moved": metres
+    the robot moved on ground truth from the gesture until 5 s after it}.
+    """
+    from rosgraph_msgs.msg import Log
+    from std_msgs.msg import String
+    from std_srvs.srv import SetBool
+
+    states, refusals = [], []
+    subs = [rospy.Subscriber("/rbd_controller/state", String, lambda m: states.append(m.data), queue_size=20),
+            rospy.Subscriber("/rosout", Log, lambda m: refusals.append(m.msg) if "refusing gesture" in m.msg
+                             else None, queue_size=100)]
+    gesture = rospy.Publisher("/rbd_gestrec/gesture", String, queue_size=1)
+    rospy.wait_for_service("/rbd_controller/em_stop", 60.0)
+    wait_for(lambda: "EMERGENCY_STOP" in states, 60.0, "the controller in EMERGENCY_STOP")
+    rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)(False)
+    wait_for(lambda: states and states[-1] == "WAITING_FOR_GESTURE", 30.0, "WAITING_FOR_GESTURE")
+    with runner.lock:
+        start = runner.truth
+    n_states = len(states)
+    for _ in range(3):
+        gesture.publish(String("spin"))
+        rospy.sleep(1.0)
+    rospy.sleep(3.0)
+    with runner.lock:
+        end = runner.truth
+    for sub in subs:
+        sub.unregister()
+    return {"states": list(states), "states_after_gesture": states[n_states:], "refusals": list(refusals),
+            "moved": math.hypot(end[0] - start[0], end[1] - start[1])}
+
+
 def save_map(env, directory, name):
     """rosrun rbd_localization save_map DIR NAME; returns (exit code, output)."""
     return env.run_to_exit(["rosrun", "rbd_localization", "save_map", directory, name, "--timeout", "30"],
@@ -224,7 +264,7 @@ def place_crowd(rospy, crowd_world, remove=False):
 def run(out_dir, loops=1, world="lab", seed=1, columns=512, first_start=(0.0, 0.0, 0.0), place=DEFAULT_PLACE,
         box_seconds=0.0, crowd_seconds=0.0, far_check=False, log_dir=None):
     """The whole experiment (see the module docstring); returns the report (dict)."""
-    from rbd_testkit import RosEnv, restore_sigint
+    from rbd_testkit import RosEnv, free_port, restore_sigint
     from rbd_testkit.process import stop_process
 
     restore_sigint()
@@ -277,19 +317,23 @@ def run(out_dir, loops=1, world="lab", seed=1, columns=512, first_start=(0.0, 0.
             far = compose(first_start, FAR_PLACE)
             runner = sim_loops.Runner(map_origin=first_start)
             watch = Watch(runner)
-            stack = launch(env, "far_run", world, seed, columns, far, map_file)
+            # the whole system (rbd_bringup sim.launch): the controller too
+            stack = env.launch("rbd_bringup", "sim.launch", "world:=%s" % world, "seed:=%d" % seed,
+                               "lidar_columns:=%d" % columns, "map:=%s" % map_file, "bridge_port:=%d" % free_port(),
+                               "robot_x:=%.6f" % far[0], "robot_y:=%.6f" % far[1], "robot_yaw:=%.6f" % far[2],
+                               name="far_run")
             if not runner.wait_ready(120.0):
                 raise RuntimeError("far run: no ground truth / pose / odometry\n" + env.tails())
-            rospy.sleep(FAR_WAIT_S)
-            row = preflight_localized_row(env)
+            report["far"] = {"place_from_home": [FAR_PLACE[0], FAR_PLACE[1], math.degrees(FAR_PLACE[2])]}
+            report["far"]["gesture"] = refused_gesture(rospy, runner)
+            rospy.sleep(max(0.0, FAR_WAIT_S - 5.0))
+            report["far"]["preflight_localized"] = preflight_localized_row(env)
             with watch.lock:
-                values = [v for _, v in watch.localized]
+                report["far"]["localized_values"] = [v for _, v in watch.localized]
                 last = watch.samples[-1] if watch.samples else None
+            report["far"]["last_error"] = None if last is None else [last[1], last[2]]
             watch.close()
             stop_process(stack, timeout=20.0)
-            report["far"] = {"place_from_home": [FAR_PLACE[0], FAR_PLACE[1], math.degrees(FAR_PLACE[2])],
-                             "localized_values": values, "preflight_localized": row,
-                             "last_error": None if last is None else [last[1], last[2]]}
         # --- 2. localization run, placed away from home -------------------------------------------------
         placed = compose(first_start, place)
         report["placed_world"] = [placed[0], placed[1], math.degrees(placed[2])]
