@@ -193,3 +193,23 @@ def test_config_validation():
         A1Config(max_vx=0.0)
     with pytest.raises(ValueError):
         A1Config(drift_heading=4.0)
+
+
+def test_start_pose_ground_truth_there_odometry_at_zero():
+    # Placed at (1.5, -0.7) facing 40 deg: ground truth starts there, the robot's own odometry and
+    # IMU yaw start at zero (as a real A1's, wherever it is switched on), and walking forward moves
+    # the truth along the start heading while the odometry counts along its own x.
+    yaw0 = math.radians(40.0)
+    m = A1Model(A1Config(x0=1.5, y0=-0.7, yaw0=yaw0, drift_per_180=0.0))
+    x, y, _z, _r, _p, yaw = m.pose()
+    assert (x, y, yaw) == pytest.approx((1.5, -0.7, yaw0), abs=1e-12)
+    s = state_of(m)
+    assert tuple(s["position"]) == (0.0, 0.0, 0.0)
+    assert s["imu"]["rpy"][2] == pytest.approx(0.0, abs=1e-6)
+    t = drive(m, lambda t: walk(0.3), 0.0, 2.0)
+    drive(m, lambda t: walk(0.0), t, 1.0)
+    d = math.hypot(m.x - 1.5, m.y + 0.7)
+    assert d == pytest.approx(0.6, rel=0.03)
+    assert math.atan2(m.y + 0.7, m.x - 1.5) == pytest.approx(yaw0, abs=1e-6)
+    s = state_of(m)
+    assert s["position"][0] == pytest.approx(d, rel=1e-3) and abs(s["position"][1]) < 1e-5

@@ -7,7 +7,7 @@ import pytest
 
 from rbd_geometry.rotation import rpy_to_matrix
 from rbd_sim.imu import STANDARD_GRAVITY, AccelerationEstimator, ImuModel
-from rbd_sim.zed2 import Zed2Model
+from rbd_sim.zed2 import Zed2Model, in_tracking_frame
 
 
 def test_level_imu_reads_plus_one_g_on_z():
@@ -148,3 +148,18 @@ def test_zed2_rejects_bad_parameters():
         Zed2Model(jump_min=0.5, jump_max=0.1)
     with pytest.raises(ValueError):
         Zed2Model(jump_reset_prob=2.0)
+
+
+def test_zed2_tracking_frame_starts_at_the_robots_start_pose():
+    # Placed at (2, -1) facing 40 deg, the ZED2 reports zero there, as a real one switched on there.
+    origin = (2.0, -1.0, math.radians(40.0))
+    pos, rpy = in_tracking_frame((2.0, -1.0, 0.28), (0.01, -0.02, math.radians(40.0)), origin)
+    assert pos == pytest.approx((0.0, 0.0, 0.28), abs=1e-12)
+    assert rpy == pytest.approx((0.01, -0.02, 0.0), abs=1e-12)
+    # One metre along the start heading is (1, 0) in the tracking frame; a quarter turn left is +90 deg.
+    c, s = math.cos(origin[2]), math.sin(origin[2])
+    pos, rpy = in_tracking_frame((2.0 + c, -1.0 + s, 0.28), (0.0, 0.0, origin[2] + math.pi / 2), origin)
+    assert pos == pytest.approx((1.0, 0.0, 0.28), abs=1e-12)
+    assert rpy[2] == pytest.approx(math.pi / 2, abs=1e-12)
+    # The origin at zero changes nothing (the default).
+    assert in_tracking_frame((1.5, 0.5, 0.3), (0.0, 0.0, 3.0), (0.0, 0.0, 0.0)) == ((1.5, 0.5, 0.3), (0.0, 0.0, 3.0))

@@ -2,10 +2,12 @@
 """Drives the simulated A1 round the thesis path and measures the localization against ground truth.
 
 Path (thesis 4.1.1): (0,0) -> (1,0), turn 180 deg, -> (-1,0), turn 180 deg, -> (0,0) facing +x.
-The robot is steered on ground truth (/rbd_sim/ground_truth), so the path itself is exact; at
-every loop end the corrected pose (/rbd_localization/pose, map) and the EKF alone
-(/odometry/filtered, odom: what the pose would be without map correction) are compared with the
-truth. Writes a JSON report (and, with --png, the trajectories as a PNG like thesis Fig. 16/17).
+The robot is steered on ground truth (/rbd_sim/ground_truth), so the path itself is exact (or,
+with ``steer="corrected"``, on /rbd_localization/pose, as the robot's own navigation would: then
+the ground truth shows where the localization took it); at every loop end the corrected pose
+(/rbd_localization/pose, map) and the EKF alone (/odometry/filtered, odom: what the pose would be
+without map correction) are compared with the truth. Writes a JSON report (and, with --png, the
+trajectories as a PNG like thesis Fig. 16/17).
 
 Used by the rostest sim_loops.test (few loops, with assertions) and by hand for the 10 loops:
     rosrun rbd_localization sim_loops.py --loops 10 --out /tmp/loops.json --png /tmp/loops.png
@@ -41,9 +43,17 @@ def relative(pose, origin):
 
 
 class Runner:
-    """Steers on ground truth and records the three trajectories (and any extra odometry)."""
+    """Steers on ground truth and records the three trajectories (and any extra odometry).
 
-    def __init__(self, extra_odometry=None):
+    map_origin: (x, y, yaw) of the map frame in world (None: map == world); the truth is recorded
+    and compared in the map frame. steer: "truth" (default) or "corrected" (the localization's pose).
+    """
+
+    def __init__(self, extra_odometry=None, map_origin=None, steer="truth"):
+        if steer not in ("truth", "corrected"):
+            raise ValueError("steer must be 'truth' or 'corrected', got %r" % (steer,))
+        self.map_origin = map_origin
+        self.steer = steer
         self.lock = threading.Lock()
         self.truth = None
         self.est = None
@@ -64,8 +74,11 @@ class Runner:
 
     def on_truth(self, msg):
         p = msg.pose.pose
+        truth = (p.position.x, p.position.y, yaw_of(p.orientation))
+        if self.map_origin is not None:
+            truth = relative(truth, self.map_origin)
         with self.lock:
-            self.truth = (p.position.x, p.position.y, yaw_of(p.orientation))
+            self.truth = truth
             self.tracks["truth"].append(self.truth[:2])
             self.truth_history.append((msg.header.stamp.to_sec(), self.truth))
 
@@ -119,18 +132,22 @@ class Runner:
                 e["first"], e["recording"], e["max_err"], e["samples"], e["track"] = None, True, 0.0, 0, []
                 e["errors"] = []
 
-    def send(self, vx, wz):
+    def send(self, vx, wz, vy=0.0):
         t = Twist()
-        t.linear.x, t.angular.z = vx, wz
+        t.linear.x, t.linear.y, t.angular.z = vx, vy, wz
         self.cmd.publish(t)
 
+    def steer_pose(self):
+        """The pose the steering follows (lock held): the truth or the corrected pose (map)."""
+        return self.truth if self.steer == "truth" else self.est
+
     def go_to(self, gx, gy, timeout=40.0):
-        """Walk to (gx, gy): turn towards it, then P control on distance (ground truth)."""
+        """Walk to (gx, gy): turn towards it, then P control on distance (on steer_pose)."""
         rate = rospy.Rate(20)
         end = rospy.Time.now() + rospy.Duration(timeout)
         while not rospy.is_shutdown() and rospy.Time.now() < end:
             with self.lock:
-                x, y, yaw = self.truth
+                x, y, yaw = self.steer_pose()
             dx, dy = gx - x, gy - y
             rho = math.hypot(dx, dy)
             if rho < 0.02:
@@ -152,11 +169,31 @@ class Runner:
         end = rospy.Time.now() + rospy.Duration(timeout)
         while not rospy.is_shutdown() and rospy.Time.now() < end:
             with self.lock:
-                yaw = self.truth[2]
+                yaw = self.steer_pose()[2]
             err = wrap(goal_yaw - yaw)
             if abs(err) < 0.01:
                 break
             self.send(0.0, max(-WZ_MAX, min(WZ_MAX, 1.5 * err)))
+            rate.sleep()
+        self.stop()
+
+    def settle_at(self, gx, gy, tol=0.01, timeout=10.0):
+        """Step onto (gx, gy) without turning (forward and sideways P control on steer_pose).
+
+        An in-place turn of the A1 creeps (the simulated drift: 0.4 m per 180 deg), so a turn at
+        the goal leaves the robot off it; this puts it back as a robot's position controller would.
+        """
+        rate = rospy.Rate(20)
+        end = rospy.Time.now() + rospy.Duration(timeout)
+        while not rospy.is_shutdown() and rospy.Time.now() < end:
+            with self.lock:
+                x, y, yaw = self.steer_pose()
+            dx, dy = gx - x, gy - y
+            if math.hypot(dx, dy) < tol:
+                break
+            c, s = math.cos(yaw), math.sin(yaw)
+            ex, ey = c * dx + s * dy, -s * dx + c * dy
+            self.send(max(-0.15, min(0.15, 1.5 * ex)), 0.0, max(-0.15, min(0.15, 1.5 * ey)))
             rate.sleep()
         self.stop()
 
@@ -189,6 +226,43 @@ class Runner:
         return False
 
 
+def drive_loop(r, settle=False):
+    """One loop of the thesis path with runner r, ending at (0, 0) facing +x.
+
+    settle: after the last turn, step back onto (0, 0) sideways (Runner.settle_at), so that the
+    loop ends where it started also on a robot that creeps while turning.
+    """
+    r.go_to(1.0, 0.0)
+    r.turn_to(math.pi)
+    r.go_to(-1.0, 0.0)
+    r.turn_to(0.0)
+    r.go_to(0.0, 0.0)
+    r.turn_to(0.0)
+    if settle:
+        r.settle_at(0.0, 0.0)
+    rospy.sleep(1.0)
+
+
+def drive_loops(r, loops, settle=False):
+    """Drive `loops` loops with runner r; return {"loops": [errors at each loop end]}.
+
+    Each entry also has "start_truth" and "truth_closure" [m]: how far the loop's end is from its
+    start on ground truth (what matters when steering on the corrected pose).
+    """
+    report = {"loops": []}
+    for i in range(loops):
+        with r.lock:
+            start = r.truth
+        drive_loop(r, settle)
+        e = r.errors()
+        e["loop"] = i + 1
+        e["start_truth"] = list(start)
+        e["truth_closure"] = math.hypot(e["truth"][0] - start[0], e["truth"][1] - start[1])
+        report["loops"].append(e)
+        rospy.loginfo("loop %d: %s", i + 1, json.dumps(e))
+    return report
+
+
 def run(loops, settle=4.0, extra_odometry=None):
     """Drive `loops` loops; return the per-loop error report.
 
@@ -201,19 +275,7 @@ def run(loops, settle=4.0, extra_odometry=None):
     rospy.sleep(settle)  # map built while standing
     r.start_extra()
     rospy.sleep(0.5)
-    report = {"loops": []}
-    for i in range(loops):
-        r.go_to(1.0, 0.0)
-        r.turn_to(math.pi)
-        r.go_to(-1.0, 0.0)
-        r.turn_to(0.0)
-        r.go_to(0.0, 0.0)
-        r.turn_to(0.0)
-        rospy.sleep(1.0)
-        e = r.errors()
-        e["loop"] = i + 1
-        report["loops"].append(e)
-        rospy.loginfo("loop %d: %s", i + 1, json.dumps(e))
+    report = drive_loops(r, loops)
     with r.lock:  # subscribers keep appending
         report["tracks"] = {k: list(v) for k, v in r.tracks.items()}
         report["extra"] = {name: {"max_err": e["max_err"], "final_err": e.get("final_err"), "samples": e["samples"],

@@ -8,7 +8,9 @@ ROS-free. The estimate is the true pose plus an error state (x, y, z, yaw) that
   once (a loop closure), or a spurious shift of jump_min..jump_max metres in a random
   direction, as the ZED does when the scene changes (crowds);
 
-plus white noise on every sample. ``map`` coincides with the simulator's ``world`` frame.
+plus white noise on every sample. ``map`` is the ZED2's own tracking frame: the robot's start
+pose in the simulator's ``world`` (the world origin unless the robot is placed elsewhere;
+:func:`in_tracking_frame`), as a real ZED2 starts tracking at zero where it is switched on.
 Everything is drawn from one seeded generator: the same seed and the same true trajectory give
 the same output.
 """
@@ -18,6 +20,23 @@ import math
 import numpy as np
 
 from rbd_geometry.rotation import wrap_angle
+
+
+def in_tracking_frame(position: tuple, rpy: tuple, origin: tuple) -> tuple:
+    """The true pose (world) in the ZED2's tracking frame, which starts at ``origin``.
+
+    Args:
+        position: (x, y, z) in world [m].
+        rpy: (roll, pitch, yaw) in world [rad].
+        origin: (x, y, yaw) of the tracking frame in world: the robot's start pose [m, m, rad].
+
+    Returns:
+        (position, rpy) in the tracking frame; z, roll and pitch unchanged (the origin is level).
+    """
+    ox, oy, oyaw = origin
+    c, s = math.cos(oyaw), math.sin(oyaw)
+    dx, dy = position[0] - ox, position[1] - oy
+    return (c * dx + s * dy, -s * dx + c * dy, position[2]), (rpy[0], rpy[1], wrap_angle(rpy[2] - oyaw))
 
 
 class ZedPose:
