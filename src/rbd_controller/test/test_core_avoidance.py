@@ -248,6 +248,25 @@ def test_box_on_the_path_escape_detour_and_every_pose_reached():
     assert w.min_clearance > 0.25  # never closer than the A1's half length to a box point
 
 
+def test_the_stroll_goes_round_the_box_out_and_back_with_one_stop():
+    # Issue 27: one stop at the bag (classified, escaped, planned); the detour's end is the far pose and
+    # the way back would cross the bag again, so the avoidance plans on to the next pose at once
+    # instead of walking back into a second stop.
+    w = World(path=STROLL)
+    w.start_walk()
+    assert w.run_until(lambda: w.x > 0.3, 5.0)
+    w.obstacles["box"] = box(1.1, 0.0)
+    assert w.run_until(lambda: w.ctl.state == State.WAITING_FOR_GESTURE, 90.0), (states(w), w.logs[-5:])
+    seq = states(w)
+    assert seq.count(State.COLLISION_DETECTED) == 1 and seq.count(State.AVOIDING) == 1, seq
+    assert any("reached by the detour" in msg and "planning on" in msg for _, msg in w.logs), w.logs
+    plans = [e for e in w.events if e["event"] == "plan"]
+    assert len(plans) >= 2 and all(e["planner"] == "lattice" for e in plans)
+    assert [e["event"] for e in w.events].count("avoided") == 2 and w.ctl.stats["gave_up"] == 0
+    assert (w.x, w.y) == pytest.approx((0.0, 0.0), abs=1e-9)
+    assert w.min_clearance > 0.25
+
+
 def test_walk_with_the_box_between_its_poses_skips_them_with_reasons():
     w = World()
     w.start_walk()

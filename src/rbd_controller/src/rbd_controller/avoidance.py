@@ -19,14 +19,15 @@ from typing import Any, Tuple, Union
 from rbd_controller.context import Behaviour, Context
 from rbd_controller.detour import DetourPlanner, Plan
 from rbd_controller.escape import clear_by_margin, plan_escape
-from rbd_controller.footprint import ZoneGrowth
+from rbd_controller.footprint import ZoneGrowth, swept_hits
 from rbd_controller.fsm import Event, State
 from rbd_controller.lattice import LatticePlanner
 from rbd_controller.lattice_plan import LatticePlan, progress_index, remaining_clear, speed_ahead
 from rbd_controller.planner_worker import Outcome, PlannerWorker
 
-#: Wall-clock budget of one lattice search [s]; past it the grid planner plans instead.
-LATTICE_BUDGET = 2.0
+#: Wall-clock budget of one lattice search [s]; past it the grid planner plans instead. In the simulated
+#: stroll at load ~7 the search made ~65 expansions/s and the box needs 150-350 (2 s fell back to the grid).
+LATTICE_BUDGET = 4.0
 #: Heading bins of the lattice (32: 11.25 degrees; 48 cost ~25 % more CPU on the stroll's box scene).
 LATTICE_HEADINGS = 32
 #: The rest of a followed detour is checked against the scan this often [s].
@@ -334,6 +335,8 @@ class Avoidance(Behaviour):
                     end = plan.poses[-1]
                     if math.hypot(pose[0] - end[0], pose[1] - end[1]) <= 0.1:
                         ctx.episode.progressed()
+                        if self._chain_next(pose, now):
+                            return
                         ctx.ports.log("info", "detour done: continuing the trick")
                         ctx.fire_if(epoch, Event.DETOUR_DONE)
                         return
@@ -362,6 +365,39 @@ class Avoidance(Behaviour):
             if fresh:
                 ctx.goal.sent_at = now
             ctx.publish()
+
+    def _chain_next(self, pose: Any, now: float) -> bool:
+        """Caller holds the lock. At the blocked pose: plan on when the way to the next pose crosses the obstacle.
+
+        The trick's next motion (turn towards the next pose, walk straight, as the position controller
+        drives it) is checked against the static obstacle being avoided, with the zone for walking
+        at the planned speed. When it would bring the obstacle into the zone (the stroll's way back
+        passes the bag again), the blocked pose counts as reached (its own heading is not turned to:
+        the next motion turns anyway) and the next pose is planned for at once, without walking into
+        a new stop, classification and escape first.
+        """
+        ctx = self.ctx
+        tricks = self.tricks
+        static = ctx.perception.known_static
+        if tricks.current is None or not tricks.queue or not len(static):
+            return False
+        gx, gy = ctx.ports.pose_xy(tricks.queue[0][0])[:2]
+        if math.hypot(gx - pose[0], gy - pose[1]) < 0.05:
+            return False
+        face = math.atan2(gy - pose[1], gx - pose[0])
+        path = [tuple(pose[:3]), (pose[0], pose[1], face), (gx, gy, face)]
+        if swept_hits(path, self.lattice.zone_for(self.lattice.speed), static) < ctx.avoid.point_threshold:
+            return False
+        name = tricks.current[1]
+        tricks.current = None
+        ctx.stats["avoided"] += 1
+        since = ctx.episode.start if ctx.episode.start is not None else now
+        ctx.ports.publish_avoidance({"event": "avoided", "detail": "blocked pose reached after %.1f s" % (now - since)})
+        ctx.ports.log("info", "%r reached by the detour; the way to %r crosses the obstacle being avoided: planning on"
+                      % (name, tricks.queue[0][1]))
+        self.plan, self.detour, self._job = None, None, None
+        ctx.goal.sent_at = None
+        return True
 
     def _submit_replan(self, pose: Any, plan: LatticePlan, epoch: int) -> None:
         """Caller holds the lock. A new plan from pose to the detour's end if the rest holds known obstacles."""

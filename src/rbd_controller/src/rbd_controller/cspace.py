@@ -67,7 +67,8 @@ class CSpace:
         occ = np.argwhere(obstacles)
         if points is None:
             points = np.stack([self.x0 + (occ[:, 1] + 0.5) * res, self.y0 + (occ[:, 0] + 0.5) * res], axis=1)
-        self.points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        self.points = points[np.argsort(points[:, 0], kind="stable")]  # by x: a range is two binary searches
         self._occ = occ
         self._built = np.zeros(headings, dtype=bool)  # bins are built when first looked up
 
@@ -142,9 +143,9 @@ class CSpace:
         if not len(pts):
             return True
         reach = math.hypot(max(zone[0], zone[2]), max(zone[1], zone[3])) + EXACT_MARGIN
-        near = ((pts[:, 0] > xs.min() - reach) & (pts[:, 0] < xs.max() + reach) & (pts[:, 1] > ys.min() - reach)
-                & (pts[:, 1] < ys.max() + reach))
-        pts = pts[near]
+        lo, hi = np.searchsorted(pts[:, 0], (xs.min() - reach, xs.max() + reach))
+        pts = pts[lo:hi]
+        pts = pts[(pts[:, 1] > ys.min() - reach) & (pts[:, 1] < ys.max() + reach)]
         if not len(pts):
             return True
         f, left, b, right = (z + EXACT_MARGIN for z in zone)
