@@ -1,16 +1,12 @@
 """The avoidance behaviour (issue 17): escape from a static blocker, then detour to the blocked pose. ROS-free.
 
-ESCAPING sends guarded goals (the position controller gates them per zone side) until the zone
-is clear by a margin; AVOIDING plans a detour to the blocked trick pose in SE(2) with the stop
-zone as footprint (:mod:`rbd_controller.lattice`) and has the position controller follow it
-continuously (follow_path) under the normal collision rules. Planning runs in a worker thread
-(:mod:`rbd_controller.planner_worker`), never in the tick: the robot stands still (it is stopped
-anyway) until the plan arrives. When the lattice finds nothing within its wall-clock budget the
-grid planner (:mod:`rbd_controller.detour`, a disc) plans instead and its poses are driven one by
-one, as before issue 27; which one ran is logged and published. Without progress for
-~avoid_timeout, or when the goal is blocked or the detour too long, it gives up: the blocked
-pose is dropped (or the trick heads home) and the trick goes on. The decisions are in ROS-free
-modules (escape, lattice, detour, arena); this one only sequences them.
+ESCAPING sends guarded goals (the position controller gates them per zone side) until the zone is
+clear by a margin; AVOIDING plans in a worker thread (never in the tick) with the SE(2) lattice, the
+stop zone as footprint, and has the position controller follow the plan (follow_path); the grid
+planner (a disc, driven pose by pose) only when the lattice finds nothing within its budget. Without
+progress for ~avoid_timeout, or when the goal is blocked or the detour too long, it gives up: the
+blocked pose is dropped (or the trick heads home) and the trick goes on. The decisions are in
+ROS-free modules (escape, lattice, detour, arena, planner_worker); this one only sequences them.
 """
 
 import math
@@ -25,8 +21,7 @@ from rbd_controller.lattice import LatticePlanner
 from rbd_controller.lattice_plan import LatticePlan, progress_index, remaining_clear, speed_ahead
 from rbd_controller.planner_worker import Outcome, PlannerWorker
 
-#: Wall-clock budget of one lattice search [s]; past it the grid planner plans instead. In the simulated
-#: stroll at load ~7 the search made ~65 expansions/s and the box needs 150-350 (2 s fell back to the grid).
+#: Wall-clock budget of one lattice search [s], then the grid planner (the README says why 4 s).
 LATTICE_BUDGET = 4.0
 #: Heading bins of the lattice (32: 11.25 degrees; 48 cost ~25 % more CPU on the stroll's box scene).
 LATTICE_HEADINGS = 32
@@ -285,12 +280,9 @@ class Avoidance(Behaviour):
     def _follow_detour(self, plan: LatticePlan, now: float, epoch: int) -> None:
         """Follow the lattice plan continuously (follow_path), speed-limited, replanned; DETOUR_DONE at its end.
 
-        The path goes to the position controller once; it is sent again (replacing the running one, no
-        stop) when the speed limit of the poses ahead changes (slow near the obstacle, fast away from
-        it). Every REPLAN_CHECK s the rest of the path's swept zones are checked against the known
-        obstacles; when they hold some, a new plan from where the robot is goes to the worker while the
-        robot follows on (rbd_lidar still stops it if the way really closes) and replaces the path
-        when it arrives. After a stop that cleared by itself the rest of the path is sent again.
+        Sent once, again (no stop) when the speed limit ahead changes or a new plan arrives; every
+        REPLAN_CHECK s a known obstacle in the rest of the swept zones starts a replan in the worker
+        while the robot follows on. After a stop that cleared by itself the rest is sent again.
         """
         ctx = self.ctx
         p = ctx.perception
@@ -369,12 +361,9 @@ class Avoidance(Behaviour):
     def _chain_next(self, pose: Any, now: float) -> bool:
         """Caller holds the lock. At the blocked pose: plan on when the way to the next pose crosses the obstacle.
 
-        The trick's next motion (turn towards the next pose, walk straight, as the position controller
-        drives it) is checked against the static obstacle being avoided, with the zone for walking
-        at the planned speed. When it would bring the obstacle into the zone (the stroll's way back
-        passes the bag again), the blocked pose counts as reached (its own heading is not turned to:
-        the next motion turns anyway) and the next pose is planned for at once, without walking into
-        a new stop, classification and escape first.
+        The trick's next motion (turn, walk straight) is checked against the static obstacle being avoided
+        (the stroll's way back passes the bag again): then the blocked pose counts as reached and the next
+        one is planned for at once, instead of walking into a new stop, classification and escape.
         """
         ctx = self.ctx
         tricks = self.tricks
