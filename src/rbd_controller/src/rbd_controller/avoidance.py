@@ -378,12 +378,12 @@ class Avoidance(Behaviour):
         if swept_hits(path, self.lattice.zone_for(self.lattice.speed), static) < ctx.avoid.point_threshold:
             return False
         name = tricks.current[1]
-        tricks.current = None
+        tricks.current = tricks.queue.pop(0)  # the new blocked pose (a give-up drops it)
         ctx.stats["avoided"] += 1
         since = ctx.episode.start if ctx.episode.start is not None else now
         ctx.ports.publish_avoidance({"event": "avoided", "detail": "blocked pose reached after %.1f s" % (now - since)})
         ctx.ports.log("info", "%r reached by the detour; the way to %r crosses the obstacle being avoided: planning on"
-                      % (name, tricks.queue[0][1]))
+                      % (name, tricks.current[1]))
         self.plan, self.detour, self._job = None, None, None
         ctx.goal.sent_at = None
         return True
