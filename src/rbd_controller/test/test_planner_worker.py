@@ -6,10 +6,15 @@ give-up with its reason (never a dead node), and a result that arrives after the
 AVOIDING, or after a stop, is dropped.
 """
 
+import math
 import threading
 import time
 
+import numpy as np
+import pytest
+
 from rbd_controller.core import MainController, Ports
+from rbd_controller.detour import GridMap
 from rbd_controller.fsm import Event, State
 from rbd_controller.lattice_plan import LatticePlan
 from rbd_controller.perception import AvoidParams
@@ -170,3 +175,35 @@ def test_the_grid_planner_runs_only_when_the_lattice_finds_nothing_and_says_so()
     assert fake.av.kind == "grid" and fake.av.plan.ok
     assert any(level == "warn" and "grid planner" in msg and "budget spent" in msg for level, msg in fake.logs)
     assert [e for e in fake.events if e["event"] == "plan" and e["planner"] == "grid"]
+
+
+def _degenerate(kind):
+    """(robot pose, obstacle points) of a degenerate scene for a blocked pose at (2, 0)."""
+    if kind == "start is the goal":
+        return (2.0, 0.0, 0.0), np.zeros((0, 2))
+    if kind == "start inside the zone":
+        return (0.0, 0.0, 0.0), np.array([[0.3, 0.0], [0.3, 0.05]])
+    if kind == "goal on the map's edge":
+        return (0.0, 0.0, 0.0), np.array([[1.0, 0.9]])
+    if kind == "non-finite points":
+        return (0.0, 0.0, 0.0), np.array([[math.nan, 0.0], [math.inf, 1.0]])
+    return (0.0, 0.0, 0.0), np.zeros((0, 2))  # no points, no map
+
+
+@pytest.mark.parametrize("kind", ["start is the goal", "start inside the zone", "goal on the map's edge",
+                                  "non-finite points", "empty"])
+def test_degenerate_scenes_give_a_detour_or_a_reason_never_a_crash(kind):
+    fake = Fake()
+    fake.av.worker = PlannerWorker(inline=True)
+    fake.av.budget = 2.0
+    pose, points = _degenerate(kind)
+    fake.ctl.perception.on_pose(0.0, *pose)
+    fake.ctl.perception.on_blocking_points(0.0, [tuple(p) for p in points])
+    if kind == "goal on the map's edge":  # a 2 x 2 m map ending at the goal's x, one wall cell on it
+        occupied = np.zeros((40, 40), dtype=bool)
+        occupied[20, 39] = occupied[0, 0] = True
+        fake.ctl.perception.on_map(GridMap(occupied, (0.0, -1.0), 0.05))
+    for _ in range(3):
+        fake.tick()
+    assert not [m for level, m in fake.logs if "planner crashed" in m], fake.logs
+    assert fake.av.plan is not None or fake.ctl.state != State.AVOIDING, (kind, fake.logs)
