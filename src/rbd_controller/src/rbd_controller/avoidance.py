@@ -181,10 +181,7 @@ class Avoidance(Behaviour):
         if self.plan is None:
             self._plan_detour(now, epoch)
             return
-        if self.kind == "lattice":
-            self._follow_detour(self.plan, now, epoch)
-        else:
-            self._drive_detour(self.plan, now, epoch)
+        (self._follow_detour if self.kind == "lattice" else self._drive_detour)(self.plan, now, epoch)
 
     def _plan_job(self, start: Any, goal: Any, grid: Any, points: Any, arena: Any) -> Tuple[str, Any, str]:
         """In the worker: the lattice within its budget, else the grid planner. (kind, plan, lattice's answer)."""
@@ -314,7 +311,8 @@ class Avoidance(Behaviour):
                         return  # gave up
             progress = progress_index(plan, pose, self._progress)
             if progress > self._progress:
-                ctx.episode.progressed()  # a pose of the detour passed
+                ctx.episode.progressed()  # a pose of the detour passed: ~pose_timeout counts from here
+                ctx.goal.sent_at = now if ctx.goal.sent_at is not None else None
             self._progress = progress
             remaining = plan.poses[self._progress:]
             speed = speed_ahead(plan, self._progress)
