@@ -243,7 +243,7 @@ def lidar_zone_model():
     return zone, growth, origin
 
 
-def swept_zones(samples, states, model, every=0.4):
+def swept_zones(samples, states, model, every=0.5):
     """The stop zone rbd_lidar checked while AVOIDING, at ground-truth poses every ``every`` s.
 
     Each rectangle is the rest zone grown (rbd_controller.footprint, rbd_lidar's rule) for the
@@ -844,7 +844,8 @@ def plot(ctx, name, title, runs):
         if r.get("arena"):
             ax.plot([p[0] for p in r["arena"] + r["arena"][:1]], [p[1] for p in r["arena"] + r["arena"][:1]],
                     "k:", lw=1, label="arena")
-        for i, rect in enumerate(r.get("swept", [])):
+        swept = r.get("swept") or []
+        for i, rect in enumerate(swept[::max(1, len(swept) // 20)]):  # <= ~20 rectangles: readable
             ax.fill([p[0] for p in rect], [p[1] for p in rect], facecolor="none", edgecolor="tab:orange", lw=0.5,
                     alpha=0.7, label="stop zone swept on the detour (ground truth, grown)" if i == 0 else None)
         for i, plan in enumerate(r.get("plans", [])):
