@@ -69,6 +69,7 @@ class Watch:
         ]
         # A new subscriber connects after a while under load; every experiment reads pose() and
         # state at once (a CI run at load 18 crashed on a pose() of None).
+        self.zone_model = lidar_zone_model()
         if not wait_for(lambda: self.truth and self.state, 30.0):
             self.close()
             raise RuntimeError("no ground truth or controller state within 30 s (truth %d samples, state %r)"
@@ -214,6 +215,67 @@ def footprint_trace(samples, boxes, people=None):
     return best, contacts
 
 
+def lidar_zone_model():
+    """rbd_lidar's rest zone, growth parameters and zone origin in base_link: to draw the zone it swept."""
+    import rospy
+    import tf2_ros
+
+    from rbd_controller.footprint import ZoneGrowth
+
+    ns = "/rbd_lidar"
+    zone = tuple(float(rospy.get_param(ns + "/zone_" + side, d)) for side, d in (
+        ("front", 0.70), ("left", 0.35), ("back", 0.55), ("right", 0.35)))
+    d = ZoneGrowth()
+    growth = ZoneGrowth(reaction_time=float(rospy.get_param(ns + "/reaction_time", d.reaction_time)),
+                        rotation_lever=float(rospy.get_param(ns + "/rotation_lever", d.rotation_lever)),
+                        max_growth=float(rospy.get_param(ns + "/max_growth", d.max_growth)),
+                        enabled=bool(rospy.get_param(ns + "/velocity_aware", d.enabled)))
+    origin = (0.0, 0.0)
+    frame = str(rospy.get_param(ns + "/zone_frame", ""))
+    if frame:
+        buf = tf2_ros.Buffer()
+        listener = tf2_ros.TransformListener(buf)  # noqa: F841 - fills buf
+        try:
+            tr = buf.lookup_transform("base_link", frame, rospy.Time(0), rospy.Duration(5.0)).transform.translation
+            origin = (tr.x, tr.y)
+        except (tf2_ros.LookupException, tf2_ros.ConnectivityException, tf2_ros.ExtrapolationException) as err:
+            log("zone frame %s not in TF (%s): zone drawn from base_link" % (frame, err))
+    return zone, growth, origin
+
+
+def swept_zones(samples, states, model, every=0.5):
+    """The stop zone rbd_lidar checked while AVOIDING, at ground-truth poses every ``every`` s.
+
+    Each rectangle is the rest zone grown (rbd_controller.footprint, rbd_lidar's rule) for the
+    ground-truth speed and yaw rate there; corners in the world frame.
+    """
+    from rbd_controller.footprint import grown_zone
+
+    zone, growth, (ox, oy) = model
+    spans, since = [], None
+    for t, st in states:
+        if st == "AVOIDING" and since is None:
+            since = t
+        elif st != "AVOIDING" and since is not None:
+            spans.append((since, t))
+            since = None
+    if since is not None:
+        spans.append((since, math.inf))
+    out, last = [], -math.inf
+    for a, b in zip(samples, samples[1:]):
+        t = a[0]
+        if t - last < every or not any(t0 <= t <= t1 for t0, t1 in spans):
+            continue
+        last = t
+        dt = max(b[0] - a[0], 1e-3)
+        wz = math.atan2(math.sin(b[3] - a[3]), math.cos(b[3] - a[3])) / dt
+        f, left, back, right = grown_zone(zone, a[4], 0.0, wz, growth)
+        c, s = math.cos(a[3]), math.sin(a[3])
+        corners = [(ox + f, oy + left), (ox - back, oy + left), (ox - back, oy - right), (ox + f, oy - right)]
+        out.append([(round(a[1] + c * u - s * v, 3), round(a[2] + s * u + c * v, 3)) for u, v in corners])
+    return out
+
+
 def stationary_for(samples, radius=0.05):
     """Seconds the robot has stayed within radius of where it is at the end of samples."""
     if not samples:
@@ -316,6 +378,16 @@ def run_trick_with_box(ctx, watch, op, trick, avoidance, blocked_wait):
     result["path"] = [(s[1], s[2]) for s in samples[::5]]
     result["plans"] = plans
     result["arena"] = arena
+    if avoidance:
+        planned = [t for t, e in events if e.startswith("plan:")]
+        # Collision stops once the first detour was planned (issue 27: none), and which planner ran.
+        result["stops_after_plan"] = sum(1 for (t, st), (_, prev) in zip(watch.states[1:], watch.states)
+                                         if planned and t0 <= t <= t1 and t > planned[0]
+                                         and st == "COLLISION_DETECTED" and prev != st)
+        result["planners"] = [e.split(":", 2)[1].split(",")[0].strip() for _, e in events if e.startswith("plan:")]
+        with watch.lock:
+            states_t = [(t, st) for t, st in watch.states if t0 <= t <= t1]
+        result["swept"] = swept_zones(samples, states_t, watch.zone_model)
     op.place_box(name="bag", remove=True)
     if not avoidance:
         op.switch("avoidance", True)  # let the pending trick finish, clear of the box
@@ -366,10 +438,10 @@ def exp_box(ctx):
             on["time_lost_s"] = None if on["baseline_s"] is None else on["duration_s"] - on["baseline_s"]
             result[trick] = on
             log("box in %s (avoidance on): completed %s in %.1f s (lost %s s), min clearance %.3f m, contacts %d, "
-                "avoided %d, poses %s, skipped %s" % (
+                "avoided %d, poses %s, skipped %s, planners %s, collision stops after the plan %d" % (
                     trick, on["completed"], on["duration_s"], on["time_lost_s"], on["min_clearance_m"],
                     on["contacts"], on["obstacles_avoided"], [(p["pose"], p["closest_m"]) for p in on["poses"]],
-                    on["skipped"]))
+                    on["skipped"], on["planners"], on["stops_after_plan"]))
         off = run_trick_with_box(ctx, watch, op, "walk", False, result["blocked_forever_s"])
         result["off"] = off
         log("box in walk (avoidance off): stationary %.1f s in %s, trick pending %s" % (
@@ -772,6 +844,10 @@ def plot(ctx, name, title, runs):
         if r.get("arena"):
             ax.plot([p[0] for p in r["arena"] + r["arena"][:1]], [p[1] for p in r["arena"] + r["arena"][:1]],
                     "k:", lw=1, label="arena")
+        swept = r.get("swept") or []
+        for i, rect in enumerate(swept[::max(1, len(swept) // 20)]):  # <= ~20 rectangles: readable
+            ax.fill([p[0] for p in rect], [p[1] for p in rect], facecolor="none", edgecolor="tab:orange", lw=0.5,
+                    alpha=0.7, label="stop zone swept on the detour (ground truth, grown)" if i == 0 else None)
         for i, plan in enumerate(r.get("plans", [])):
             if plan:
                 ax.plot([p[0] for p in plan], [p[1] for p in plan], "o--", color="tab:purple", ms=3, lw=1,

@@ -26,6 +26,7 @@ from rbd_controller.dodge import ApproachDetector, dodge_target
 from rbd_controller.escape import ZoneReading, clear_by_margin, occupied_sides, plan_escape
 from rbd_controller.fsm import State
 from rbd_controller.perception import AvoidParams, Perception
+from rbd_controller.planner_worker import PlannerWorker
 
 EXAMPLES = int(os.environ.get("RBD_FUZZ_EXAMPLES", "25"))
 FUZZ = settings(max_examples=EXAMPLES, deadline=None, database=None,
@@ -248,6 +249,7 @@ class Scene:
 
     def __init__(self):
         self.goals = []
+        self.logs = []
         self.ctl = MainController(
             Ports(
                 get_gesture=lambda: "walk",
@@ -259,12 +261,17 @@ class Scene:
                 pos_collision=lambda on: None,
                 publish_estop=lambda on: None,
                 publish=lambda c: None,
-                log=lambda level, msg: None,
+                log=lambda level, msg: self.logs.append((level, msg)),
                 set_guarded_position=lambda x, y, v: self.goals.append(("guarded", (x, y, v))) or (True, "ok"),
+                follow_path=lambda poses, v: self.goals.append(("path", poses[-1])) or (True, "ok"),
             ),
             avoid=AvoidParams(static_after=0.3, blocked_timeout=0.2, dodge=True, zone=ZONE, arena_half_size=2.0),
             start_timeout=0.5,
         )
+        # The planner runs inside the tick here (the worker's thread is tested in test_planner_worker.py):
+        # a planner that raises is then a logged give-up, caught below.
+        self.ctl.avoidance.worker = PlannerWorker(inline=True)
+        self.ctl.avoidance.budget = 0.5
 
 
 @FUZZ
@@ -299,3 +306,4 @@ def test_the_tick_never_raises_and_no_behaviour_faults(steps):
         assert ctl.state in State
     for _, goal in scene.goals:
         assert all(math.isfinite(v) for v in goal), scene.goals
+    assert not [m for level, m in scene.logs if "planner crashed" in m], scene.logs

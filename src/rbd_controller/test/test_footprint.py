@@ -38,3 +38,15 @@ def test_max_age_is_validated():
     for bad in (-0.1, math.nan, math.inf, True):
         with pytest.raises(ValueError):
             ZoneGrowth(max_age=bad)
+
+
+def test_growth_from_params_reads_rbd_lidars_names_and_refuses_bad_values():
+    from rbd_controller.footprint import growth_from_params
+
+    params = {"/l/reaction_time": 0.5, "/l/rotation_lever": 0.2, "/l/max_growth": 0.4, "/l/velocity_aware": False,
+              "/l/max_cloud_age": 0.3}
+    g = growth_from_params(lambda name, default: params.get(name, default), "/l")
+    assert (g.reaction_time, g.rotation_lever, g.max_growth, g.enabled, g.max_age) == (0.5, 0.2, 0.4, False, 0.3)
+    params["/l/reaction_time"] = -1.0
+    with pytest.raises(ValueError):
+        growth_from_params(lambda name, default: params.get(name, default), "/l")

@@ -232,3 +232,22 @@ def test_the_sim_strolls_box_detour_with_any_final_heading_is_sound():
     assert plan.ok, plan
     assert plan.poses[-1][:2] == (-1.0, -0.03)
     assert_sound(plan, start, pts, origin=(-0.08, 0.0))
+
+
+def test_progress_passes_turns_on_the_spot_once_faced_so_a_slow_turn_does_not_hold_the_path_back():
+    # The simulated stroll's detour begins with turns on the spot: progress stuck at the first of them
+    # kept the whole path at the turn's slow speed limit (0.06 m/s) until a replan.
+    from rbd_controller.lattice_plan import LatticePlan, progress_index
+
+    poses = [(0.0, 0.0, math.radians(a)) for a in (170, 160, 150)] + [(-0.2, 0.1, math.radians(150)),
+                                                                      (-0.4, 0.2, math.radians(150))]
+    plan = LatticePlan(True, poses, 0.45, 0.45, "test", 0.3)
+    plan.speeds = [0.06, 0.06, 0.06, 0.3, 0.3]
+    i = progress_index(plan, (0.0, 0.0, math.pi))
+    assert i == 0 and speed_ahead(plan, i) == 0.06  # not turned yet: the turn's limit
+    for yaw, want in ((172, 1), (161, 2), (151, 3)):
+        i = progress_index(plan, (0.0, 0.0, math.radians(yaw)), i)
+        assert i == want, (yaw, i)
+    assert speed_ahead(plan, i) == 0.3
+    # A robot that walked on without standing exactly at the turns is past them too.
+    assert progress_index(plan, (-0.25, 0.12, math.radians(150)), 0) == 4

@@ -11,6 +11,7 @@ import math
 from typing import Callable, Optional, Sequence, Tuple
 
 import numpy as np
+from scipy.signal import fftconvolve
 
 from rbd_controller.arena import Arena
 from rbd_controller.detour import dilate
@@ -66,52 +67,30 @@ class CSpace:
         occ = np.argwhere(obstacles)
         if points is None:
             points = np.stack([self.x0 + (occ[:, 1] + 0.5) * res, self.y0 + (occ[:, 0] + 0.5) * res], axis=1)
-        self.points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        self.points = points[np.argsort(points[:, 0], kind="stable")]  # by x: a range is two binary searches
         self._occ = occ
         self._built = np.zeros(headings, dtype=bool)  # bins are built when first looked up
 
     def _build(self, k: int) -> None:
         layer = self.blocked[k]
-        h, w = layer.shape
         if len(self._occ):
-            kernel = self._kernel(k)
-            if len(self._occ) * len(kernel) <= 300000:  # few obstacle cells: stamp the rectangle on each
-                cells = (self._occ[:, None, :] - kernel[None, :, :]).reshape(-1, 2)
-                ok = (cells[:, 0] >= 0) & (cells[:, 0] < h) & (cells[:, 1] >= 0) & (cells[:, 1] < w)
-                layer[cells[ok, 0], cells[ok, 1]] = True
-            else:  # walls: dilate by the rectangle's two sides in turn (Minkowski sum), then by a cell
-                self._build_by_sides(k, layer)
+            layer |= self._dilated(k)
         layer |= self.outside
         self._built[k] = True
 
-    def _build_by_sides(self, k: int, layer: np.ndarray) -> None:
-        res = self.res
-        grow = 1.5 * res
-        f, left, b, right = (z + grow for z in self.zone)
-        for frac in np.linspace(-0.5, 0.5, 5):
-            th = (k + frac) * self.bin
-            c, s = math.cos(th), math.sin(th)
-            u = np.linspace(-b, f, max(2, int(math.ceil((f + b) / (0.5 * res))) + 1))
-            v = np.linspace(-right, left, max(2, int(math.ceil((left + right) / (0.5 * res))) + 1))
-            # The robot at p holds an obstacle at o when o - p lies in the rectangle: p in o - R.
-            side_u = set(zip(np.rint(-u * s / res).astype(int).tolist(), np.rint(-u * c / res).astype(int).tolist()))
-            side_v = set(zip(np.rint(-v * c / res).astype(int).tolist(), np.rint(v * s / res).astype(int).tolist()))
-            # Padded: an obstacle's first shift may leave the window and the second bring it back.
-            pad = int(math.ceil(max(f, b, left, right) / res)) + 2
-            src = np.pad(self.obstacles, pad)
-            tmp = np.zeros_like(src)
-            for dr, dc in side_u:
-                _shift_or(tmp, src, dr, dc)
-            full = np.zeros_like(src)
-            for dr, dc in side_v:
-                _shift_or(full, tmp, dr, dc)
-            layer |= full[pad:-pad, pad:-pad]
-        # Rounding each side's offsets on its own: the sum may be a cell off.
-        grown = layer.copy()
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                _shift_or(grown, layer, dr, dc)
-        layer[...] = grown
+    def _dilated(self, k: int) -> np.ndarray:
+        """The obstacle cells dilated by bin k's rotated rectangle: p is blocked when p + offset is an obstacle.
+
+        One FFT convolution of the obstacle grid with the kernel's stamp (the cost does not grow with
+        the number of obstacle cells: a wall of the LiDAR map costs what a box costs).
+        """
+        kernel = self._kernel(k)
+        reach = int(np.abs(kernel).max())
+        stamp = np.zeros((2 * reach + 1, 2 * reach + 1))
+        stamp[reach - kernel[:, 0], reach - kernel[:, 1]] = 1.0
+        counts = fftconvolve(self.obstacles.astype(np.float64), stamp, mode="same")
+        return counts > 0.5
 
     def _kernel(self, k: int) -> np.ndarray:
         key = (self.zone, self.res, self.headings, k)
@@ -164,9 +143,9 @@ class CSpace:
         if not len(pts):
             return True
         reach = math.hypot(max(zone[0], zone[2]), max(zone[1], zone[3])) + EXACT_MARGIN
-        near = ((pts[:, 0] > xs.min() - reach) & (pts[:, 0] < xs.max() + reach) & (pts[:, 1] > ys.min() - reach)
-                & (pts[:, 1] < ys.max() + reach))
-        pts = pts[near]
+        lo, hi = np.searchsorted(pts[:, 0], (xs.min() - reach, xs.max() + reach))
+        pts = pts[lo:hi]
+        pts = pts[(pts[:, 1] > ys.min() - reach) & (pts[:, 1] < ys.max() + reach)]
         if not len(pts):
             return True
         f, left, b, right = (z + EXACT_MARGIN for z in zone)
@@ -260,11 +239,3 @@ class CSpace:
 
         return heur
 
-
-def _shift_or(out: np.ndarray, src: np.ndarray, dr: int, dc: int) -> None:
-    """out[r, c] |= src[r - dr, c - dc] where both are inside."""
-    h, w = src.shape
-    if abs(dr) >= h or abs(dc) >= w:
-        return
-    out[max(0, dr):h + min(0, dr), max(0, dc):w + min(0, dc)] |= src[max(0, -dr):h - max(0, dr),
-                                                                     max(0, -dc):w - max(0, dc)]

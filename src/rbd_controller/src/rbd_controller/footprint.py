@@ -11,7 +11,7 @@ Sides are ordered as rbd_msgs/CollisionState's: FRONT, LEFT, BACK, RIGHT (like A
 """
 
 import math
-from typing import Sequence, Tuple
+from typing import Any, Callable, Sequence, Tuple
 
 import numpy as np
 
@@ -44,6 +44,20 @@ class ZoneGrowth:
         self.enabled = bool(enabled)
         self.max_age = float(max_age)
 
+
+
+def growth_from_params(get: Callable[[str, Any], Any], ns: str = "/rbd_lidar") -> ZoneGrowth:
+    """rbd_lidar's growth parameters from its namespace; get(name, default) reads one (rospy.get_param).
+
+    Raises:
+        ValueError: a value out of range (or not a number).
+    """
+    d = ZoneGrowth()
+    return ZoneGrowth(reaction_time=float(get(ns + "/reaction_time", d.reaction_time)),
+                      rotation_lever=float(get(ns + "/rotation_lever", d.rotation_lever)),
+                      max_growth=float(get(ns + "/max_growth", d.max_growth)),
+                      enabled=bool(get(ns + "/velocity_aware", d.enabled)),
+                      max_age=float(get(ns + "/max_cloud_age", d.max_age)))
 
 def grown_zone(zone: Sequence[float], vx: float, vy: float, wz: float, growth: ZoneGrowth, age: float = 0.0) -> Zone:
     """The stop zone grown for the body velocity (vx, vy [m/s], wz [rad/s]), as rbd_lidar grows it.

@@ -54,7 +54,8 @@ class LatticePlanner:
         step: length of one forward motion [m].
         window_margin: the search window extends this far beyond start and goal [m].
         max_expansions: the search gives up after this many expansions.
-        max_seconds: ... or after this much CPU time [s].
+        max_seconds: ... or after this much wall-clock time from the call [s] (a plan's ``budget`` overrides it;
+            wall clock: the planner runs in a worker thread beside the node's, CPU time would count both).
         origin: (x, y) of the point the zone is measured from in the robot's frame [m] (rbd_lidar's
             ~zone_frame: collision_zone, 0.08 m behind base_link on the A1); the poses are base_link's.
 
@@ -142,7 +143,7 @@ class LatticePlanner:
     # ------------------------------------------------------------------ entry
     def plan(self, start: Sequence[float], goal: Sequence[float], grid: Optional[GridMap] = None,
              points: Sequence[Sequence[float]] = (), arena: Optional[Arena] = None,
-             age: float = 0.0, any_heading: bool = False) -> LatticePlan:
+             age: float = 0.0, any_heading: bool = False, budget: Optional[float] = None) -> LatticePlan:
         """Plan from the start pose to the goal pose (map frame); never raises.
 
         Args:
@@ -154,11 +155,15 @@ class LatticePlanner:
             age: age of the newest cloud the points come from [s]: grows the zone like speed x age.
             any_heading: the goal's position with any heading (the path ends facing the way it walked;
                 the trick pose re-sent afterwards turns to its own heading).
+            budget: wall-clock seconds for the search from this call (None: ``max_seconds``); past it the
+                answer is "no path" with "budget" in the reason.
 
         Returns:
             A LatticePlan; ``ok`` False with the reason when no speed gives a free start, goal and path.
         """
         t0 = time.process_time()
+        limit = self.max_seconds if budget is None or not math.isfinite(budget) or budget <= 0 else float(budget)
+        self._deadline = time.monotonic() + limit
         self._any_heading = bool(any_heading)
         try:
             plan = self._plan(start, goal, grid, points, arena, age)
@@ -186,7 +191,6 @@ class LatticePlanner:
         window = self._window(start, goal)
         obstacles = self._obstacles(window, grid, pts)
         exact = self._exact_points(window, grid, pts)
-        self._deadline = time.process_time() + self.max_seconds
         speeds = self.speeds()
         spaces = [CSpace(window, obstacles, self.zone_for(v, age), self.bin, self.headings, arena, self.resolution,
                          self._kernels, exact, self.turn_zone_for(v, age), self._walk_zones(v, age)) for v in speeds]
@@ -201,7 +205,9 @@ class LatticePlanner:
             return LatticePlan(False, [], 0.0, direct, "start inside the zone even at %.2f m/s" % speeds[-1])
         poses, seg_speeds, n = self._search(spaces, speeds, start, goal)
         if poses is None:
-            return LatticePlan(False, [], 0.0, direct, "no path around the obstacle (%d expansions)" % n, expanded=n)
+            spent = " (wall-clock budget spent)" if time.monotonic() >= self._deadline else ""
+            return LatticePlan(False, [], 0.0, direct, "no path around the obstacle (%d expansions%s)" % (n, spent),
+                               expanded=n)
         length = path_length(start, poses)
         plan = LatticePlan(True, poses, length, direct, "%d poses, %.2f m, %.2f-%.2f m/s" % (
             len(poses), length, min(seg_speeds), max(seg_speeds)), max(seg_speeds),
@@ -309,11 +315,20 @@ class LatticePlanner:
         return out
 
     def _level(self, spaces: List[CSpace], check: Callable[[CSpace], bool]) -> int:
-        """Index of the fastest space in which check(space) holds; len(spaces) if none."""
-        for i, space in enumerate(spaces):
-            if check(space):
+        """Index of the fastest space in which check(space) holds; len(spaces) if none.
+
+        The zones grow with the speed (a motion free at a speed is free at every slower one): the
+        fastest is tried first (most motions, away from obstacles), then the slowest (a blocked motion
+        costs two checks, not one per speed), then those between.
+        """
+        if check(spaces[0]):
+            return 0
+        if len(spaces) > 1 and not check(spaces[-1]):
+            return len(spaces)
+        for i in range(1, len(spaces) - 1):
+            if check(spaces[i]):
                 return i
-        return len(spaces)
+        return len(spaces) - 1 if len(spaces) > 1 else len(spaces)
 
     def _search(self, spaces: List[CSpace], speeds: List[float], start: Pose,
                 goal: Pose) -> Tuple[Optional[List[Pose]], List[float], int]:
@@ -341,7 +356,7 @@ class LatticePlanner:
         heap = [(heur(first[0], first[1]), 0.0, len(nodes) - 1, first)]
         closed = set()
         expanded = 0
-        while heap and expanded < self.max_expansions and time.process_time() < self._deadline:
+        while heap and expanded < self.max_expansions and time.monotonic() < self._deadline:
             _, g, idx, (x, y, k) = heapq.heappop(heap)
             key = (int(math.floor(x / cres)), int(math.floor(y / cres)), k)
             if key in closed:

@@ -11,6 +11,7 @@ from typing import List, Sequence, Tuple
 
 from rbd_controller.detour import finite_points
 from rbd_controller.footprint import swept_hits
+from rbd_geometry.rotation import wrap_angle
 
 Pose = Tuple[float, float, float]
 
@@ -68,18 +69,40 @@ def speed_ahead(plan: LatticePlan, index: int, lookahead: int = 3) -> float:
     return min(vs) if vs else 0.0
 
 
-def progress_index(plan: LatticePlan, pose: Sequence[float], current: int = 0, reached: float = 0.15) -> int:
-    """Index of the plan's next pose for a robot at pose, never behind current.
+def progress_index(plan: LatticePlan, pose: Sequence[float], current: int = 0, reached: float = 0.15,
+                   turned: float = 0.15) -> int:
+    """Index of the plan's next pose for a robot at pose (x, y, yaw), never behind current.
 
-    A pose is passed when the robot is within ``reached`` of it, or closer to the segment after it
-    than to the segment before it (and past its start).
+    A pose reached by walking is passed when the robot is within ``reached`` of it, or closer to the
+    segment after it than to the segment before it (and past its start). A pose reached by a turn on
+    the spot (at the position of the pose before it), and a pose a turn on the spot follows, is
+    passed when the robot stands within ``reached`` of it facing its heading (within ``turned``
+    rad), or has walked on to the first walking segment after the turns: the speed limit of a slow
+    turn then no longer holds the rest of the path back.
     """
     poses = plan.poses
     i = max(0, current)
     while i < len(poses) - 1:
         a = poses[i - 1] if i > 0 else poses[0]
         b, c = poses[i], poses[i + 1]
-        if math.hypot(pose[0] - b[0], pose[1] - b[1]) <= reached and math.hypot(c[0] - b[0], c[1] - b[1]) > 1e-9:
+        near = math.hypot(pose[0] - b[0], pose[1] - b[1]) <= reached
+        facing = len(pose) < 3 or abs(wrap_angle(pose[2] - b[2])) <= turned
+        turn_after, turn_into = _same(b, c), i > 0 and _same(a, b)
+        if turn_after or turn_into:
+            if near and facing:
+                i += 1
+                continue
+            j = i
+            while j < len(poses) - 1 and _same(poses[j], poses[j + 1]):
+                j += 1  # the last pose of the turns at b's position
+            if j < len(poses) - 1 and not near:
+                u, d = _segment(pose, poses[j], poses[j + 1])
+                _, d0 = _segment(pose, poses[i - 1] if i > 0 else b, b) if not turn_into else (0.0, math.inf)
+                if u > 0.0 and d < d0:
+                    i = j + 1  # walked on past the turns
+                    continue
+            break
+        if near and not _same(c, b):
             i += 1
             continue
         u2, d2 = _segment(pose, b, c)
@@ -89,6 +112,11 @@ def progress_index(plan: LatticePlan, pose: Sequence[float], current: int = 0, r
             continue
         break
     return i
+
+
+def _same(p: Sequence[float], q: Sequence[float]) -> bool:
+    """Two poses at one position (a turn on the spot between them)."""
+    return math.hypot(q[0] - p[0], q[1] - p[1]) <= 1e-9
 
 
 def remaining_clear(plan: LatticePlan, progress: int, pose: Sequence[float], points: Sequence[Sequence[float]],
