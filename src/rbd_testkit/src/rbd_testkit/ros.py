@@ -71,6 +71,25 @@ def run_rostest(package: str, test_name: str, case: type, seed: Optional[int] = 
         unittest.TestLoader.sortTestMethodsUsing = saved
 
 
+def subscriber_nodes(publisher: Any) -> List[str]:
+    """The nodes whose subscriptions are connected to ``publisher`` now (a ``rospy.Publisher``).
+
+    A latched publisher hands its last message to each subscriber on connection, so a node in
+    this list has been sent it: wait for a node's name here instead of sleeping after a latched
+    publish (e.g. a static transform) or after a subscriber count that other nodes could make.
+
+    Args:
+        publisher: a ``rospy.Publisher``.
+
+    Returns:
+        The subscribers' node names (e.g. ``["/ekf_localization"]``), one per connection.
+
+    Example:
+        >>> wait_for(lambda: "/ekf" in subscriber_nodes(static_tf.pub_tf), 20.0)  # doctest: +SKIP
+    """
+    return [str(info[1]) for info in publisher.impl.get_stats_info()]
+
+
 class RosoutWatcher:
     """Collects what nodes log on /rosout: a node's own log line proves an input reached it.
 

@@ -58,6 +58,48 @@ def wait_for(
     return value
 
 
+def wait_quiet(
+    read: Callable[[], Any],
+    quiet: float,
+    timeout: float = 10.0,
+    step: float = 0.05,
+    what: Optional[str] = None,
+) -> Any:
+    """Wait until ``read()`` has kept one value for ``quiet`` seconds (a stream drained, a robot settled).
+
+    Not a "nothing happened" check: it waits for a quiet period, however long the noise lasts
+    (up to ``timeout``); a check that an input changes nothing is ``stays_unchanged``.
+
+    Args:
+        read: the observed value (a message count, a rounded pose...); compared with ``!=``.
+        quiet: seconds the value must stay the same.
+        timeout: seconds to wait at most.
+        step: polling period [s].
+        what: a description; when given, a timeout raises ``WaitTimeoutError`` with it.
+
+    Returns:
+        The settled value, or None on timeout without ``what``.
+
+    Raises:
+        WaitTimeoutError: no quiet period within ``timeout`` when ``what`` is given.
+
+    Example:
+        >>> n = wait_quiet(inbox.count, 0.45, what="the warm-up messages drained")  # doctest: +SKIP
+    """
+    last = {"value": read(), "since": time.monotonic()}
+
+    def settled() -> bool:
+        value, now = read(), time.monotonic()
+        if value != last["value"]:
+            last["value"], last["since"] = value, now
+            return False
+        return now - last["since"] >= quiet
+
+    if not wait_for(settled, timeout, step, what=None if what is None else "%s (quiet for %.2f s)" % (what, quiet)):
+        return None
+    return last["value"]
+
+
 def stays_unchanged(
     read: Callable[[], Any],
     arrived: Callable[[], Any],
