@@ -108,3 +108,14 @@ def test_wait_quiet_times_out_on_a_value_that_never_settles():
     assert time.monotonic() - t0 >= 0.3
     with pytest.raises(WaitTimeoutError, match="the ticks drained"):
         wait_quiet(time.monotonic, 0.1, 0.1, step=0.01, what="the ticks drained")
+
+
+def test_wait_quiet_with_a_tolerance_restarts_on_a_slow_drift():
+    t0 = time.monotonic()
+
+    def drift():  # 1 mm every 10 ms for 0.3 s (never 5 mm in one step), then still at 30 mm
+        return min(time.monotonic() - t0, 0.3) * 0.1
+
+    value = wait_quiet(drift, 0.2, 5.0, step=0.01, same=lambda a, b: abs(a - b) < 0.005)
+    assert value == pytest.approx(0.03)  # the drift added up past the tolerance: not settled at its start
+    assert time.monotonic() - t0 >= 0.3 + 0.2 - 0.05

@@ -64,6 +64,7 @@ def wait_quiet(
     timeout: float = 10.0,
     step: float = 0.05,
     what: Optional[str] = None,
+    same: Optional[Callable[[Any, Any], bool]] = None,
 ) -> Any:
     """Wait until ``read()`` has kept one value for ``quiet`` seconds (a stream drained, a robot settled).
 
@@ -76,9 +77,11 @@ def wait_quiet(
         timeout: seconds to wait at most.
         step: polling period [s].
         what: a description; when given, a timeout raises ``WaitTimeoutError`` with it.
+        same: ``same(first, now)`` true when ``now`` still counts as the quiet period's first
+            value (a tolerance for a pose); default ``==``. A slow drift adds up and restarts it.
 
     Returns:
-        The settled value, or None on timeout without ``what``.
+        The last value read (quiet), or None on timeout without ``what``.
 
     Raises:
         WaitTimeoutError: no quiet period within ``timeout`` when ``what`` is given.
@@ -86,14 +89,16 @@ def wait_quiet(
     Example:
         >>> n = wait_quiet(inbox.count, 0.45, what="the warm-up messages drained")  # doctest: +SKIP
     """
-    last = {"value": read(), "since": time.monotonic()}
+    first = {"value": read(), "since": time.monotonic()}
+    last = {"value": first["value"]}
 
     def settled() -> bool:
         value, now = read(), time.monotonic()
-        if value != last["value"]:
-            last["value"], last["since"] = value, now
+        last["value"] = value
+        if not (same(first["value"], value) if same is not None else value == first["value"]):
+            first["value"], first["since"] = value, now
             return False
-        return now - last["since"] >= quiet
+        return now - first["since"] >= quiet
 
     if not wait_for(settled, timeout, step, what=None if what is None else "%s (quiet for %.2f s)" % (what, quiet)):
         return None
@@ -157,18 +162,18 @@ def stays_unchanged(
             raise AssertionError("%s changed %s, %.2f s after the input: %r -> %r"
                                  % (what, phase, time.monotonic() - start, baseline, value))
 
-    while True:
+    def proven() -> Any:
         check("before the input was proven to arrive")
-        if arrived():
-            break
-        if time.monotonic() - start >= timeout:
-            raise AssertionError(
-                "no proof of %s within %.1f s: an unchanged %s would prove nothing" % (proof, timeout, what))
-        time.sleep(step)
+        return arrived()
+
+    if not wait_for(proven, timeout, step):
+        raise AssertionError(
+            "no proof of %s within %.1f s: an unchanged %s would prove nothing" % (proof, timeout, what))
     end = time.monotonic() + hold
-    while True:
+
+    def held() -> bool:
         check("while held")
-        left = end - time.monotonic()
-        if left <= 0:
-            return baseline
-        time.sleep(min(step, left))
+        return time.monotonic() >= end
+
+    wait_for(held, hold, step)  # its last call comes at the deadline, after ``end``
+    return baseline
