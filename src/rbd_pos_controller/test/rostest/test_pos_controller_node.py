@@ -14,7 +14,7 @@ from std_srvs.srv import SetBool
 from rbd_geometry.rotation import rpy_to_quat, yaw_of
 from rbd_msgs.srv import FollowPath, SetPosition
 from rbd_testkit import stays_unchanged, wait_for
-from rbd_testkit.ros import run_rostest
+from rbd_testkit.ros import messages_received, run_rostest
 
 PERIOD = 1.0 / 20.0  # the controller's rate
 
@@ -211,8 +211,10 @@ class TestPosController(unittest.TestCase):
         self.assertLess(math.hypot(x1 - goal.position.x, y1 - goal.position.y), 0.03)
 
     def test_speed_scale_zero_holds_robot(self):
+        n = messages_received("/rbd_pos_controller", "/rbd_lidar/speed_scale")
         self.scale_pub.publish(Float32(0.0))
-        time.sleep(0.3)
+        self.assertTrue(wait_for(lambda: messages_received("/rbd_pos_controller", "/rbd_lidar/speed_scale") > n, 5.0),
+                        "the speed scale never reached the controller")
         x, y, yaw = self.rec.xy_yaw()
         self.assertTrue(
             self.set_position(pose=make_pose(x + 0.5 * math.cos(yaw), y + 0.5 * math.sin(yaw), yaw)).accepted

@@ -10,7 +10,8 @@ ROS-free at import (rospy is imported only by ``rbd_testkit.ros``); runs on Pyth
 - ``stop_process(proc)`` / ``stop_processes(procs)``: process group SIGINT -> SIGKILL.
 - ``restore_sigint()``: the SIGINT guard for processes started with SIGINT ignored.
 - ``rbd_testkit.pytest_plugin``: the ``ros_env`` fixture (loaded by the conftests).
-- ``rbd_testkit.ros``: ``run_rostest`` (shuffled method order), ``RosoutWatcher``, ``subscriber_nodes``.
+- ``rbd_testkit.ros``: ``run_rostest`` (shuffled method order), ``RosoutWatcher``, ``subscriber_nodes``,
+  ``messages_received``.
 """
 
 from rbd_testkit.ports import free_port, wait_for_port
