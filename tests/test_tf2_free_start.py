@@ -16,7 +16,7 @@ import time
 import pytest
 import rosgraph
 
-from rbd_testkit import free_port
+from rbd_testkit import free_port, wait_for
 
 SHIM = '''"""Test shim: tf2_py does not import, as on Melodic with Python 3."""
 import sys
@@ -82,8 +82,8 @@ def test_safety_path_nodes_start_without_tf2_py(ros_env, blocked_env):
         procs[name] = ros_env.start(cmd, name=name, env=blocked_env)
     master = rosgraph.Master("/tf2free_test", master_uri=ros_env.uri)
     waiting = set(procs)
-    deadline = time.monotonic() + 60.0
-    while waiting and time.monotonic() < deadline:
+
+    def registered():
         for name in sorted(waiting):
             assert procs[name].poll() is None, "%s exited:\n%s" % (name, ros_env.output(procs[name])[-3000:])
             try:
@@ -91,7 +91,9 @@ def test_safety_path_nodes_start_without_tf2_py(ros_env, blocked_env):
                 waiting.discard(name)
             except rosgraph.MasterError:
                 pass
-        time.sleep(0.2)
+        return not waiting
+
+    wait_for(registered, 60.0, 0.2)
     assert not waiting, "not registered in 60 s: %s\n%s" % (sorted(waiting), ros_env.tails())
     time.sleep(3.0)  # and they stay up
     for name, proc in procs.items():

@@ -6,6 +6,7 @@ import shutil
 import subprocess
 
 import pytest
+from rbd_testkit import stays_unchanged
 from xvfb import pump, pump_for
 
 from rbd_local.link import EM_STOP_SERVICE, PATH_QUEUE_TOPIC, STATE_TOPIC, STATUS_TOPIC, RobotLink
@@ -121,9 +122,15 @@ def test_release_needs_a_second_deliberate_click(app):
     bridge, gui, root = app["bridge"], app["gui"], app["root"]
     n = len(em_stops(bridge))
     gui.release_button.invoke()
-    pump_for(root, 0.6)
+
+    def calls():
+        root.update()
+        return len(em_stops(bridge))
+
+    # the click was taken (the button asks for confirmation), and no call reaches the bridge
+    stays_unchanged(calls, lambda: "Confirm" in gui.release_button.cget("text"), hold=0.6,
+                    what="one click must not release the e-stop: the bridge's e-stop calls", proof="the release armed")
     assert len(em_stops(bridge)) == n, "one click must not release the e-stop"
-    assert "Confirm" in gui.release_button.cget("text")
     gui.release_button.invoke()
     assert pump(root, lambda: len(em_stops(bridge)) > n)
     assert em_stops(bridge)[n] == (EM_STOP_SERVICE, {"data": False})

@@ -335,9 +335,8 @@ def test_a_stall_of_the_whole_process_ending_just_before_the_verdict_keeps_the_l
 
         def stall_bridge():
             bridge_stalled.set()
-            while link.keepalive.unanswered is None:  # a ping goes out and stays unanswered
-                time.sleep(0.005)
-            sent = link.keepalive.unanswered
+            # a ping goes out and stays unanswered
+            sent = wait_for(lambda: link.keepalive.unanswered, 10.0, 0.005, what="an unanswered ping")
             reactor.callFromThread(time.sleep, max(0.0, sent + keepalive - 0.2 - time.monotonic()))
             time.sleep(max(0.0, sent + keepalive + 0.5 - time.monotonic()))
 

@@ -4,6 +4,8 @@ import os
 import subprocess
 import time
 
+from rbd_testkit import wait_for
+
 
 class Xvfb:
     def __init__(self, size="1024x768x24"):
@@ -63,14 +65,11 @@ def pump(root, until, timeout=LIVENESS_S):
     When it is still false at the end, the threads' stacks and how fast roslibpy's reactor answers
     go to stderr (the failed test's captured output): why a window waited in vain, not only that.
     """
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
+    def pumped():
         root.update()
-        if until():
-            return True
-        time.sleep(0.02)
-    root.update()
-    if until():
+        return until()
+
+    if wait_for(pumped, timeout, 0.02):
         return True
     print_threads()
     return False

@@ -110,9 +110,10 @@ def exp_step(ctx):
 
     def hold(twist, seconds):
         end = time.monotonic() + seconds
+        pace = rospy.Rate(rate)
         while time.monotonic() < end:
             pub.publish(twist)
-            time.sleep(1.0 / rate)
+            pace.sleep()
 
     for axis, amp, unit in STEPS:
         hold(Twist(), pre)

@@ -20,7 +20,6 @@ import math
 import os
 import statistics
 import sys
-import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -33,22 +32,26 @@ TARGET_RADIUS = 1.0
 TARGET_SURFACE_X = 1.2
 
 
-def cloud_target_x():
-    """Median x (os_sensor) of the returns near y = 0, z = 0 ahead (the target's surface)."""
+def cloud_target_x(since):
+    """Median x (os_sensor) of the returns near y = 0, z = 0 ahead (the target's surface).
+
+    From the first cloud stamped after ``since`` (the target's placement) that has the target in
+    it: a scan under way at the placement may have swept y = 0 before the target was there.
+    """
     import rospy
     from sensor_msgs import point_cloud2
     from sensor_msgs.msg import PointCloud2
 
-    since = rospy.Time.now()
+    xs = []
     for _ in range(50):
         cloud = rospy.wait_for_message("/ouster/points", PointCloud2, timeout=5.0)
-        if cloud.header.stamp > since:
-            break
-    xs = [x for x, y, z in point_cloud2.read_points(cloud, ("x", "y", "z"), skip_nans=True)
-          if x > 0.5 and abs(y) < 0.03 and abs(z) < 0.1]
-    if len(xs) < 3:
-        raise RuntimeError("target not in the cloud (%d returns)" % len(xs))
-    return statistics.median(xs), len(xs)
+        if cloud.header.stamp <= since:
+            continue
+        xs = [x for x, y, z in point_cloud2.read_points(cloud, ("x", "y", "z"), skip_nans=True)
+              if x > 0.5 and abs(y) < 0.03 and abs(z) < 0.1]
+        if len(xs) >= 3:
+            return statistics.median(xs), len(xs)
+    raise RuntimeError("target not in the cloud (%d returns)" % len(xs))
 
 
 def main():
@@ -79,12 +82,12 @@ def main():
         _, body_x, body_y = truth.last()[:3]
         result["truth_xy"] = [body_x, body_y]
         # The flat target straight ahead of the body (the robot faces +x at start).
+        placed = rospy.Time.now()
         place = zone.place(name="flat", x=body_x + TARGET_SURFACE_X + TARGET_RADIUS, y=body_y, radius=TARGET_RADIUS,
                            height=1.7, remove=False)
         if not place.success:
             raise RuntimeError("place_obstacle refused")
-        time.sleep(0.5)
-        result["cloud_x"], result["cloud_returns"] = cloud_target_x()
+        result["cloud_x"], result["cloud_returns"] = cloud_target_x(placed)
         zone.remove("flat")
         for side, angle, target in (("front", 0.0, zone.zone[0]), ("back", math.pi, zone.zone[1])):
             flip = experiments.flip_distance(zone, "fig23", angle, TARGET_RADIUS, target + TARGET_RADIUS, 0.005)

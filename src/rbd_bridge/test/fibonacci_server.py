@@ -21,13 +21,14 @@ def main() -> None:
 
     def execute(goal: object) -> None:
         sequence = [0, 1]
+        rate = rospy.Rate(1.0 / period)  # one feedback a period
         for i in range(1, goal.order + 1):
             if server.is_preempt_requested() or rospy.is_shutdown():
                 server.set_preempted()
                 return
             sequence.append(sequence[i] + sequence[i - 1])
             server.publish_feedback(FibonacciFeedback(sequence=sequence))
-            rospy.sleep(period)
+            rate.sleep()
         server.set_succeeded(FibonacciResult(sequence=sequence))
 
     server = actionlib.SimpleActionServer("fibonacci", FibonacciAction, execute_cb=execute, auto_start=False)

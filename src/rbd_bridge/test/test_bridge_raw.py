@@ -1,13 +1,17 @@
 """A raw WebSocket client against a real bridge: malformed input, fragments, compressions, limits."""
 
+import fcntl
 import json
 import socket
 import struct
+import termios
 import time
 
 import pytest
 from rbd_bridge_testing import WsClient as Client
 from rbd_bridge_testing import master_of, png_text, wait_for_service, wait_until
+
+from rbd_testkit import wait_for, wait_quiet
 
 
 @pytest.fixture
@@ -271,7 +275,14 @@ def test_stalled_client_does_not_delay_others(open_bridge, client):
         c = client()
         c.send({"op": "subscribe", "topic": "/echo/tick", "type": "std_msgs/Header"})
         c.recv_until(lambda f: f.get("topic") == "/echo/tick")
-        time.sleep(2.0)  # the stalled client's buffers fill up meanwhile
+        # the stalled client's receive queue fills up and stays full: the TCP window is closed, so
+        # the bridge's sends to it now block (or are dropped)
+
+        def queued():
+            return struct.unpack("i", fcntl.ioctl(stalled.fileno(), termios.FIONREAD, b"\0\0\0\0"))[0]
+
+        wait_for(queued, 10.0, what="ticks queued at the stalled client")
+        wait_quiet(queued, 0.5, 20.0, what="the stalled client's receive queue full")
         c.drain(0.2)
         # The other client keeps up: the median lag of ten ticks in a row falls below 0.5 s within
         # 10 s. A bridge that waited on the stalled socket would fall further behind, or stop.

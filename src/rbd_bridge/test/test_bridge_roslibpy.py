@@ -11,7 +11,7 @@ import roslibpy
 from rbd_bridge_testing import LINGER, master_of, png_text, start_echo, wait_until
 
 from rbd_bridge.core.rosapi import ROSAPI_TYPES
-from rbd_testkit import free_port, stays_unchanged
+from rbd_testkit import free_port, stays_unchanged, wait_quiet
 
 BRIDGE = "/rbd_bridge"
 
@@ -377,10 +377,7 @@ def test_throttle_with_queue_length_keeps_the_newest_of_a_burst(roslibpy_client)
     pub = roslibpy.Topic(roslibpy_client(), topic, "std_msgs/Int32")
     assert keep_publishing(pub, lambda i: {"data": -1}, lambda: queued.items and dropped.items)
     # let the warm-up messages drain and a throttle period pass with nothing new
-    last = -1
-    while queued.count() != last:
-        last = queued.count()
-        time.sleep(throttle / 1000.0 + 0.15)
+    wait_quiet(queued.count, throttle / 1000.0 + 0.15, 20.0, what="the warm-up messages drained")
     n_queued, n_dropped = queued.count(), dropped.count()
     burst = 10
     for i in range(burst):

@@ -16,6 +16,8 @@ from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import PointCloud2, PointField
 from visualization_msgs.msg import Marker
 
+from rbd_testkit import wait_for
+
 rospy.init_node("mount_probe")
 seen = []
 rospy.Subscriber("/rbd_controller/blocking_points", Marker, lambda m: seen.append(m))
@@ -29,12 +31,17 @@ cloud.header.frame_id = "os1"
 cloud.height, cloud.width, cloud.point_step, cloud.row_step = 1, 1, 12, 12
 cloud.fields = [PointField(n, 4 * i, PointField.FLOAT32, 1) for i, n in enumerate("xyz")]
 cloud.data = struct.pack("<3f", 1.0, 0.0, 0.0)
-deadline = rospy.get_time() + 60.0
-while not seen and not rospy.is_shutdown() and rospy.get_time() < deadline:
+
+
+def give(_event):
     pose.header.stamp = cloud.header.stamp = rospy.Time.now()
     pose_pub.publish(pose)
     cloud_pub.publish(cloud)
-    rospy.sleep(0.1)
+
+
+sensor = rospy.Timer(rospy.Duration(0.1), give)  # a 10 Hz pose and LiDAR, until the marker comes
+wait_for(lambda: seen, 60.0, abort=rospy.is_shutdown)
+sensor.shutdown()
 if seen:
     p = seen[-1].points[0]
     print("point %.3f %.3f" % (p.x, p.y), flush=True)

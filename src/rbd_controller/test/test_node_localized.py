@@ -18,8 +18,11 @@ from std_msgs.msg import Bool, String
 from std_srvs.srv import SetBool
 
 from rbd_msgs.srv import GetLastGesture, GetLastGestureResponse, SetBodyPose, SetBodyPoseResponse
+from rbd_testkit import stays_unchanged, wait_for
+from rbd_testkit.ros import RosoutWatcher
 
 rospy.init_node("gate_probe")
+rosout = RosoutWatcher()
 gestures, states, polls = [], [], []
 
 
@@ -37,28 +40,37 @@ rospy.Subscriber("/rbd_controller/state", String, lambda m: states.append(m.data
 
 
 def wait(cond, timeout):
-    end = time.monotonic() + timeout
-    while not cond() and time.monotonic() < end and not rospy.is_shutdown():
-        time.sleep(0.02)
-    return cond()
+    return bool(wait_for(cond, timeout, 0.02, abort=rospy.is_shutdown))
 
 
 print("ready", flush=True)
 if not wait(lambda: localized.get_num_connections() > 0 and states, 60.0):
     print("no controller", states, flush=True)
     raise SystemExit(1)
+rosout.wait_connected("/rbd_controller", 30.0)
 rospy.wait_for_service("/rbd_controller/em_stop", 30.0)
 rospy.ServiceProxy("/rbd_controller/em_stop", SetBool)(data=False)
 wait(lambda: states[-1] == "WAITING_FOR_GESTURE", 10.0)
 wait(lambda: polls, 10.0)  # the first poll after the release drops what it finds: let it find nothing
 n = len(states)
+mark = rosout.mark()
 gestures.append("spin")
 taken = wait(lambda: not gestures, 10.0)
-time.sleep(0.5)  # a taken gesture would be GENERATING_PATH within one tick (50 ms)
-print("not localized: consumed %s, states %s, body poses %d" % (taken, states[n:] or [states[-1]], len(body_poses)),
-      flush=True)
+k = len(polls)
+# The proof that the gesture reached the gate: the controller logs its refusal and polls again (its
+# loop went on past the tick that took it; a taken gesture is GENERATING_PATH within that tick).
+refused = "no proof"
+try:
+    stays_unchanged(lambda: list(states[n:]), lambda: rosout.find("refusing gesture 'spin'", since=mark)
+                    and len(polls) > k, hold=0.1, timeout=10.0, what="the controller's states", proof="the refusal")
+    refused = "refused"
+except AssertionError as err:
+    refused = str(err)
+print("not localized: consumed %s, %s, states %s, body poses %d"
+      % (taken, refused, states[n:] or [states[-1]], len(body_poses)), flush=True)
+mark = rosout.mark()
 localized.publish(Bool(data=True))
-time.sleep(0.5)
+wait(lambda: rosout.find("taking gestures again", since=mark), 10.0)  # the flag reached the core
 gestures.append("spin")
 wait(lambda: "GENERATING_PATH" in states[n:], 10.0)
 print("localized: states %s" % states[n:], flush=True)
@@ -80,7 +92,8 @@ def test_gesture_refused_while_the_map_correction_says_not_localized(ros_env):
     probe.wait(30.0)
     log = ros_env.output(controller)
     # taken from rbd_gestrec, nothing moved: still waiting, only the attentive body pose of the release sent
-    assert "not localized: consumed True, states ['WAITING_FOR_GESTURE'], body poses 1" in lines, (lines, log[-3000:])
+    expected = "not localized: consumed True, refused, states ['WAITING_FOR_GESTURE'], body poses 1"
+    assert expected in lines, (lines, log[-3000:])
     assert "refusing gesture 'spin': not localized in the map" in log, log[-3000:]
     taken = [line for line in lines if line.startswith("localized: states")]
     assert taken and "GENERATING_PATH" in taken[0], (lines, log[-3000:])

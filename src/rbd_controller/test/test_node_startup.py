@@ -17,6 +17,8 @@ import rosgraph
 import rospy
 from std_msgs.msg import String
 
+from rbd_testkit import wait_for
+
 rospy.init_node("startup_probe")
 master = rosgraph.Master("/startup_probe")
 first = []
@@ -38,9 +40,7 @@ def on_state(msg):
 
 rospy.Subscriber("/rbd_controller/state", String, on_state)
 print("subscribed", flush=True)
-deadline = rospy.get_time() + 90.0
-while not first and not rospy.is_shutdown() and rospy.get_time() < deadline:
-    rospy.sleep(0.01)
+wait_for(lambda: first, 90.0, 0.01, abort=rospy.is_shutdown)
 print(first[0] if first else "no state within 90 s", flush=True)
 """
 

@@ -63,3 +63,32 @@ def _zombie(pid):
             return f.read().rsplit(")", 1)[1].split()[0] == "Z"
     except OSError:
         return True
+
+
+LATCHED = textwrap.dedent("""
+    import rospy
+    from std_msgs.msg import String
+    from rbd_testkit import wait_for
+    from rbd_testkit.ros import messages_received, subscriber_nodes
+
+    rospy.init_node("latch_probe")
+    pub = rospy.Publisher("/latched", String, queue_size=1, latch=True)
+    pub.publish(String("x"))
+    print("before", subscriber_nodes(pub), flush=True)
+    got = []
+    rospy.Subscriber("/latched", String, got.append)
+    wait_for(lambda: "/latch_probe" in subscriber_nodes(pub), 20.0, what="the probe's own connection")
+    wait_for(lambda: got, 5.0, what="the latched message")
+    print("after", subscriber_nodes(pub), [m.data for m in got], flush=True)
+    pub.publish(String("y"))
+    wait_for(lambda: len(got) == 2, 5.0, what="the second message")
+    print("received", messages_received("/latch_probe", "/latched"), messages_received("/latch_probe", "/other"),
+          flush=True)
+""")
+
+
+def test_subscriber_nodes_and_messages_received_see_a_nodes_own_topic(tmp_path):
+    with RosEnv(log_dir=str(tmp_path)) as env:
+        code, out = env.run_to_exit([sys.executable, "-c", LATCHED])
+    assert code == 0, out
+    assert "before []" in out and "after ['/latch_probe'] ['x']" in out and "received 2 0" in out, out

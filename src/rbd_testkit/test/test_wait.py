@@ -4,7 +4,7 @@ import time
 
 import pytest
 
-from rbd_testkit import WaitTimeoutError, stays_unchanged, wait_for
+from rbd_testkit import WaitTimeoutError, stays_unchanged, wait_for, wait_quiet
 
 
 class Counter:
@@ -90,3 +90,32 @@ def test_stays_unchanged_reads_the_baseline_before_sending():
     state = {"v": 0}
     with pytest.raises(AssertionError, match="0 -> 1"):
         stays_unchanged(lambda: state["v"], lambda: True, hold=0.0, send=lambda: state.update(v=1))
+
+
+def test_wait_quiet_returns_the_value_once_it_kept_still():
+    t0 = time.monotonic()
+
+    def count():  # grows for 0.3 s, then stays at its last value
+        return min(int((time.monotonic() - t0) / 0.05), 6)
+
+    assert wait_quiet(count, 0.2, 5.0, step=0.01) == 6
+    assert time.monotonic() - t0 >= 0.3 + 0.2 - 0.02
+
+
+def test_wait_quiet_times_out_on_a_value_that_never_settles():
+    t0 = time.monotonic()
+    assert wait_quiet(time.monotonic, 0.1, 0.3, step=0.01) is None
+    assert time.monotonic() - t0 >= 0.3
+    with pytest.raises(WaitTimeoutError, match="the ticks drained"):
+        wait_quiet(time.monotonic, 0.1, 0.1, step=0.01, what="the ticks drained")
+
+
+def test_wait_quiet_with_a_tolerance_restarts_on_a_slow_drift():
+    t0 = time.monotonic()
+
+    def drift():  # 1 mm every 10 ms for 0.3 s (never 5 mm in one step), then still at 30 mm
+        return min(time.monotonic() - t0, 0.3) * 0.1
+
+    value = wait_quiet(drift, 0.2, 5.0, step=0.01, same=lambda a, b: abs(a - b) < 0.005)
+    assert value == pytest.approx(0.03)  # the drift added up past the tolerance: not settled at its start
+    assert time.monotonic() - t0 >= 0.3 + 0.2 - 0.05

@@ -187,18 +187,27 @@ class DriverWire(unittest.TestCase):
 
     @classmethod
     def _tx(cls):
-        while cls.running:
-            if cls.state_on:
-                cls.lc.publish(HIGH_STATE, cls.packet)
-            time.sleep(0.005)
+        cls._every(200.0, lambda: cls.state_on and cls.lc.publish(HIGH_STATE, cls.packet))
 
     @classmethod
     def _controller(cls):
-        while cls.running:
+        def flag():
             with cls.estop_lock:
                 if cls.estop_on:
                     cls.estop.publish(Bool(cls.estop_value))
-            time.sleep(0.1)
+
+        cls._every(10.0, flag)
+
+    @classmethod
+    def _every(cls, hz, action):
+        """Run ``action`` at ``hz`` until the class ends (a sender's pace: rospy.Rate keeps the schedule)."""
+        rate = rospy.Rate(hz)
+        try:
+            while cls.running and not rospy.is_shutdown():
+                action()
+                rate.sleep()
+        except rospy.ROSInterruptException:
+            pass
 
     def set_estop(self, value):
         """Set the stand-in controller's flag and publish it now (then at 10 Hz, as before)."""
@@ -260,10 +269,11 @@ class DriverWire(unittest.TestCase):
 
     def send(self, msg, duration, rate=20.0):
         t0 = t_pub = time.monotonic()
+        pace = rospy.Rate(rate)
         while time.monotonic() - t0 < duration:
             t_pub = time.monotonic()
             self.pub.publish(msg)
-            time.sleep(1.0 / rate)
+            pace.sleep()
         return t_pub
 
     def status_now(self):

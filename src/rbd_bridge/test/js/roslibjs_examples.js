@@ -14,6 +14,16 @@ ros.on('error', (e) => fail('connection error ' + (e && e.message)));
 const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 const topic = (name, type, extra) => new ROSLIB.Topic(Object.assign({ ros: ros, name: name, messageType: type }, extra));
 const getTopics = () => new Promise((resolve, reject) => ros.getTopics((r) => resolve(r.topics), reject));
+const getServices = () => new Promise((resolve, reject) => ros.getServices(resolve, reject));
+// Poll an (async) condition until it holds or `ms` pass; its last value (this script's wait_for).
+async function until(pred, ms) {
+  const end = Date.now() + ms;
+  for (;;) {
+    const value = await pred();
+    if (value || Date.now() >= end) { return value; }
+    await sleep(50);
+  }
+}
 
 // pubsub.example: two Topic objects on one topic and one connection; the very first publish
 // (an implicit advertise) must reach the other object's subscription through ROS.
@@ -35,12 +45,15 @@ async function pubsub() {
 async function listener() {
   const t = topic('/echo/test', 'std_msgs/String');
   const seen = [];
-  t.subscribe((m) => seen.push(m.data));
+  const four = new Promise((resolve) => {
+    t.subscribe((m) => { seen.push(m.data); if (seen.length === 4) { resolve(); } });
+    setTimeout(resolve, 10000);
+  });
   for (const data of ['1', '2', '3', '4']) {
     await sleep(50);
     t.publish({ data: data });
   }
-  await sleep(1500);
+  await four;
   t.unsubscribe();
   t.unadvertise();
   result.listener = seen;
@@ -76,16 +89,11 @@ async function fibonacci() {
 async function checkTopics() {
   const t = topic('/some_test_topic', 'std_msgs/String');
   result.topic_before = (await getTopics()).includes('/some_test_topic');
+  const listed = async () => (await getTopics()).includes('/some_test_topic');
   t.advertise();
-  await sleep(200);
-  result.topic_advertised = (await getTopics()).includes('/some_test_topic');
+  result.topic_advertised = await until(listed, 10000);
   t.unadvertise();
-  let listed = true;
-  for (let i = 0; i < 50 && listed; i++) {
-    await sleep(200);
-    listed = (await getTopics()).includes('/some_test_topic');
-  }
-  result.topic_after_unadvertise = listed;
+  result.topic_after_unadvertise = !(await until(async () => !(await listed()), 10000));
 }
 
 // compression 'png' (roslibjs decodes the PNG and JSON.parses the pixels as text: its own
@@ -115,7 +123,7 @@ async function service() {
   for (const message of ['first provider', 'second provider']) {
     const server = new ROSLIB.Service({ ros: ros, name: name, serviceType: 'std_srvs/Trigger' });
     server.advertise((req, resp) => { resp.success = true; resp.message = message; return true; });
-    await sleep(300);
+    await until(async () => (await getServices()).includes(name), 10000);  // registered with ROS
     result.service.push(await call());
     server.unadvertise();
     ros.removeAllListeners(name);

@@ -68,8 +68,8 @@ class BridgeFlood(Faults):
         timeout = float(rospy.get_param("/rbd_controller/operator_timeout"))
         queue = []  # the controller's remaining poses of the current trick (latched), newest last
         sub = rospy.Subscriber("/rbd_controller/path_queue", PathQueue, lambda msg: queue.append(list(msg.names)))
-        m.heartbeat = True
-        t_armed = time.monotonic()
+        m.arm_heartbeat()
+        wait_for(lambda: queue, 5.0)  # the latched remaining poses (none on a stack that never had a trick)
 
         def long_trick():  # walking, with at least one whole pose after the current one still to go
             return m.state == "EXECUTING" and m.speed() > 0.08 and bool(queue) and len(queue[-1]) >= 2
@@ -78,7 +78,6 @@ class BridgeFlood(Faults):
         # robot may be anywhere in one: if its last pose is under way (its end could come before
         # the timeout), it is let end first; idle, it is shown "spin" (the shortest trick that moves,
         # two 180 deg turns), as on a fresh stack.
-        time.sleep(max(0.0, t_armed + 1.0 - time.monotonic()))  # the heartbeat arms the watchdog
         if not long_trick():
             self.assertTrue(wait_for(lambda: m.state in ("WAITING_FOR_GESTURE", "EMERGENCY_STOP"), 60.0),
                             "the trick of the fault before did not end: %s" % m.state)

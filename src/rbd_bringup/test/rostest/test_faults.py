@@ -36,7 +36,7 @@ import rbd_testkit
 from rbd_bringup import a1_monitor
 from rbd_geometry.rotation import yaw_of, yaw_to_quat
 from rbd_msgs.srv import PressRemote
-from rbd_testkit.ros import run_rostest
+from rbd_testkit.ros import run_rostest, subscriber_nodes
 from rbd_wire_oracle import unitree as vendor
 
 #: The e-stop during a detour (AVOIDING) needs a stroll with a dropped bag (~60 s): with the other
@@ -153,6 +153,7 @@ class Monitor:
         self.cloud_pub = rospy.Publisher("/reliability/points", PointCloud2, queue_size=2)
         self.pose_pub = rospy.Publisher("/reliability/pose", PoseStamped, queue_size=5)
         self.hb_pub = rospy.Publisher("/rbd_local/heartbeat", Header, queue_size=2)
+        self.hb_sent = 0  # heartbeats relayed so far
         self.gesture = rospy.Publisher("/rbd_gestrec/gesture", String, queue_size=10)
         rospy.Subscriber("/rbd_sim/ground_truth", Odometry, self.on_truth, queue_size=50)
         rospy.Subscriber("/rbd_controller/state", String, self.on_state, queue_size=20)
@@ -208,6 +209,14 @@ class Monitor:
     def on_hb_timer(self, _event):
         if self.heartbeat:
             relay(self.hb_pub, Header(stamp=rospy.Time.now(), frame_id="test_faults"))
+            self.hb_sent += 1
+
+    def arm_heartbeat(self):
+        """Turn the heartbeat on; wait for a beat sent while rbd_controller is connected (it arms the watchdog)."""
+        n = self.hb_sent
+        self.heartbeat = True
+        rbd_testkit.wait_for(lambda: self.hb_sent > n and "/rbd_controller" in subscriber_nodes(self.hb_pub), 10.0,
+                             what="a heartbeat sent to a connected rbd_controller")
 
     def close(self):
         self.a1.close()
@@ -842,8 +851,7 @@ class Faults(unittest.TestCase):
     def fault_operator_link(self, i):
         m = self.m
         if not m.heartbeat:
-            m.heartbeat = True
-            time.sleep(1.0)
+            m.arm_heartbeat()
         # A fresh trick ("walk": its first pose takes ~6 s, longer than the heartbeat timeout), so
         # neither the end of a trick nor the pause between two poses can pass for the watchdog's
         # stop: after another fault's recovery the robot may be anywhere in a trick. A trick

@@ -80,6 +80,11 @@ class World:
         with self.lock:
             return [v for v in self.applied if v[0] >= t0 and any(abs(c) > STILL for c in v[1:])]
 
+    def last_sample(self):
+        """Receipt time of the newest ground-truth velocity sample (0.0 before the first)."""
+        with self.lock:
+            return self.applied[-1][0] if self.applied else 0.0
+
     def first_zero_after(self, t0):
         with self.lock:
             for v in self.applied:
@@ -227,13 +232,23 @@ class TestControlSystem(unittest.TestCase):
         delay = self.w.first_zero_after(t0)
         rospy.loginfo("%s: zero velocity at the robot %.3f s after the request", label, delay)
         self.assertLess(delay, CONTROL_PERIOD + MARGIN + self.w.stop_time, label)
-        time.sleep(0.3)
+        # the check starts 0.3 s after the first zero (deceleration), at a ground-truth sample
+        settled = t0 + delay + 0.3
+        self.assertTrue(wait_for(lambda: self.w.last_sample() >= settled, 5.0), "%s: ground truth stopped" % label)
+        self.assert_still(0.5, label)
+
+    def assert_still(self, hold, label):
+        """No motion at the robot for ``hold`` s, proven on fresh ground truth (a stale simulator fails)."""
         t1 = time.monotonic()
         x0, y0, yaw0 = self.w.pose()
-        time.sleep(0.5)
-        x1, y1, yaw1 = self.w.pose()
-        self.assertEqual(self.w.moving_since(t1), [], label)
-        self.assertLess(math.hypot(x1 - x0, y1 - y0) + abs(yaw1 - yaw0), 1e-3, label)
+
+        def still():
+            x1, y1, yaw1 = self.w.pose()
+            return not self.w.moving_since(t1) and math.hypot(x1 - x0, y1 - y0) + abs(yaw1 - yaw0) < 1e-3
+
+        stays_unchanged(still, lambda: self.w.last_sample() > t1, hold, timeout=5.0,
+                        what="%s: the robot at rest" % label, proof="a fresh ground-truth sample")
+        self.assertGreater(self.w.last_sample(), t1 + hold - 0.2, "%s: ground truth stopped coming" % label)
 
     def assert_back_at_start(self, start):
         x, y, yaw = self.w.pose()
@@ -326,8 +341,7 @@ class TestControlSystem(unittest.TestCase):
         self.wait_state("EMERGENCY_STOP", 30.0)
         self.em_stop(data=False)
         self.wait_state("COLLISION_DETECTED", 30.0)
-        time.sleep(0.3)
-        self.assertEqual(self.w.moving_since(time.monotonic() - 0.2), [])
+        self.assert_still(0.5, "e-stop released, collision held")
         self.collision(data=False)
         self.wait_state("EXECUTING", 30.0)
         self.wait_state("WAITING_FOR_GESTURE", 40.0)

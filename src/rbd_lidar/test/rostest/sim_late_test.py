@@ -33,7 +33,7 @@ from rbd_bringup.metrics import box_ahead, footprint_box_clearance
 from rbd_geometry.rotation import yaw_of
 from rbd_msgs.msg import CollisionState
 from rbd_msgs.srv import PlaceBox
-from rbd_testkit import wait_for
+from rbd_testkit import stays_unchanged, wait_for
 from rbd_testkit.ros import run_rostest
 
 SPEED = 0.4  # [m/s], forward
@@ -152,10 +152,11 @@ class SimLateTest(unittest.TestCase):
             return math.atan2(math.sin(yaw - self._pose()[2]), math.cos(yaw - self._pose()[2]))
 
         deadline = rospy.get_time() + 15.0
+        rate = rospy.Rate(50)  # the turn's control loop
         while abs(err()) > 0.04 and rospy.get_time() < deadline and not rospy.is_shutdown():
             e = err()
             self._command(wz=math.copysign(min(0.8, max(0.25, 1.5 * abs(e))), e))
-            rospy.sleep(0.02)
+            rate.sleep()
         self._command()
         wait_for(self._still, 5.0, what="standing still after the turn", abort=rospy.is_shutdown)
         self.assertLess(abs(err()), 0.08)
@@ -204,7 +205,16 @@ class SimLateTest(unittest.TestCase):
         t_drop = rospy.get_time()
         bag = self._put("late_bag", 0.5)
         t_stop = self._stopped_after(t_drop, 3.0)
-        rospy.sleep(1.0)  # standing in front of it: the hold keeps the stop
+        # standing in front of it, still commanded forward: the hold keeps the stop, on fresh ground truth
+        with self.lock:
+            n = len(self.truth)
+
+        def fresh() -> bool:
+            with self.lock:
+                return len(self.truth) > n + 5
+
+        stays_unchanged(lambda: self._still(0.3), fresh, hold=1.0, what="the robot standing in front of the bag",
+                        proof="fresh ground truth")
         self._command()
         drop_clearance = self._clearance(t_drop, bag)
         self.place(name="late_bag", remove=True)

@@ -20,7 +20,7 @@ from sensor_msgs.msg import Imu
 
 from rbd_geometry.rotation import yaw_to_quat
 from rbd_testkit import wait_for
-from rbd_testkit.ros import run_rostest
+from rbd_testkit.ros import run_rostest, subscriber_nodes
 
 V = 0.3  # forward speed [m/s]
 W = 0.25  # yaw rate [rad/s]
@@ -29,6 +29,7 @@ JUMP_AT = 8.0  # [s] after start the ZED jumps +1 m in x ...
 JUMP_END = 9.5  # [s] ... until it relocalises
 POSE_STOP_AT = 14.0  # [s] ZED goes silent
 IMU_STOP_AT = 18.0  # [s] IMU goes silent
+END_AT = IMU_STOP_AT + 3.0  # [s] the script ends: every sensor silent for 3 s
 # base_link -> os_sensor: mount yawed by +90 deg (exercises the frame rotation of the IMU data).
 MOUNT_YAW = math.pi / 2
 
@@ -57,6 +58,8 @@ class Feeder:
         while not rospy.is_shutdown() and not self.stop:
             now = rospy.Time.now()
             t = (now - self.start).to_sec()
+            if t >= END_AT:
+                break
             if t < IMU_STOP_AT:
                 self.imu_pub.publish(self.imu(now))
             if t < POSE_STOP_AT and k % 7 == 0:  # ~14 Hz
@@ -130,11 +133,13 @@ class EkfSyntheticTest(unittest.TestCase):
         rospy.Subscriber("/diagnostics", DiagnosticArray, cls.on_diag, queue_size=20)
         wait_for(lambda: cls.feeder.imu_pub.get_num_connections() and cls.feeder.pose_pub.get_num_connections(),
                  20.0, what="ekf_localization_node subscribed")
-        rospy.sleep(0.5)  # TF listener gets the static transforms
+        # The latched mount reaches a subscriber on connection: wait for the EKF's connection.
+        wait_for(lambda: "/ekf_localization" in subscriber_nodes(broadcaster.pub_tf), 20.0,
+                 what="ekf_localization_node's /tf_static connection")
         cls.feeder.start = rospy.Time.now()
         cls.feeder.thread.start()
-        rospy.sleep(IMU_STOP_AT + 3.0)
-        cls.feeder.stop = True
+        cls.feeder.thread.join(IMU_STOP_AT + 30.0)  # the feeder ends its script itself (END_AT)
+        assert not cls.feeder.thread.is_alive(), "the feeder did not end its script"
 
     @classmethod
     def on_odom(cls, msg):

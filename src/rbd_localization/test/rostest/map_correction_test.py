@@ -23,7 +23,8 @@ from sensor_msgs.msg import LaserScan
 from tf2_msgs.msg import TFMessage
 
 from rbd_geometry.rotation import wrap_angle, yaw_of, yaw_to_quat
-from rbd_testkit.ros import run_rostest
+from rbd_testkit import wait_for
+from rbd_testkit.ros import run_rostest, subscriber_nodes
 
 WALLS = np.array([
     (-3, -2.5, 5, -2.5), (5, -2.5, 5, 3.5), (5, 3.5, -3, 3.5), (-3, 3.5, -3, -2.5),
@@ -108,12 +109,11 @@ class MapCorrectionTest(unittest.TestCase):
         rospy.Subscriber("/rbd_localization/pose", PoseStamped, cls.on_pose, queue_size=50)
         rospy.Subscriber("/tf", TFMessage, cls.on_tf, queue_size=100)
         rospy.Subscriber("/map", OccupancyGrid, cls.on_map, queue_size=2)
-        deadline = rospy.Time.now() + rospy.Duration(20.0)
-        while cls.scan_pub.get_num_connections() == 0 or cls.odom_pub.get_num_connections() == 0:
-            if rospy.Time.now() > deadline:
-                raise AssertionError("map_correction_node did not subscribe")
-            rospy.sleep(0.1)
-        rospy.sleep(0.5)
+        wait_for(lambda: cls.scan_pub.get_num_connections() and cls.odom_pub.get_num_connections(), 20.0,
+                 what="map_correction_node subscribed")
+        # the latched LiDAR mount reaches a subscriber on connection: wait for the node's
+        wait_for(lambda: "/map_correction" in subscriber_nodes(static.pub_tf), 20.0,
+                 what="map_correction_node's /tf_static connection")
         cls.run_drive()
 
     @classmethod

@@ -157,7 +157,9 @@ class RlConfigTest(unittest.TestCase):
         self.assertIn("got 224", output)
         self.assertEqual(proc.returncode, 1, output)
         self.assertLess(time.time() - start, 20.0)
-        rospy.sleep(0.5)
+        # The node is gone: what it sent before it exited came before its connections' end, and
+        # rospy hands a connection's messages to the callback before it drops the connection.
+        wait_for(lambda: not any(s.impl.connections for s in subs), 5.0, what="the bad node's connections closed")
         for s in subs:
             s.unregister()
         self.assertEqual(received, [])

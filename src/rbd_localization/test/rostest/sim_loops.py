@@ -26,6 +26,7 @@ from geometry_msgs.msg import PoseStamped, Twist
 from nav_msgs.msg import Odometry
 
 from rbd_geometry.rotation import yaw_of
+from rbd_testkit import wait_for
 
 VX_MAX, WZ_MAX = 0.3, 0.6  # thesis saturations (0.3 m/s, 36 deg/s)
 
@@ -198,9 +199,10 @@ class Runner:
         self.stop()
 
     def stop(self):
+        rate = rospy.Rate(20)  # ten zero commands, at the walking loops' pace
         for _ in range(10):
             self.send(0.0, 0.0)
-            rospy.sleep(0.05)
+            rate.sleep()
 
     def errors(self):
         with self.lock:
@@ -217,13 +219,16 @@ class Runner:
         return out
 
     def wait_ready(self, timeout=60.0):
-        end = rospy.Time.now() + rospy.Duration(timeout)
-        while not rospy.is_shutdown() and rospy.Time.now() < end:
+        def ready():
             with self.lock:
-                if self.truth and self.est and self.ekf:
-                    return True
-            rospy.sleep(0.2)
-        return False
+                return bool(self.truth and self.est and self.ekf)
+
+        return wait_for(ready, timeout, 0.2, abort=rospy.is_shutdown)
+
+    def extra_aligned(self):
+        """True once every extra odometry has its first recorded sample (aligned with the truth)."""
+        with self.lock:
+            return all(e["first"] is not None for e in self.extra.values())
 
 
 def drive_loop(r, settle=False):
@@ -274,7 +279,8 @@ def run(loops, settle=4.0, extra_odometry=None):
         raise RuntimeError("no ground truth / pose / odometry")
     rospy.sleep(settle)  # map built while standing
     r.start_extra()
-    rospy.sleep(0.5)
+    if not wait_for(r.extra_aligned, 10.0, 0.05, abort=rospy.is_shutdown):
+        raise RuntimeError("no sample of the extra odometry %s" % sorted(r.extra))
     report = drive_loops(r, loops)
     with r.lock:  # subscribers keep appending
         report["tracks"] = {k: list(v) for k, v in r.tracks.items()}

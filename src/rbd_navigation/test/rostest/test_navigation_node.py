@@ -2,7 +2,6 @@
 """rostest: /rbd_navigation/generate_path answers around the current pose; unknown => no poses."""
 
 import math
-import time
 import unittest
 
 import rospy
@@ -31,9 +30,15 @@ class TestNavigation(unittest.TestCase):
         o = msg.pose.orientation
         o.x, o.y, o.z, o.w = yaw_to_quat(yaw)
         wait_for(lambda: self.pub.get_num_connections() > 0, 10.0, what="rbd_navigation subscribed to the pose")
-        for _ in range(3):
+
+        def taken():
+            # the proof the node has this pose: "walk" starts 0.6 m ahead of it
             self.pub.publish(msg)
-            time.sleep(0.1)
+            res = self.srv(command="walk")
+            p = res.poses[0].position if res.success else None
+            return p and math.hypot(p.x - x - 0.6 * math.cos(yaw), p.y - y - 0.6 * math.sin(yaw)) < 1e-6
+
+        wait_for(taken, 10.0, 0.05, what="rbd_navigation using the pose (%.2f, %.2f, %.2f)" % (x, y, yaw))
 
     def test_no_pose_no_path(self):
         res = self.no_pose

@@ -13,8 +13,8 @@ from std_srvs.srv import SetBool
 
 from rbd_geometry.rotation import rpy_to_quat, yaw_of
 from rbd_msgs.srv import FollowPath, SetPosition
-from rbd_testkit import wait_for
-from rbd_testkit.ros import run_rostest
+from rbd_testkit import stays_unchanged, wait_for
+from rbd_testkit.ros import messages_received, run_rostest
 
 PERIOD = 1.0 / 20.0  # the controller's rate
 
@@ -31,6 +31,7 @@ class Recorder:
     def __init__(self):
         self.lock = threading.Lock()
         self.truth = None
+        self.n_truth = 0  # ground-truth poses received (a window proves the pose kept coming)
         self.cmds = []  # (receipt time, Twist)
         self.status = []
         self.body = None
@@ -42,6 +43,7 @@ class Recorder:
     def on_truth(self, msg):
         with self.lock:
             self.truth = msg.pose
+            self.n_truth += 1
 
     def on_cmd(self, msg):
         with self.lock:
@@ -106,11 +108,23 @@ class TestPosController(unittest.TestCase):
             return [m for t, m in self.rec.cmds if t > t0]
 
     def assert_robot_stopped(self, window=0.5):
+        """The ground truth stays within 5 mm / 5 mrad for ``window`` s, while fresh poses keep coming.
+
+        A pose that stopped coming (a stale stand-in) would look like a robot at rest: the check
+        first waits for a pose newer than the baseline, and at the end asserts poses arrived during
+        the window too (the stand-in sends 25 Hz).
+        """
         x0, y0, yaw0 = self.rec.xy_yaw()
-        time.sleep(window)
-        x1, y1, yaw1 = self.rec.xy_yaw()
-        self.assertLess(math.hypot(x1 - x0, y1 - y0), 0.005)
-        self.assertLess(abs(yaw1 - yaw0), 0.005)
+        n0 = self.rec.n_truth
+
+        def still():
+            x1, y1, yaw1 = self.rec.xy_yaw()
+            return math.hypot(x1 - x0, y1 - y0) < 0.005 and abs(yaw1 - yaw0) < 0.005
+
+        stays_unchanged(still, lambda: self.rec.n_truth > n0, hold=window, timeout=5.0,
+                        what="the robot at rest", proof="a fresh ground-truth pose")
+        n1 = self.rec.n_truth
+        self.assertGreaterEqual(n1 - n0, 1 + int(window * 25 / 2), "ground truth stopped coming during the window")
 
     def test_reaches_goal_with_body_pose(self):
         self.go(make_pose(0.6, 0.3, 1.2, pitch=0.1, z=-0.05))
@@ -121,7 +135,7 @@ class TestPosController(unittest.TestCase):
         self.assertAlmostEqual(self.rec.body.z, -0.05, places=3)
         # idle means zero velocity
         t0 = time.monotonic()
-        time.sleep(0.3)
+        wait_for(lambda: len(self.last_cmd_after(t0)) >= 3, 0.3, 0.01)
         cmds = self.last_cmd_after(t0)
         self.assertGreaterEqual(len(cmds), 3, "cmd_vel must keep coming at >= 10 Hz")
         self.assertTrue(all(c.linear.x == 0 and c.linear.y == 0 and c.angular.z == 0 for c in cmds))
@@ -197,14 +211,16 @@ class TestPosController(unittest.TestCase):
         self.assertLess(math.hypot(x1 - goal.position.x, y1 - goal.position.y), 0.03)
 
     def test_speed_scale_zero_holds_robot(self):
+        n = messages_received("/rbd_pos_controller", "/rbd_lidar/speed_scale")
         self.scale_pub.publish(Float32(0.0))
-        time.sleep(0.3)
+        self.assertTrue(wait_for(lambda: messages_received("/rbd_pos_controller", "/rbd_lidar/speed_scale") > n, 5.0),
+                        "the speed scale never reached the controller")
         x, y, yaw = self.rec.xy_yaw()
         self.assertTrue(
             self.set_position(pose=make_pose(x + 0.5 * math.cos(yaw), y + 0.5 * math.sin(yaw), yaw)).accepted
         )
-        time.sleep(0.5)
-        self.assert_robot_stopped()
+        self.assertTrue(wait_for(lambda: self.rec.status[-1] == "running", 5.0), self.rec.status[-3:])
+        self.assert_robot_stopped(1.0)  # a goal taken at full speed moves it within a control period
         self.scale_pub.publish(Float32(1.0))
         self.assertTrue(wait_for(self.idle, 30.0))
 

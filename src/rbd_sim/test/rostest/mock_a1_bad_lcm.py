@@ -17,7 +17,7 @@ import lcm
 import rospy
 from nav_msgs.msg import Odometry
 
-from rbd_testkit import stays_unchanged, wait_for
+from rbd_testkit import stays_unchanged, wait_for, wait_quiet
 from rbd_testkit.ros import RosoutWatcher, run_rostest
 from rbd_wire_oracle import unitree as vendor
 
@@ -56,13 +56,13 @@ class MockA1BadLcm(unittest.TestCase):
     def setUp(self):
         """Known state, whatever ran before: the mock stands still."""
         self.assertIsNotNone(self.get(), "no ground truth")
-        wait_for(self.still, 5.0, 0.0, what="the mock standing still")
+        self.wait_still("the mock standing still")
 
-    def still(self):
-        """True if the ground truth moved less than 0.1 mm / 0.1 mrad in 0.2 s."""
-        before = self.get()
-        time.sleep(0.2)
-        return all(v < 1e-4 for v in self.moved(self.get(), before))
+    def wait_still(self, what):
+        """Wait until fresh ground truth moved less than 0.1 mm / 0.1 mrad over 0.2 s."""
+        n = self.gt_count
+        wait_quiet(self.get, 0.2, 5.0, 0.01, what=what, same=lambda a, b: all(v < 1e-4 for v in self.moved(a, b)))
+        self.assertGreaterEqual(self.gt_count, n + 2, "the ground truth stopped coming: it only looked still")
 
     def rejected_so_far(self):
         """The mock's count of rejected HighCmd packets, from its latest (throttled) log line."""
@@ -100,10 +100,11 @@ class MockA1BadLcm(unittest.TestCase):
     def send(self, packets, duration):
         t0 = time.monotonic()
         i = 0
+        pace = rospy.Rate(1.0 / PERIOD)
         while time.monotonic() - t0 < duration:
             self.lc.publish(HIGH_CMD, packets[i % len(packets)])
             i += 1
-            time.sleep(PERIOD)
+            pace.sleep()
 
     def moved(self, a, b):
         return math.hypot(a[0] - b[0], a[1] - b[1]), abs(a[2] - b[2])
@@ -151,7 +152,7 @@ class MockA1BadLcm(unittest.TestCase):
         d, _ = self.moved(at_last, start)
         self.assertGreater(d, 0.2, "valid commands did not move the mock (%.3f m)" % d)
         # the watchdog stops it: measured once the ground truth stands still (however long that takes)
-        wait_for(self.still, 5.0, 0.0, what="the mock stopping after the last command")
+        self.wait_still("the mock stopping after the last command")
         stopped = self.get()
         coast, _ = self.moved(stopped, at_last)
         # latency 0.05 s + watchdog 0.1 s at 0.3 m/s + 0.03 m braking = 0.075 m

@@ -20,7 +20,7 @@ from std_msgs.msg import Bool
 from rbd_a1_driver.unitree_layout import MODE_FORCE_STAND
 from rbd_geometry.rotation import quat_to_rpy
 from rbd_msgs.srv import SetBodyPose
-from rbd_testkit import stays_unchanged, wait_for
+from rbd_testkit import stays_unchanged, wait_for, wait_quiet
 from rbd_testkit.ros import run_rostest
 
 PKG = "rbd_sim"
@@ -113,22 +113,19 @@ class MockA1Behaviour(unittest.TestCase):
     def send(self, msg, duration):
         """Publish msg at RATE for duration seconds (monotonic)."""
         t0 = time.monotonic()
+        pace = rospy.Rate(RATE)
         while time.monotonic() - t0 < duration:
             self.pub.publish(msg)
-            time.sleep(1.0 / RATE)
+            pace.sleep()
         return self.gt.get()
 
     def settle(self, timeout=5.0):
-        """Wait until the ground truth has not moved for 0.3 s; return the pose."""
-        deadline = time.monotonic() + timeout
-        last = self.gt.get()
-        while time.monotonic() < deadline:
-            time.sleep(0.3)
-            now = self.gt.get()
-            if dist(now, last) < 1e-4 and abs(now[5] - last[5]) < 1e-4:
-                return now
-            last = now
-        self.fail("ground truth still moving after %.1f s" % timeout)
+        """Wait until fresh ground truth has not moved for 0.3 s; return the pose."""
+        n = self.gt.count
+        pose = wait_quiet(self.gt.get, 0.3, timeout, 0.02, what="the ground truth still",
+                          same=lambda a, b: dist(a, b) < 1e-4 and abs(a[5] - b[5]) < 1e-4)
+        self.assertGreaterEqual(self.gt.count, n + 3, "the ground truth stopped coming: it only looked still")
+        return pose
 
     def assert_still(self, duration, what):
         """No motion for ``duration`` s of ground truth that keeps arriving (not just a sleep)."""
@@ -156,9 +153,7 @@ class MockA1Behaviour(unittest.TestCase):
     def test_no_cmd_vel_for_025s_stops(self):
         self.settle()
         at_last = self.send(twist(0.3), 1.0)
-        t_last = time.monotonic()
-        time.sleep(1.0)
-        stopped = self.gt.get()
+        stopped = self.settle()  # at rest on fresh ground truth: the whole coast (a robot that never stops fails)
         # Along the heading (an earlier test may have turned the robot: x alone goes negative then).
         yaw = at_last[5]
         coast = (stopped[0] - at_last[0]) * math.cos(yaw) + (stopped[1] - at_last[1]) * math.sin(yaw)
@@ -166,7 +161,6 @@ class MockA1Behaviour(unittest.TestCase):
         # 0.25 s gate + 0.05 s latency at 0.3 m/s + 0.03 m braking = 0.12 m; a 1 s gate would give 0.33 m.
         self.assertGreater(coast, 0.03, "was not moving?")
         self.assertLess(coast, 0.2, "coasted %.3f m after the last cmd_vel" % coast)
-        self.assertLess(time.monotonic() - t_last, 1.5, "test too slow to judge")
         self.assert_still(0.5, "after cmd_vel stopped")
 
     def test_turn_180(self):

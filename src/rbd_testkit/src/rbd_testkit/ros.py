@@ -71,6 +71,59 @@ def run_rostest(package: str, test_name: str, case: type, seed: Optional[int] = 
         unittest.TestLoader.sortTestMethodsUsing = saved
 
 
+def subscriber_nodes(publisher: Any) -> List[str]:
+    """The nodes whose subscriptions are connected to ``publisher`` now (a ``rospy.Publisher``).
+
+    A latched publisher hands its last message to each subscriber on connection, so a node in
+    this list has been sent it: wait for a node's name here instead of sleeping after a latched
+    publish (e.g. a static transform) or after a subscriber count that other nodes could make.
+
+    Args:
+        publisher: a ``rospy.Publisher``.
+
+    Returns:
+        The subscribers' node names (e.g. ``["/ekf_localization"]``), one per connection.
+
+    Example:
+        >>> wait_for(lambda: "/ekf" in subscriber_nodes(static_tf.pub_tf), 20.0)  # doctest: +SKIP
+    """
+    return [str(info[1]) for info in publisher.impl.get_stats_info()]
+
+
+def messages_received(node: str, topic: str) -> int:
+    """How many messages ``node`` has received on ``topic`` so far, from the node's own statistics.
+
+    The node's XML-RPC ``getBusStats`` counts the messages its subscription read from each live
+    connection: a count above its value before a publish proves the message reached that node
+    (not only that someone is subscribed). Needs ``rospy.init_node`` first.
+
+    Args:
+        node: the node's full name (e.g. ``/rbd_pos_controller``).
+        topic: the topic's resolved name.
+
+    Returns:
+        The sum over the node's live connections on ``topic`` (0 when it has none).
+
+    Raises:
+        RuntimeError: the node did not answer the statistics call.
+
+    Example:
+        >>> n = messages_received("/rbd_pos_controller", "/rbd_lidar/speed_scale")  # doctest: +SKIP
+        >>> pub.publish(Float32(0.0))
+        >>> wait_for(lambda: messages_received("/rbd_pos_controller", "/rbd_lidar/speed_scale") > n, 5.0)
+    """
+    from xmlrpc.client import ServerProxy
+
+    import rosgraph
+    import rospy
+
+    caller = rospy.get_name()
+    code, message, stats = ServerProxy(rosgraph.Master(caller).lookupNode(node)).getBusStats(caller)
+    if code != 1:
+        raise RuntimeError("%s: getBusStats failed: %s" % (node, message))
+    return sum(int(conn[2]) for name, conns in stats[1] if name == topic for conn in conns)
+
+
 class RosoutWatcher:
     """Collects what nodes log on /rosout: a node's own log line proves an input reached it.
 

@@ -58,6 +58,53 @@ def wait_for(
     return value
 
 
+def wait_quiet(
+    read: Callable[[], Any],
+    quiet: float,
+    timeout: float = 10.0,
+    step: float = 0.05,
+    what: Optional[str] = None,
+    same: Optional[Callable[[Any, Any], bool]] = None,
+) -> Any:
+    """Wait until ``read()`` has kept one value for ``quiet`` seconds (a stream drained, a robot settled).
+
+    Not a "nothing happened" check: it waits for a quiet period, however long the noise lasts
+    (up to ``timeout``); a check that an input changes nothing is ``stays_unchanged``.
+
+    Args:
+        read: the observed value (a message count, a rounded pose...); compared with ``!=``.
+        quiet: seconds the value must stay the same.
+        timeout: seconds to wait at most.
+        step: polling period [s].
+        what: a description; when given, a timeout raises ``WaitTimeoutError`` with it.
+        same: ``same(first, now)`` true when ``now`` still counts as the quiet period's first
+            value (a tolerance for a pose); default ``==``. A slow drift adds up and restarts it.
+
+    Returns:
+        The last value read (quiet), or None on timeout without ``what``.
+
+    Raises:
+        WaitTimeoutError: no quiet period within ``timeout`` when ``what`` is given.
+
+    Example:
+        >>> n = wait_quiet(inbox.count, 0.45, what="the warm-up messages drained")  # doctest: +SKIP
+    """
+    first = {"value": read(), "since": time.monotonic()}
+    last = {"value": first["value"]}
+
+    def settled() -> bool:
+        value, now = read(), time.monotonic()
+        last["value"] = value
+        if not (same(first["value"], value) if same is not None else value == first["value"]):
+            first["value"], first["since"] = value, now
+            return False
+        return now - first["since"] >= quiet
+
+    if not wait_for(settled, timeout, step, what=None if what is None else "%s (quiet for %.2f s)" % (what, quiet)):
+        return None
+    return last["value"]
+
+
 def stays_unchanged(
     read: Callable[[], Any],
     arrived: Callable[[], Any],
@@ -115,18 +162,18 @@ def stays_unchanged(
             raise AssertionError("%s changed %s, %.2f s after the input: %r -> %r"
                                  % (what, phase, time.monotonic() - start, baseline, value))
 
-    while True:
+    def proven() -> Any:
         check("before the input was proven to arrive")
-        if arrived():
-            break
-        if time.monotonic() - start >= timeout:
-            raise AssertionError(
-                "no proof of %s within %.1f s: an unchanged %s would prove nothing" % (proof, timeout, what))
-        time.sleep(step)
+        return arrived()
+
+    if not wait_for(proven, timeout, step):
+        raise AssertionError(
+            "no proof of %s within %.1f s: an unchanged %s would prove nothing" % (proof, timeout, what))
     end = time.monotonic() + hold
-    while True:
+
+    def held() -> bool:
         check("while held")
-        left = end - time.monotonic()
-        if left <= 0:
-            return baseline
-        time.sleep(min(step, left))
+        return time.monotonic() >= end
+
+    wait_for(held, hold, step)  # its last call comes at the deadline, after ``end``
+    return baseline
