@@ -19,17 +19,22 @@ from rbd_controller.fsm import Event, State
 from rbd_controller.lattice_plan import LatticePlan
 from rbd_controller.perception import AvoidParams
 from rbd_controller.planner_worker import PlannerWorker
+from rbd_testkit import wait_for
 
 
 def wait_outcome(worker, timeout=10.0):
     """Poll like the tick does until the wanted job's outcome arrives."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        done = worker.poll()
-        if done is not None:
-            return done
-        time.sleep(0.01)
-    raise AssertionError("no outcome within %.0f s" % timeout)
+    return wait_for(worker.poll, timeout, 0.01, what="the job's outcome")
+
+
+def tick_until(fake, done, timeout=5.0):
+    """Tick the fake controller every 10 ms (as the node's timer would) until done() or timeout."""
+    def ticked():
+        if done():
+            return True
+        fake.tick()
+        return False
+    wait_for(ticked, timeout, 0.01)
 
 
 def test_a_job_runs_off_the_callers_thread_and_its_outcome_is_polled_once():
@@ -67,9 +72,7 @@ def test_a_cancelled_jobs_late_outcome_is_never_delivered():
     worker.cancel()
     assert not worker.submit("new", lambda: "new plan")  # the old one still runs: no second planner
     gate.set()
-    deadline = time.monotonic() + 5.0
-    while worker.busy and time.monotonic() < deadline:
-        time.sleep(0.01)
+    wait_for(lambda: not worker.busy, 5.0, 0.01)
     assert worker.poll() is None and not worker.busy
     assert worker.submit("new", lambda: "new plan")
     assert wait_outcome(worker).result == "new plan"
@@ -121,10 +124,7 @@ def test_a_slow_planner_leaves_the_robot_standing_while_the_tick_goes_on():
     assert time.monotonic() - t0 < 0.5  # the tick never waited for the planner
     assert fake.ctl.state == State.AVOIDING and fake.av.plan is None and not fake.paths
     gate.set()
-    deadline = time.monotonic() + 5.0
-    while fake.av.plan is None and time.monotonic() < deadline:
-        fake.tick()
-        time.sleep(0.01)
+    tick_until(fake, lambda: fake.av.plan is not None)
     assert fake.av.kind == "lattice" and fake.av.plan.poses[-1] == (2.0, 0.0, 0.0)
     assert [e for e in fake.events if e["event"] == "plan" and e["planner"] == "lattice"]
 
@@ -136,10 +136,7 @@ def test_a_raising_planner_is_a_give_up_with_its_reason_not_a_dead_node():
         raise ZeroDivisionError("a planner bug")
 
     fake.av._plan_job = boom
-    deadline = time.monotonic() + 5.0
-    while fake.ctl.state == State.AVOIDING and time.monotonic() < deadline:
-        fake.tick()
-        time.sleep(0.01)
+    tick_until(fake, lambda: fake.ctl.state != State.AVOIDING)
     assert fake.ctl.state == State.EXECUTING and fake.ctl.stats["gave_up"] == 1
     assert any(e["event"] == "gave_up" and "ZeroDivisionError: a planner bug" in e["detail"] for e in fake.events)
     assert any(level == "error" and "Traceback" in msg for level, msg in fake.logs)
@@ -158,10 +155,7 @@ def test_a_plan_arriving_after_a_stop_is_dropped_and_planned_again():
     ctl.set_emergency(False)  # released: back to the detour, under a new epoch
     assert ctl.state == State.AVOIDING and ctl.fsm.epoch != before
     gate.set()
-    deadline = time.monotonic() + 5.0
-    while fake.av.plan is None and time.monotonic() < deadline:
-        fake.tick()
-        time.sleep(0.01)
+    tick_until(fake, lambda: fake.av.plan is not None)
     assert len(calls) == 2  # the stale plan was dropped and a new one made
     assert fake.av.plan is not None
 

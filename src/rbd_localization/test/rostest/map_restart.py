@@ -198,13 +198,10 @@ def launch(env, name, world, seed, columns, pose, map_file=""):
 
 
 def wait_for(predicate, timeout, what):
-    """Poll predicate every 0.1 s; RuntimeError naming what after timeout s."""
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if predicate():
-            return
-        time.sleep(0.1)
-    raise RuntimeError("timed out after %.0f s waiting for %s" % (timeout, what))
+    """rbd_testkit's wait_for, every 0.1 s; WaitTimeoutError naming what after timeout s."""
+    import rbd_testkit
+
+    return rbd_testkit.wait_for(predicate, timeout, 0.1, what=what)
 
 
 def compare_maps(a_yaml, b_yaml):
