@@ -42,6 +42,37 @@ int initialCells(const OccupancyMap::Params& p) {
   return std::max(8, static_cast<int>(std::ceil(p.size / p.resolution)));
 }
 
+/// Whether beam k (points in scan order, sensor frame) meets its surface steeper than asin(sin_min).
+/// The surface direction comes from the neighbours on the same surface as point k: a neighbour
+/// counts when it lies within 0.05 r + 0.05 of it (half the span two neighbours may have). Both
+/// neighbours on it: the chord between them; one (point k at a depth step, e.g. the edge of an
+/// object with the wall behind): the chord from point k to it; none (a surface grazed so flat that
+/// its points lie far apart, or an isolated return): the surface is unknown and the beam does not
+/// clear. Before, a depth step on either side made the beam not clear, so the beams along an
+/// object's silhouette never cleared what they passed (issue 29: a visitor's flank in front of a
+/// bin stayed a wall).
+bool beamClears(const Points2d& points, size_t k, double sin_min) {
+  const Eigen::Vector2d& p = points[k];
+  const double r = p.norm();
+  if (r <= 1e-6) return false;
+  const double near = 0.05 * r + 0.05;
+  const bool has_prev = k > 0 && (points[k - 1] - p).norm() <= near;
+  const bool has_next = k + 1 < points.size() && (points[k + 1] - p).norm() <= near;
+  Eigen::Vector2d tangent;
+  if (has_prev && has_next) {
+    tangent = points[k + 1] - points[k - 1];
+  } else if (has_prev) {
+    tangent = p - points[k - 1];
+  } else if (has_next) {
+    tangent = points[k + 1] - p;
+  } else {
+    return false;
+  }
+  const double span = tangent.norm();
+  if (span <= 1e-6) return false;
+  return std::fabs(p.x() * tangent.y() - p.y() * tangent.x()) / (r * span) >= sin_min;
+}
+
 }  // namespace
 
 OccupancyMap::OccupancyMap() : OccupancyMap(Params()) {}
@@ -148,18 +179,7 @@ bool OccupancyMap::insertScan(const Eigen::Isometry2d& map_from_sensor, const Po
     const Eigen::Vector2d& ps = points[k];
     const Eigen::Vector2d pm = map_from_sensor * ps;
     bool clear = true;
-    if (sin_min > 0.0) {
-      // Surface direction from the neighbours in scan order (both must lie on the same surface).
-      clear = false;
-      if (k > 0 && k + 1 < points.size()) {
-        const Eigen::Vector2d tangent = points[k + 1] - points[k - 1];
-        const double span = tangent.norm();
-        const double r = ps.norm();
-        if (span > 1e-6 && span <= 0.1 * r + 0.1 && r > 1e-6) {
-          clear = std::fabs(ps.x() * tangent.y() - ps.y() * tangent.x()) / (r * span) >= sin_min;
-        }
-      }
-    }
+    if (sin_min > 0.0) clear = beamClears(points, k, sin_min);
     // Beam end in cells (may lie outside; then the walk stops at the border).
     const double ex = (pm.x() - origin_x_) / params_.resolution;
     const double ey = (pm.y() - origin_y_) / params_.resolution;

@@ -38,9 +38,10 @@ class OccupancyMap {
     bool hits = true;         ///< false: only clear along the beams (no cell becomes occupied)
     double end_margin = 0.0;  ///< [m] the last part of each beam before its end is not cleared
     double time = 0.0;        ///< [s] stamp, for the occupied-since bookkeeping
-    /// Beams meeting their surface flatter than this [rad] (surface from the neighbouring points;
-    /// points in scan order) only hit, they do not clear: such a beam runs along a wall's cells.
-    /// 0: all beams clear.
+    /// Beams meeting their surface flatter than this [rad] only hit, they do not clear: such a beam
+    /// runs along a wall's cells. The surface is the chord through the neighbours in scan order
+    /// that lie within 0.05 r + 0.05 of the point (both, or the one across from a depth step; none:
+    /// unknown, no clearing). 0: all beams clear.
     double min_incidence = 0.0;
   };
 
