@@ -246,6 +246,87 @@ def grid_occupied_near(grid, points, radius):
     return [int(((data >= 65) & (np.hypot(x - px, y - py) <= radius)).sum()) for px, py in points]
 
 
+#: Height bands [m above the floor] for comparing the saved map with the world. The map correction
+#: slices the cloud 0.0-0.4 m above base_link (0.28 m above the floor on the A1): an occupied cell
+#: must lie near a shape reaching into the slice (with 0.08 m for the body's pitch and the sensor
+#: noise), and no cell may be free inside a shape that fills the slice's middle (a desk top at
+#: 0.68-0.75 m is seen under, not through).
+SLICE_ANY = (0.20, 0.76)
+SLICE_CORE = (0.38, 0.58)
+
+
+def shape_distance(boxes, cylinders, pts, z_lo, z_hi):
+    """Signed distance [m] of points (N x 2, world) to the nearest footprint edge of the shapes
+    reaching into [z_lo, z_hi] (negative inside one); inf without such a shape."""
+    import numpy as np
+
+    best = np.full(len(pts), np.inf)
+    for b in boxes:
+        if b.z1 < z_lo or b.z0 > z_hi:
+            continue
+        c, s = math.cos(b.yaw), math.sin(b.yaw)
+        dx, dy = pts[:, 0] - b.cx, pts[:, 1] - b.cy
+        qx, qy = np.abs(c * dx + s * dy) - b.hx, np.abs(-s * dx + c * dy) - b.hy
+        d = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0)) + np.minimum(np.maximum(qx, qy), 0.0)
+        best = np.where(np.abs(d) < np.abs(best), d, best)
+    for cyl in cylinders:
+        if cyl.z1 < z_lo or cyl.z0 > z_hi:
+            continue
+        d = np.hypot(pts[:, 0] - cyl.cx, pts[:, 1] - cyl.cy) - cyl.radius
+        best = np.where(np.abs(d) < np.abs(best), d, best)
+    return best
+
+
+def saved_vs_world(map_yaml, world_name, map_origin):
+    """The saved map, read with map_server's semantics, against the simulator's static world.
+
+    map_origin: the map frame's pose in the world (the mapping run's start). Returns the share of
+    occupied cells within 0.1 m of a shape's footprint edge (and the farthest ones), the free cells
+    deeper than 0.05 m inside a shape, and the occupied cells along each wall.
+    """
+    import numpy as np
+    import rospkg
+    from map_correction_test import read_map_server
+
+    from rbd_sim.world_file import load_world, resolve_world_path
+
+    world = load_world(resolve_world_path(world_name, os.path.join(rospkg.RosPack().get_path("rbd_sim"), "worlds")))
+    occ, free, xy = read_map_server(map_yaml)
+    c, s = math.cos(map_origin[2]), math.sin(map_origin[2])
+
+    def in_world(mask):
+        mx, my = xy(np.nonzero(mask))
+        return np.stack([map_origin[0] + c * mx - s * my, map_origin[1] + s * mx + c * my], axis=1)
+
+    po, pf = in_world(occ), in_world(free)
+    d_occ = shape_distance(world.boxes, world.cylinders, po, *SLICE_ANY)
+    d_free = shape_distance(world.boxes, world.cylinders, pf, *SLICE_CORE)
+    far = np.argsort(-np.abs(d_occ))[:5]
+    walls = [b for b in world.boxes if b.name.startswith("wall")]
+    return {"occupied": int(len(po)), "free": int(len(pf)),
+            "occupied_near_shape": float(np.mean(np.abs(d_occ) <= 0.1)) if len(po) else 0.0,
+            "farthest_occupied": [[round(float(po[i, 0]), 3), round(float(po[i, 1]), 3), round(float(d_occ[i]), 3)]
+                                  for i in far],
+            "free_inside_shape": int(np.sum(d_free < -0.05)),
+            "wall_cells": {b.name: int(np.sum(np.abs(shape_distance([b], [], po, -1e9, 1e9)) <= 0.1)) for b in walls}}
+
+
+def classifier_sees(grid, points, radius):
+    """Per point: the places within radius (0.05 m apart) that rbd_controller's avoidance reads as
+    occupied in this /map (its GridMap from the OccupancyGrid and the lookup its classification
+    makes, rbd_controller.perception.Perception.classify)."""
+    import numpy as np
+
+    from rbd_controller.detour import GridMap
+
+    info = grid.info
+    gm = GridMap.from_occupancy(grid.data, info.width, info.height,
+                                (info.origin.position.x, info.origin.position.y), info.resolution)
+    steps = np.arange(-radius, radius + 1e-9, 0.05)
+    offsets = [(dx, dy) for dx in steps for dy in steps if math.hypot(dx, dy) <= radius]
+    return [sum(gm.is_occupied(px + dx, py + dy) for dx, dy in offsets) for px, py in points]
+
+
 def place_crowd(rospy, crowd_world, remove=False):
     """Put the crowd's cylinders into the simulated world (or take them away)."""
     from rbd_msgs.srv import PlaceObstacle
@@ -297,6 +378,12 @@ def run(out_dir, loops=1, world="lab", seed=1, columns=512, first_start=(0.0, 0.
                 if grids else None
             place_crowd(rospy, crowd_world, remove=True)
             rospy.sleep(AFTER_CROWD_S)
+            # the working /map now, as the avoidance's classification reads it (a map published after the wait)
+            after, since = [], rospy.get_time()
+            map_sub = rospy.Subscriber("/map", OccupancyGrid, after.append, queue_size=2)
+            wait_for(lambda: after and after[-1].header.stamp.to_sec() >= since, 15.0, "a /map after the crowd left")
+            map_sub.unregister()
+            report["crowd"]["classifier_occupied"] = classifier_sees(after[-1], crowd_map, CROWD_RADIUS)
         else:
             rospy.sleep(MAPPING_STAND_S)
         code, out = save_map(env, out_dir, "lab")
@@ -306,6 +393,7 @@ def run(out_dir, loops=1, world="lab", seed=1, columns=512, first_start=(0.0, 0.
         stop_process(stack, timeout=20.0)
         report["mapping_run_s"] = time.monotonic() - t
         map_file = os.path.join(out_dir, "lab.yaml")
+        report["saved_vs_world"] = saved_vs_world(map_file, world, first_start)
         if crowd_seconds > 0:  # the saved map is in the map frame: the crowd relative to home
             report["crowd"]["cells"] = crowd_cells(map_file, list(CROWD))
         t = time.monotonic()
