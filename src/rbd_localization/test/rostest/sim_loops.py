@@ -142,41 +142,44 @@ class Runner:
         """The pose the steering follows (lock held): the truth or the corrected pose (map)."""
         return self.truth if self.steer == "truth" else self.est
 
-    def go_to(self, gx, gy, timeout=40.0):
-        """Walk to (gx, gy): turn towards it, then P control on distance (on steer_pose)."""
+    def _steer(self, command, timeout):
+        """At 20 Hz until command(x, y, yaw) on steer_pose returns None or timeout: send its
+        (vx, wz[, vy]); then stop."""
         rate = rospy.Rate(20)
         end = rospy.Time.now() + rospy.Duration(timeout)
         while not rospy.is_shutdown() and rospy.Time.now() < end:
             with self.lock:
-                x, y, yaw = self.steer_pose()
+                pose = self.steer_pose()
+            cmd = command(*pose)
+            if cmd is None:
+                break
+            self.send(*cmd)
+            rate.sleep()
+        self.stop()
+
+    def go_to(self, gx, gy, timeout=40.0):
+        """Walk to (gx, gy): turn towards it, then P control on distance (on steer_pose)."""
+        def command(x, y, yaw):
             dx, dy = gx - x, gy - y
             rho = math.hypot(dx, dy)
             if rho < 0.02:
-                break
+                return None
             gamma = wrap(math.atan2(dy, dx) - yaw)
             if abs(gamma) > math.pi / 2:  # goal behind: walk backwards
                 gamma = wrap(gamma + math.pi)
                 sign = -1.0
             else:
                 sign = 1.0
-            vx = sign * min(VX_MAX, 2.5 * rho * math.cos(gamma))
-            wz = max(-WZ_MAX, min(WZ_MAX, 2.0 * gamma))
-            self.send(vx, wz)
-            rate.sleep()
-        self.stop()
+            return sign * min(VX_MAX, 2.5 * rho * math.cos(gamma)), max(-WZ_MAX, min(WZ_MAX, 2.0 * gamma))
+        self._steer(command, timeout)
 
     def turn_to(self, goal_yaw, timeout=30.0):
-        rate = rospy.Rate(20)
-        end = rospy.Time.now() + rospy.Duration(timeout)
-        while not rospy.is_shutdown() and rospy.Time.now() < end:
-            with self.lock:
-                yaw = self.steer_pose()[2]
+        def command(_x, _y, yaw):
             err = wrap(goal_yaw - yaw)
             if abs(err) < 0.01:
-                break
-            self.send(0.0, max(-WZ_MAX, min(WZ_MAX, 1.5 * err)))
-            rate.sleep()
-        self.stop()
+                return None
+            return 0.0, max(-WZ_MAX, min(WZ_MAX, 1.5 * err))
+        self._steer(command, timeout)
 
     def settle_at(self, gx, gy, tol=0.01, timeout=10.0):
         """Step onto (gx, gy) without turning (forward and sideways P control on steer_pose).
@@ -184,19 +187,14 @@ class Runner:
         An in-place turn of the A1 creeps (the simulated drift: 0.4 m per 180 deg), so a turn at
         the goal leaves the robot off it; this puts it back as a robot's position controller would.
         """
-        rate = rospy.Rate(20)
-        end = rospy.Time.now() + rospy.Duration(timeout)
-        while not rospy.is_shutdown() and rospy.Time.now() < end:
-            with self.lock:
-                x, y, yaw = self.steer_pose()
+        def command(x, y, yaw):
             dx, dy = gx - x, gy - y
             if math.hypot(dx, dy) < tol:
-                break
+                return None
             c, s = math.cos(yaw), math.sin(yaw)
             ex, ey = c * dx + s * dy, -s * dx + c * dy
-            self.send(max(-0.15, min(0.15, 1.5 * ex)), 0.0, max(-0.15, min(0.15, 1.5 * ey)))
-            rate.sleep()
-        self.stop()
+            return max(-0.15, min(0.15, 1.5 * ex)), 0.0, max(-0.15, min(0.15, 1.5 * ey))
+        self._steer(command, timeout)
 
     def stop(self):
         rate = rospy.Rate(20)  # ten zero commands, at the walking loops' pace
