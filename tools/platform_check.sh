@@ -2,6 +2,9 @@
 # Platform check (issue 28): this checkout on another Debian release, in a chroot.
 #
 #   sudo tools/platform_check.sh bullseye      # Debian 11, the stand-in for Ubuntu 20.04 + Noetic
+#   sudo RBD_PLATFORM_BARE=1 tools/platform_check.sh bookworm   # Debian 12 as a bare machine:
+#        the README's `make test` alone, timed, in a chroot debootstrapped afresh for the run
+#        (no apt, pip, npm or ccache cache; the network as a fresh machine has it)
 #
 # 1. Debian <release> is debootstrapped once from http://deb.debian.org/debian into
 #    $RBD_PLATFORM_CACHE/<release> (default /var/cache/robodog-platform); it is kept between
@@ -17,9 +20,10 @@
 set -euo pipefail
 release="${1:-}"
 case "$release" in
-  bullseye) ;;
-  *) echo "usage: tools/platform_check.sh bullseye   (Debian 11; the only release known here)" >&2; exit 2 ;;
+  bullseye | bookworm) ;;
+  *) echo "usage: tools/platform_check.sh bullseye|bookworm   (Debian 11 or 12)" >&2; exit 2 ;;
 esac
+bare="${RBD_PLATFORM_BARE:-0}"
 [ "$(id -u)" -eq 0 ] || { echo "platform_check: needs root (debootstrap, chroot)" >&2; exit 2; }
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cache="${RBD_PLATFORM_CACHE:-/var/cache/robodog-platform}"
@@ -27,6 +31,11 @@ chroot_dir="$cache/$release"
 t0=$(date +%s)
 mkdir -p "$cache"
 
+if [ "$bare" = 1 ] && [ -e "$chroot_dir" ]; then
+  echo "platform_check: bare run: removing the cached $chroot_dir first"
+  for m in dev/shm dev/pts dev sys proc; do umount -l "$chroot_dir/$m" 2>/dev/null || true; done
+  rm -rf --one-file-system "$chroot_dir"
+fi
 if [ ! -f "$chroot_dir/.rbd-debootstrap" ]; then
   command -v debootstrap >/dev/null || DEBIAN_FRONTEND=noninteractive apt-get install -y -qq debootstrap
   echo "platform_check: debootstrap $release into $chroot_dir (once; cached)"
@@ -86,6 +95,17 @@ run_in() {  # run_in CMD: bash -lc CMD in the chroot's checkout, with a clean en
 
 log="$cache/$release-make-test.log"
 rc=0
+if [ "$bare" = 1 ]; then
+  # The README's test command on a machine that has nothing yet: setup (apt, venv, npm), build, tests.
+  log="$cache/$release-bare-make-test.log"
+  echo "platform_check: bare make test in the chroot (log: $log)"
+  t1=$(date +%s)
+  run_in "make test" > "$log" 2>&1 || rc=$?
+  t2=$(date +%s)
+  tail -n 30 "$log"
+  echo "platform_check: $release bare make test exit $rc in $(( t2 - t1 )) s (setup + build + tests, from nothing)"
+  exit "$rc"
+fi
 if [ "${RBD_PLATFORM_TESTS:-1}" = 0 ]; then
   run_in "tools/setup.sh && make build" || rc=$?
   echo "platform_check: make build exit $rc ($(( $(date +%s) - t0 )) s)"
