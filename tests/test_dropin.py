@@ -14,10 +14,12 @@ same packages. The repository root as a source space (README: clone the reposito
 ``catkin_ws/src``) is what `make build` itself does on every `make test`; its result is checked
 here from the build's own package order.
 
-The three workspaces have the same layout (src/<pkg>, build/<pkg>) and the same flags, so with
-ccache (CCACHE_BASEDIR = the workspace) most of the C++ compiled by whichever of the three runs
-first is a cache hit for the other two (not the files that include generated message headers:
-their include path differs per tool).
+catkin_make's workspace is built with `make build`'s flags into build/src, so that every package's
+build directory lies where `make build` has it (build/src/<pkg>): with ccache (CCACHE_BASEDIR = the
+workspace) its compile lines equal those of `make build` and every object is a cache hit. catkin
+build and colcon (long) share their own -O0 flags and layout (src/<pkg>, build/<pkg>): most of the C++
+compiled by the first of the two is a cache hit for the other (not the files that include generated
+message headers: their include path differs per tool).
 """
 
 import os
@@ -31,11 +33,17 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PACKAGES = sorted(
     d for d in os.listdir(os.path.join(ROOT, "src")) if os.path.isfile(os.path.join(ROOT, "src", d, "package.xml"))
 )
-# -O0: this test proves the packages build and are found; optimised code is built once by `make build`.
-# Build type "None" (not empty): rbd_lidar's CMakeLists turns an empty build type into Release, whose
-# -O3 came after -O0 on its command lines.
+# -O0 for catkin build and colcon (make test-long): they prove the packages build and are found;
+# optimised code is built by `make build`. Build type "None" (not empty): rbd_lidar's CMakeLists
+# turns an empty build type into Release, whose -O3 came after -O0 on its command lines.
 CMAKE_ARGS = ["-DPYTHON_EXECUTABLE=/usr/bin/python3", "-DCATKIN_ENABLE_TESTING=OFF", "-DCMAKE_BUILD_TYPE=None",
               "-DCMAKE_CXX_FLAGS=-O0"]
+# catkin_make (make test) with the flags of `make build` (tools/build.sh: Release, warnings as errors):
+# with ccache, every object it compiles is the one `make build` compiled minutes before, a cache hit
+# (test_catkin_make). On a bare machine the cold -O0 build it did before was 359 s of the side lane
+# (~275 CPU-seconds of compiling beside the serial lane's simulations).
+CATKIN_MAKE_ARGS = ["-DPYTHON_EXECUTABLE=/usr/bin/python3", "-DCATKIN_ENABLE_TESTING=OFF",
+                    "-DCMAKE_BUILD_TYPE=Release", "-DCMAKE_COMPILE_WARNING_AS_ERROR=ON"]
 # With a cold cache (a bare machine, or after a C++ change) one tool compiles all the C++: about
 # 275 CPU-seconds of compiling (2026-11-26), and catkin_make from cold took over pytest.ini's 600 s at
 # load 20 (issue 19).
@@ -44,6 +52,7 @@ if shutil.which("ccache"):
     # Rebuilds of unchanged sources come from the cache: CCACHE_BASEDIR (set per workspace in run())
     # makes the paths relative, so a fresh workspace at another tmp path still hits.
     CMAKE_ARGS += ["-DCMAKE_CXX_COMPILER_LAUNCHER=ccache", "-DCMAKE_C_COMPILER_LAUNCHER=ccache"]
+    CATKIN_MAKE_ARGS += ["-DCMAKE_CXX_COMPILER_LAUNCHER=ccache", "-DCMAKE_C_COMPILER_LAUNCHER=ccache"]
 
 
 def clean_env():
@@ -88,7 +97,10 @@ def test_every_rbd_package_is_a_package():
 
 @COLD_BUILD_TIMEOUT
 def test_catkin_make(workspace):
-    out = run(["catkin_make", "-j2"] + CMAKE_ARGS, str(workspace))
+    # Build space build/src: each package's build directory is then build/src/<pkg>, as in `make build`
+    # (source space = the repository root, packages in src/), so with CCACHE_BASEDIR the compile lines,
+    # relative to the build directory, are the same and hit the cache. Nothing else differs for catkin_make.
+    out = run(["catkin_make", "-j2", "--build", "build/src"] + CATKIN_MAKE_ARGS, str(workspace))
     for pkg in PACKAGES:
         assert "+++ processing catkin" in out and ("'%s'" % pkg) in out, pkg
     assert (workspace / "devel" / "share" / "rbd_msgs" / "msg").exists() or (

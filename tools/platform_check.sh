@@ -52,6 +52,12 @@ cleanup() {
   for ((i = ${#mounted[@]} - 1; i >= 0; i--)); do umount -l "${mounted[$i]}" 2>/dev/null || true; done
 }
 trap cleanup EXIT
+# The chroot's / a mount point of its own: `ip netns` (tests/test_two_hosts.py) makes / a slave
+# mount, which fails on a plain directory ("mount --make-rslave /": Invalid argument).
+if ! mountpoint -q "$chroot_dir"; then
+  mount --bind "$chroot_dir" "$chroot_dir"
+  mounted+=("$chroot_dir")
+fi
 for m in proc sys dev dev/pts dev/shm; do
   mkdir -p "$chroot_dir/$m"
   if ! mountpoint -q "$chroot_dir/$m"; then

@@ -5,12 +5,21 @@
 #   2. localhost must resolve (roslaunch needs it)
 #   3. .venv from /usr/bin/python3 --system-site-packages with pinned requirements
 #      (skipped when requirements.txt and rbd_local/pyproject.toml are unchanged)
+#   4. roslibjs from npm (beside 3)
+# `tools/setup.sh --build` (make test) also runs tools/build.sh, while pip downloads the wheels:
+# the build needs only the Debian packages and the venv's interpreter, and the wheels are
+# installed after it (the build's Python must not see a half-installed setuptools).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 t_setup=$(date +%s)
+build_beside=0
+[ "${1:-}" = --build ] && build_beside=1
 
 mapfile -t pkgs < <(grep -v '^\s*#' tools/apt-packages.txt | grep -v '^\s*$')
+# nodejs + npm (roslibjs for the bridge's JavaScript client tests, below) in the same apt run:
+# one download queue and one round of dpkg triggers instead of two (npm alone is ~350 packages).
+if [ ! -d src/rbd_bridge/test/js/node_modules ] && ! command -v npm >/dev/null; then pkgs+=(nodejs npm); fi
 codename="$(. /etc/os-release && echo "${VERSION_CODENAME:-}")"
 pypi=()  # what this release's apt lacks, pip-installed into the venv instead
 if [ "$codename" = bullseye ]; then
@@ -36,7 +45,11 @@ if [ ${#missing[@]} -gt 0 ]; then
   sudo_cmd=()
   [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
   "${sudo_cmd[@]}" apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  # --force-unsafe-io: dpkg skips its fsync per unpacked file (a fresh machine's first install of
+  # ~1400 packages; a power cut during it means re-running setup, as any interrupted install does).
+  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends \
+    -o Dpkg::Options::=--force-unsafe-io "${missing[@]}"
+  echo "setup: Debian packages installed ($(( $(date +%s) - t_setup )) s)"
 else
   echo "setup: Debian packages present"
 fi
@@ -47,6 +60,18 @@ fi
 
 want="$( (cat requirements.txt rbd_local/pyproject.toml; [ ${#pypi[@]} -eq 0 ] || echo "${pypi[*]}") | sha256sum | cut -d' ' -f1)"
 have="$(cat .venv/.rbd-requirements 2>/dev/null || true)"
+# roslibjs (npm `roslib`) for the bridge's JavaScript client tests: fetched beside the venv's pip
+# installs (both mostly wait on the network), its output in build/npm-ci.log.
+npm_pid=""
+mkdir -p build
+if [ ! -d src/rbd_bridge/test/js/node_modules ]; then
+  if ! command -v npm >/dev/null; then
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends nodejs npm
+  fi
+  echo "setup: npm ci (roslibjs for the bridge tests), beside the venv"
+  (cd src/rbd_bridge/test/js && npm ci --no-audit --no-fund --loglevel=error) > build/npm-ci.log 2>&1 &
+  npm_pid=$!
+fi
 if [ "$want" != "$have" ] || [ ! -x .venv/bin/python ]; then
   echo "setup: creating .venv"
   [ -x .venv/bin/python ] || /usr/bin/python3 -m venv --system-site-packages .venv
@@ -55,22 +80,49 @@ if [ "$want" != "$have" ] || [ ! -x .venv/bin/python ]; then
   if [ ${#pypi[@]} -gt 0 ]; then
     .venv/bin/python -m pip install -q --disable-pip-version-check "${pypi[@]}"
   fi
-  .venv/bin/python -m pip install -q --disable-pip-version-check -r requirements.txt 2>&1 | { grep -v "is ignored: it is neither" || true; }
+  wheels=()
+  if [ "$build_beside" = 1 ]; then
+    rm -rf build/pip-wheels
+    echo "setup: building (tools/build.sh) while pip downloads the wheels (log: build/pip-download.log)"
+    .venv/bin/python -m pip download -q --disable-pip-version-check -d build/pip-wheels -r requirements.txt \
+      > build/pip-download.log 2>&1 &
+    download_pid=$!
+    build_rc=0
+    tools/build.sh || build_rc=$?
+    download_rc=0
+    wait "$download_pid" || download_rc=$?
+    [ "$build_rc" -eq 0 ] || { echo "setup: tools/build.sh failed (exit $build_rc)" >&2; exit "$build_rc"; }
+    [ "$download_rc" -eq 0 ] || { cat build/pip-download.log >&2; echo "setup: pip download failed" >&2; exit 1; }
+    # the build's own line in make test's phase table, outside the sum (it ran inside setup's time)
+    sed -i 's/^build: /(beside setup) build: /' build/phase-build.tsv
+    wheels=(--no-index --find-links build/pip-wheels)
+    built=1
+  fi
+  .venv/bin/python -m pip install -q --disable-pip-version-check "${wheels[@]}" -r requirements.txt 2>&1 | { grep -v "is ignored: it is neither" || true; }
+  rm -rf build/pip-wheels
   .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps -e rbd_local 2>&1 | { grep -v "is ignored: it is neither" || true; }
   echo "$want" > .venv/.rbd-requirements
+  echo "setup: .venv done ($(( $(date +%s) - t_setup )) s)"
 else
   echo "setup: .venv up to date"
 fi
 
-# roslibjs (npm `roslib`) for the bridge's JavaScript client tests.
-if [ ! -d src/rbd_bridge/test/js/node_modules ]; then
-  if ! command -v npm >/dev/null; then
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends nodejs npm
+if [ -n "$npm_pid" ]; then
+  if ! wait "$npm_pid"; then
+    cat build/npm-ci.log >&2
+    rm -rf src/rbd_bridge/test/js/node_modules  # a partial install is not "done" for the next run
+    echo "setup: npm ci failed (output above)" >&2
+    exit 1
   fi
-  echo "setup: npm ci (roslibjs for the bridge tests)"
-  (cd src/rbd_bridge/test/js && npm ci --no-audit --no-fund --loglevel=error)
+  echo "setup: npm ci done ($(( $(date +%s) - t_setup )) s)"
 fi
 
 # Its wall time, for make test's per-phase report (tools/run_tests.sh).
 mkdir -p build
-printf 'setup: Debian packages, .venv, npm (make setup)\t%s\n' "$(( $(date +%s) - t_setup ))" > build/phase-setup.tsv
+label='setup: Debian packages, .venv, npm (make setup)'
+[ "${built:-0}" = 1 ] && label='setup + build: Debian packages, .venv, npm; the build beside pip'
+printf '%s\t%s\n' "$label" "$(( $(date +%s) - t_setup ))" > build/phase-setup.tsv
+
+if [ "$build_beside" = 1 ] && [ "${built:-0}" = 0 ]; then
+  tools/build.sh  # the venv was up to date: nothing to overlap; the build's own phase line
+fi
