@@ -186,7 +186,9 @@ def test_retrying_does_not_pile_up_twisted_log_observers(monkeypatch):
         assert wait_for(lambda: len(attempts) >= 3, 10.0), "no connection attempts"
         before = len(log.theLogPublisher.observers)
         n = len(attempts)
-        assert wait_for(lambda: len(attempts) >= n + 10, 20.0), "not 10 more attempts"
+        # ~0.2 s each on an idle machine; a bare machine's make test (nice 10 beside the serial lane's
+        # simulations) made fewer than 10 in 20 s once. What counts is that they do not pile up observers.
+        assert wait_for(lambda: len(attempts) >= n + 10, 60.0), "not 10 more attempts in 60 s: %d" % (len(attempts) - n)
         assert len(log.theLogPublisher.observers) <= before
     finally:
         link.stop()

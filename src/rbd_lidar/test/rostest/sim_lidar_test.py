@@ -126,8 +126,14 @@ class SimLidarTest(unittest.TestCase):
             after = [(t, s) for t, s in self.states if t > t1]
             calls = self.calls[ncalls:]
         self.assertFalse(after[-1][1].collision)
-        first_clear = next(i for i, (_, s) in enumerate(after) if not s.collision)
-        self.assertGreaterEqual(first_clear, 2)  # hysteresis: 3 clear scans
+        # Hysteresis, 3 clear scans: counted from the last state whose scan still had the person's
+        # points, not from t1 (on a loaded machine the first scan without the person may be judged
+        # before the removal's service reply comes back and t1 is read).
+        with self.lock:
+            since_t0 = [s for t, s in self.states if t > t0]
+        seen = max(i for i, s in enumerate(since_t0) if sum(s.points) > 0)
+        first_clear = next(i for i, s in enumerate(since_t0[seen + 1:]) if not s.collision)
+        self.assertGreaterEqual(first_clear, 2, "clear after %d scans without the person" % (first_clear + 1))
         got = [c[1] for c in calls]
         if any(st.stale for _, st in after):
             # A loaded machine delivered no valid cloud for 3 periods: the stale fail-safe tripped

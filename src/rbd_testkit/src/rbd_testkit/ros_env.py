@@ -65,6 +65,9 @@ class RosEnv:
         self.env = dict(os.environ)
         self.env.update(ROS_MASTER_URI=self.uri, ROS_HOME=self.home, ROS_LOG_DIR=os.path.join(self.home, "log"),
                         ROS_IP=LOCALHOST)
+        # rospy writes INFO lines to stdout, block-buffered into a log file: without this a log read
+        # while the node runs lacks them (a clean environment, e.g. a bare machine's `make test`).
+        self.env["PYTHONUNBUFFERED"] = "1"
         self.env.pop("ROS_HOSTNAME", None)
         self.procs: List[subprocess.Popen] = []
         self._logs: Dict[int, Tuple[str, Any]] = {}
