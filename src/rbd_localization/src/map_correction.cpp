@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <ctime>
 #include <limits>
 
 #include "rbd_localization/filter_common.h"
@@ -31,6 +33,8 @@ const char* MapCorrection::statusName(Status s) {
       return "rejected (too few points)";
     case Status::kSearched:
       return "searched the start pose";
+    case Status::kRejectedAmbiguous:
+      return "rejected (ambiguous start)";
   }
   return "?";
 }
@@ -68,10 +72,22 @@ MapCorrection::Update MapCorrection::searchStart(double time, const Points2d& po
                                                  const Eigen::Isometry2d& odom_from_base,
                                                  const Eigen::Isometry2d& prior) {
   Update u;
+  u.map_from_odom = map_from_odom_;
+  if (ambiguous_ && time - ambiguous_time_ < params_.ambiguity_retry_interval && time >= ambiguous_time_) {
+    u.status = Status::kRejectedAmbiguous;  // the whole-map check is not run at every scan
+    u.reason = ambiguous_reason_;
+    return u;
+  }
+  ambiguous_ = false;
   u.match = matcher_.search(*map_, points, prior, params_.search_translation, params_.search_rotation);
   if (!fitOk(u.match, &u.reason)) {
     u.status = Status::kRejectedFit;
     u.reason = "start search: " + u.reason;
+  } else if (params_.ambiguity_check && !startIsUnique(points, &u)) {
+    u.status = Status::kRejectedAmbiguous;
+    ambiguous_ = true;
+    ambiguous_time_ = time;
+    ambiguous_reason_ = u.reason;
   } else {
     map_from_odom_ = u.match.pose * odom_from_base.inverse();  // a jump: not localized yet
     searched_ = true;
@@ -82,6 +98,29 @@ MapCorrection::Update MapCorrection::searchStart(double time, const Points2d& po
   }
   u.map_from_odom = map_from_odom_;
   return u;
+}
+
+bool MapCorrection::startIsUnique(const Points2d& points, Update* u) const {
+  const std::clock_t c0 = std::clock();
+  ScanMatcher::GlobalSearch how;
+  how.step = params_.ambiguity_step;
+  how.angle_step = params_.ambiguity_angle_step;
+  u->start_checked = true;
+  u->start_score = ScanMatcher::score(*map_, points, u->match.pose);
+  u->rival = matcher_.rivalElsewhere(*map_, points, u->match.pose, params_.ambiguity_translation,
+                                     params_.ambiguity_rotation, how);
+  u->start_check_ms = 1e3 * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+  if (!u->rival.found || u->rival.score > u->start_score + params_.ambiguity_margin) return true;
+  const Eigen::Isometry2d& r = u->rival.match.pose;
+  char buf[256];
+  std::snprintf(buf, sizeof(buf),
+                "start search: ambiguous: another pose (%.2f, %.2f, %.0f deg) fits as well (score %.3f m vs "
+                "%.3f m at (%.2f, %.2f, %.0f deg))",
+                r.translation().x(), r.translation().y(), yawOf(r) * 180.0 / M_PI, u->rival.score,
+                u->start_score, u->match.pose.translation().x(), u->match.pose.translation().y(),
+                yawOf(u->match.pose) * 180.0 / M_PI);
+  u->reason = buf;
+  return false;
 }
 
 MapCorrection::Update MapCorrection::processScan(double time, const Points2d& points,

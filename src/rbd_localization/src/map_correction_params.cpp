@@ -55,6 +55,18 @@ bool validateMapCorrectionParams(const MapCorrectionNodeParams& n, const MapCorr
         "[0, pi]; localized_scans >= 1; localized_translation/rotation > 0";
     return false;
   }
+  if (!(c.ambiguity_translation >= 0.0 && c.ambiguity_translation <= 5.0) ||
+      !(c.ambiguity_rotation >= 0.0 && c.ambiguity_rotation <= M_PI) ||
+      !(c.ambiguity_margin >= 0.0 && c.ambiguity_margin <= ScanMatcher::kTruncate) ||
+      !(c.ambiguity_step >= 0.05 && c.ambiguity_step <= 1.0) ||
+      !(c.ambiguity_angle_step >= 0.01 && c.ambiguity_angle_step <= 0.35) ||
+      !(c.ambiguity_retry_interval >= 0.0 && std::isfinite(c.ambiguity_retry_interval))) {
+    *error =
+        "ambiguity_translation in [0, 5] m, ambiguity_rotation in [0, pi], ambiguity_margin in [0, 0.3] m, "
+        "ambiguity_step in [0.05, 1] m, ambiguity_angle_step in [0.01, 0.35] rad, ambiguity_retry_interval "
+        ">= 0";
+    return false;
+  }
   const int homes = std::isnan(n.home_x) + std::isnan(n.home_y) + std::isnan(n.home_yaw);
   if ((homes != 0 && homes != 3) || std::isinf(n.home_x) || std::isinf(n.home_y) || std::isinf(n.home_yaw)) {
     *error = "home_x, home_y, home_yaw must be given all three (finite) or none";
@@ -111,6 +123,12 @@ bool parseMapCorrectionParams(const XmlRpc::XmlRpcValue& ns, MapCorrectionNodePa
       read(&r, "search_rotation", &c->search_rotation) && read(&r, "localized_scans", &c->localized_scans) &&
       read(&r, "localized_translation", &c->localized_translation) &&
       read(&r, "localized_rotation", &c->localized_rotation) &&
+      read(&r, "ambiguity_check", &c->ambiguity_check) &&
+      read(&r, "ambiguity_translation", &c->ambiguity_translation) &&
+      read(&r, "ambiguity_rotation", &c->ambiguity_rotation) &&
+      read(&r, "ambiguity_margin", &c->ambiguity_margin) && read(&r, "ambiguity_step", &c->ambiguity_step) &&
+      read(&r, "ambiguity_angle_step", &c->ambiguity_angle_step) &&
+      read(&r, "ambiguity_retry_interval", &c->ambiguity_retry_interval) &&
       read(&r, "max_iterations", &c->matcher.max_iterations) &&
       read(&r, "outlier_distance_start", &c->matcher.outlier_distance_start) &&
       read(&r, "outlier_distance", &c->matcher.outlier_distance_end) &&

@@ -244,6 +244,17 @@ void MapCorrectionNode::processPendingScan() {
   const MapCorrection::Update u = core_->processScan(stamp.toSec(), points, planar(odom_from_base));
   last_cpu_ms_ = (cpuSeconds() - cpu0) * 1e3;
   last_status_ = MapCorrection::statusName(u.status);
+  if (u.start_checked) {
+    const Eigen::Isometry2d& r = u.rival.match.pose;
+    ROS_INFO(
+        "map_correction: start search at (%.2f, %.2f, %.1f deg), score %.3f m; best pose elsewhere%s "
+        "(%.2f, %.2f, %.1f deg), score %.3f m; %s (check: %d poses, %.0f ms CPU)",
+        u.match.pose.translation().x(), u.match.pose.translation().y(), yawOf(u.match.pose) * 180.0 / M_PI,
+        u.start_score, u.rival.found ? "" : " (none)", r.translation().x(), r.translation().y(),
+        yawOf(r) * 180.0 / M_PI, u.rival.score,
+        u.status == MapCorrection::Status::kSearched ? "taken" : "ambiguous, not taken", u.rival.poses_scored,
+        u.start_check_ms);
+  }
   if (u.status == MapCorrection::Status::kAccepted || u.status == MapCorrection::Status::kSearched) {
     ++accepted_;
   } else if (u.status != MapCorrection::Status::kMapping) {

@@ -30,6 +30,39 @@ inline std::vector<Segment> room() {
           s(3.5, -2.5, 3.5, -1.2), s(3.5, -1.2, 4.2, -1.2)};
 }
 
+/// Centre of symmetricRoom().
+inline Eigen::Vector2d symmetricRoomCentre() { return Eigen::Vector2d(1.0, 0.0); }
+
+/// 8 m x 6 m room, centred on (1, 0), that is point-symmetric: every wall, pillar and stub has its
+/// twin turned 180 deg about the centre, so a pose and its twin (turned 180 deg about the centre)
+/// see the same scan. with_cupboard: plus a 1.0 m x 0.5 m cupboard against the south wall, whose
+/// twin is missing (the room is then almost, not exactly, symmetric).
+inline std::vector<Segment> symmetricRoom(bool with_cupboard) {
+  const Eigen::Vector2d c = symmetricRoomCentre();
+  auto s = [](double ax, double ay, double bx, double by) { return Segment{{ax, ay}, {bx, by}}; };
+  const std::vector<Segment> half = {s(-3, -3, 5, -3),
+                                     s(5, -3, 5, 3),  // south and east walls
+                                                      // a 0.4 m pillar and a stub from the east wall
+                                     s(2.8, 1.3, 3.2, 1.3), s(3.2, 1.3, 3.2, 1.7), s(3.2, 1.7, 2.8, 1.7),
+                                     s(2.8, 1.7, 2.8, 1.3), s(5, 0.8, 4.2, 0.8)};
+  std::vector<Segment> out = half;
+  for (const Segment& w : half) out.push_back(Segment{2.0 * c - w.a, 2.0 * c - w.b});  // the twins
+  if (with_cupboard) {
+    out.push_back(s(2.5, -3, 2.5, -2.5));
+    out.push_back(s(2.5, -2.5, 3.5, -2.5));
+    out.push_back(s(3.5, -2.5, 3.5, -3));
+  }
+  return out;
+}
+
+/// The twin of a pose in symmetricRoom(): turned 180 deg about the room's centre.
+inline Eigen::Isometry2d symmetricTwin(const Eigen::Isometry2d& pose) {
+  Eigen::Isometry2d half_turn = Eigen::Isometry2d::Identity();
+  half_turn.linear() = -Eigen::Matrix2d::Identity();
+  half_turn.translation() = 2.0 * symmetricRoomCentre();
+  return half_turn * pose;
+}
+
 /// Points (in the sensor frame) of a 360 deg scan with `beams` rays from pose, range noise sigma.
 inline Points2d castScan(const Eigen::Isometry2d& pose, const std::vector<Segment>& walls,
                          const std::vector<Circle>& people, int beams, double sigma, std::mt19937* rng,

@@ -54,6 +54,16 @@ TEST(MapCorrectionParams, EachBadValueIsRefusedWithItsReason) {
        "search_rotation"},
       {[](MapCorrectionNodeParams*, MapCorrection::Params* c) { c->localized_scans = 0; },
        "localized_scans >= 1"},
+      {[](MapCorrectionNodeParams*, MapCorrection::Params* c) { c->ambiguity_margin = -0.01; },
+       "ambiguity_margin in [0, 0.3]"},
+      {[](MapCorrectionNodeParams*, MapCorrection::Params* c) { c->ambiguity_step = 0.01; },
+       "ambiguity_step in [0.05, 1]"},
+      {[nan](MapCorrectionNodeParams*, MapCorrection::Params* c) { c->ambiguity_angle_step = nan; },
+       "ambiguity_angle_step"},
+      {[](MapCorrectionNodeParams*, MapCorrection::Params* c) { c->ambiguity_rotation = 4.0; },
+       "ambiguity_rotation in [0, pi]"},
+      {[inf](MapCorrectionNodeParams*, MapCorrection::Params* c) { c->ambiguity_retry_interval = inf; },
+       "ambiguity_retry_interval >= 0"},
       {[nan](MapCorrectionNodeParams* n, MapCorrection::Params*) { n->home_x = 1.0; }, "all three"},
       {[inf](MapCorrectionNodeParams* n, MapCorrection::Params*) {
          n->home_x = inf;
@@ -94,6 +104,9 @@ TEST(MapCorrectionParams, ParsesEveryTypeIntoItsField) {
   ns["home_yaw"] = 0;
   ns["outlier_distance"] = 0.2;
   ns["max_iterations"] = 7;
+  ns["ambiguity_check"] = false;
+  ns["ambiguity_margin"] = 0.02;
+  ns["ambiguity_translation"] = 1;  // an int where a number is expected
   MapCorrectionNodeParams n;
   MapCorrection::Params c;
   std::vector<std::string> warnings;
@@ -110,6 +123,9 @@ TEST(MapCorrectionParams, ParsesEveryTypeIntoItsField) {
   EXPECT_DOUBLE_EQ(n.home_yaw, 0.0);
   EXPECT_DOUBLE_EQ(c.matcher.outlier_distance_end, 0.2);
   EXPECT_EQ(c.matcher.max_iterations, 7);
+  EXPECT_FALSE(c.ambiguity_check);
+  EXPECT_DOUBLE_EQ(c.ambiguity_margin, 0.02);
+  EXPECT_DOUBLE_EQ(c.ambiguity_translation, 1.0);
   // untouched keys keep their defaults
   EXPECT_EQ(n.map_frame, MapCorrectionNodeParams().map_frame);
   EXPECT_DOUBLE_EQ(c.map_update_weight, MapCorrection::Params().map_update_weight);

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <sstream>
 #include <string>
@@ -37,11 +38,13 @@ std::string readAll(const std::string& path) {
   return ss.str();
 }
 
-/// Mapping mode standing at the origin for `seconds` (10 Hz), people around as given.
+/// Mapping mode standing at `at` (default the origin of room()) for `seconds` (10 Hz), people
+/// around as given.
 void standAndMap(MapCorrection* mc, double* t, double seconds, const std::vector<Circle>& people,
-                 std::mt19937* rng) {
+                 std::mt19937* rng, const std::vector<Segment>& walls = room(),
+                 const Eigen::Isometry2d& at = Eigen::Isometry2d::Identity()) {
   for (double end = *t + seconds; *t < end; *t += 0.1) {
-    mc->processScan(*t, castScan(pose2d(0, 0, 0), room(), people, 720, 0.01, rng), pose2d(0, 0, 0));
+    mc->processScan(*t, castScan(at, walls, people, 720, 0.01, rng), at);
   }
 }
 
@@ -49,14 +52,64 @@ double yawErr(const Eigen::Isometry2d& a, const Eigen::Isometry2d& b) {
   return std::fabs(wrapAngle(yawOf(a) - yawOf(b)));
 }
 
-/// A saved reference map of the room (mapping mode at the origin, 12 s so the walls are static).
-std::string savedRoom(const std::string& dir, std::mt19937* rng) {
+/// A saved reference map of a room (mapping mode standing at `at`, 12 s so the walls are static;
+/// the map frame is the mapping run's odometry frame, home its origin).
+std::string savedRoom(const std::string& dir, std::mt19937* rng, const std::vector<Segment>& walls = room(),
+                      const Eigen::Isometry2d& at = Eigen::Isometry2d::Identity()) {
   MapCorrection mc;
   double t = 0.0;
-  standAndMap(&mc, &t, 12.0, {}, rng);
+  standAndMap(&mc, &t, 12.0, {}, rng, walls, at);
   std::string error;
   EXPECT_TRUE(saveMap(mc.map(), mc.mapTime(t), Eigen::Vector3d::Zero(), dir, "room", &error)) << error;
   return dir + "/room.yaml";
+}
+
+/// Localization mode in a saved map, home at the map origin.
+std::unique_ptr<MapCorrection> localizing(const std::string& yaml, const MapCorrection::Params& params) {
+  std::unique_ptr<OccupancyMap> ref;
+  MapFileInfo info;
+  std::string error;
+  if (!loadMap(yaml, params.map, 0.0, &ref, &info, &error)) {
+    ADD_FAILURE() << error;
+    return nullptr;
+  }
+  std::unique_ptr<MapCorrection> mc(new MapCorrection(params));
+  mc->setReference(std::move(ref), pose2d(0, 0, 0));
+  return mc;
+}
+
+/// What localization mode did with `seconds` of scans (10 Hz) from a robot standing at `truth`.
+struct StartRun {
+  bool localized = false;
+  double localized_after = -1.0;  ///< [s] of scans; -1: never
+  int searched = 0, ambiguous = 0, checks = 0;
+  std::string last_reason;
+  MapCorrection::Update last_check;  ///< the last update that ran the ambiguity check
+};
+
+StartRun standAndLocalize(MapCorrection* mc, const std::vector<Segment>& walls,
+                          const Eigen::Isometry2d& truth, double seconds, std::mt19937* rng) {
+  StartRun run;
+  for (double t = 0.0; t < seconds; t += 0.1) {
+    const MapCorrection::Update u =
+        mc->processScan(t, castScan(truth, walls, {}, 720, 0.01, rng), pose2d(0, 0, 0));
+    run.searched += u.status == MapCorrection::Status::kSearched;
+    run.ambiguous += u.status == MapCorrection::Status::kRejectedAmbiguous;
+    if (u.start_checked) {
+      run.last_check = u;
+      ++run.checks;
+    }
+    if (!u.reason.empty()) run.last_reason = u.reason;
+    if (mc->localized() && !run.localized) {
+      run.localized = true;
+      run.localized_after = t;
+    }
+  }
+  return run;
+}
+
+double distanceOf(const Eigen::Isometry2d& a, const Eigen::Isometry2d& b) {
+  return (a.translation() - b.translation()).norm();
 }
 
 int pgmAt(const std::string& pgm_path, const OccupancyMap& m, const Eigen::Vector2d& p) {
@@ -196,6 +249,118 @@ TEST(Localization, StartsAwayFromHomeAndConverges) {
     EXPECT_LT((est.translation() - truth.translation()).norm(), 0.05);
     EXPECT_LT(yawErr(est, truth), 2 * M_PI / 180);
   }
+}
+
+// A room whose walls are point-symmetric about its centre: every pose has a twin (turned 180 deg
+// about the centre) that sees exactly the same scan. Home (the map origin) is 1 m from the centre;
+// the robot starts within the search around home, its twin outside the search's headings.
+TEST(Localization, StartInAPointSymmetricRoomIsAmbiguousNeverLocalized) {
+  std::mt19937 rng(21);
+  const auto walls = symmetricRoom(false);
+  // the map from the room's centre (its unknown cells, behind the pillars, are symmetric too)
+  const std::string yaml = savedRoom(tempDir(), &rng, walls, pose2d(1.0, 0.0, 0.0));
+  const Eigen::Isometry2d truth = pose2d(0.5, -0.4, 30 * M_PI / 180);
+  const Eigen::Isometry2d twin = symmetricTwin(truth);  // (1.5, 0.4, -150 deg): outside +-0.9 rad
+  MapCorrection::Params params;
+  // Without the check the search's answer is taken (right by luck: the map cannot tell).
+  params.ambiguity_check = false;
+  auto unchecked = localizing(yaml, params);
+  ASSERT_TRUE(unchecked);
+  const StartRun blind = standAndLocalize(unchecked.get(), walls, truth, 3.0, &rng);
+  ASSERT_TRUE(blind.localized) << blind.last_reason;
+  // With it: the twin fits as well, the start is ambiguous, never taken, never localized.
+  params.ambiguity_check = true;
+  auto mc = localizing(yaml, params);
+  ASSERT_TRUE(mc);
+  const StartRun run = standAndLocalize(mc.get(), walls, truth, 6.0, &rng);
+  EXPECT_FALSE(run.localized) << "localized after " << run.localized_after << " s";
+  EXPECT_EQ(run.searched, 0);
+  EXPECT_GE(run.ambiguous, 55);  // every scan refused
+  EXPECT_NE(run.last_reason.find("start search: ambiguous: another pose ("), std::string::npos)
+      << run.last_reason;
+  // searched and checked again after each retry interval (2 s): 3 times in 6 s, not at every scan
+  EXPECT_GE(run.checks, 2);
+  EXPECT_LE(run.checks, 4);
+  ASSERT_TRUE(run.last_check.start_checked);
+  const MapCorrection::Update& c = run.last_check;
+  EXPECT_LT(distanceOf(c.match.pose, truth), 0.05);  // the search found the truth ...
+  ASSERT_TRUE(c.rival.found);
+  EXPECT_LT(distanceOf(c.rival.match.pose, twin), 0.05);  // ... and the check its twin
+  EXPECT_LT(yawErr(c.rival.match.pose, twin), 2 * M_PI / 180);
+  EXPECT_LE(c.rival.score, c.start_score + params.ambiguity_margin);
+  std::printf("symmetric room: start score %.4f m, twin %.4f m, check %.0f ms CPU, %d poses\n", c.start_score,
+              c.rival.score, c.start_check_ms, c.rival.poses_scored);
+}
+
+// The same room with a cupboard against one wall (no twin): the start is unique and is taken at
+// the true pose, converged as before.
+TEST(Localization, StartInTheRoomWithAnAsymmetricFeatureIsTakenAtTheTruePose) {
+  std::mt19937 rng(22);
+  const auto walls = symmetricRoom(true);
+  const std::string yaml = savedRoom(tempDir(), &rng, walls, pose2d(1.0, 0.0, 0.0));
+  const Eigen::Isometry2d truth = pose2d(0.5, -0.4, 30 * M_PI / 180);
+  auto mc = localizing(yaml, MapCorrection::Params());
+  ASSERT_TRUE(mc);
+  const StartRun run = standAndLocalize(mc.get(), walls, truth, 5.0, &rng);
+  ASSERT_TRUE(run.localized) << run.last_reason;
+  EXPECT_EQ(run.ambiguous, 0);
+  EXPECT_LT(distanceOf(mc->mapFromOdom(), truth), 0.05);
+  EXPECT_LT(yawErr(mc->mapFromOdom(), truth), 2 * M_PI / 180);
+  const MapCorrection::Update& c = run.last_check;
+  ASSERT_TRUE(c.start_checked && c.rival.found);
+  // the twin was the best pose elsewhere, but the cupboard made it fit worse by more than the margin
+  EXPECT_LT(distanceOf(c.rival.match.pose, symmetricTwin(truth)), 0.1);
+  EXPECT_GT(c.rival.score, c.start_score + MapCorrection::Params().ambiguity_margin);
+  std::printf("with the cupboard: start score %.4f m, twin %.4f m, check %.0f ms CPU, %d poses\n",
+              c.start_score, c.rival.score, c.start_check_ms, c.rival.poses_scored);
+}
+
+// The simulator's finding: placed where the true pose lies outside the search (2.0 m from home,
+// turned 150 deg) but its twin lies inside it. Without the check the search takes the twin (its
+// fit passes the gates: only the cupboard differs) and the robot is "localized" 180 deg off; with
+// it the true pose, found over the whole map, fits better: refused, never localized.
+TEST(Localization, StartWhoseTwinLiesInsideTheSearchIsRefused) {
+  std::mt19937 rng(23);
+  const auto walls = symmetricRoom(true);
+  const std::string yaml = savedRoom(tempDir(), &rng, walls, pose2d(1.0, 0.0, 0.0));
+  const Eigen::Isometry2d truth = pose2d(1.6, -1.2, 150 * M_PI / 180);
+  const Eigen::Isometry2d twin = symmetricTwin(truth);  // (0.4, 1.2, -30 deg): inside the search
+  MapCorrection::Params params;
+  params.ambiguity_check = false;
+  auto unchecked = localizing(yaml, params);
+  ASSERT_TRUE(unchecked);
+  const StartRun blind = standAndLocalize(unchecked.get(), walls, truth, 3.0, &rng);
+  ASSERT_TRUE(blind.localized) << blind.last_reason;  // the failure without the check
+  EXPECT_LT(distanceOf(unchecked->mapFromOdom(), twin), 0.1);
+  params.ambiguity_check = true;
+  auto mc = localizing(yaml, params);
+  ASSERT_TRUE(mc);
+  const StartRun run = standAndLocalize(mc.get(), walls, truth, 5.0, &rng);
+  EXPECT_FALSE(run.localized) << "localized after " << run.localized_after << " s";
+  EXPECT_EQ(run.searched, 0);
+  EXPECT_NE(run.last_reason.find("start search: ambiguous: another pose ("), std::string::npos)
+      << run.last_reason;
+  const MapCorrection::Update& c = run.last_check;
+  ASSERT_TRUE(c.start_checked && c.rival.found);
+  EXPECT_LT(distanceOf(c.match.pose, twin), 0.1);          // the search's answer: the twin
+  EXPECT_LT(distanceOf(c.rival.match.pose, truth), 0.05);  // the check: the true pose, fitting better
+  EXPECT_LT(c.rival.score, c.start_score);
+  std::printf("twin inside the search: twin score %.4f m, true pose %.4f m, check %.0f ms CPU\n",
+              c.start_score, c.rival.score, c.start_check_ms);
+}
+
+// Placed outside the search in the asymmetric room (1.96 m from home, turned 90 deg; the
+// simulator's far check): whatever the search finds there is not the robot: never localized.
+TEST(Localization, StartOutsideTheSearchIsNeverLocalized) {
+  std::mt19937 rng(24);
+  const std::string yaml = savedRoom(tempDir(), &rng);
+  const Eigen::Isometry2d truth = pose2d(-1.9, 0.5, -M_PI / 2);
+  auto mc = localizing(yaml, MapCorrection::Params());
+  ASSERT_TRUE(mc);
+  const StartRun run = standAndLocalize(mc.get(), room(), truth, 5.0, &rng);
+  EXPECT_FALSE(run.localized) << "localized after " << run.localized_after << " s at ("
+                              << mc->mapFromOdom().translation().transpose() << ")";
+  EXPECT_EQ(run.searched, 0) << run.last_reason;
 }
 
 TEST(Localization, LoadedMapIsNotRewrittenByABoxLeftOnTheFloor) {

@@ -52,6 +52,19 @@ class MapCorrection {
     /// the home pose (the robot may start up to 1 m / 45 deg away from it).
     double search_translation = 1.2;
     double search_rotation = 0.9;
+    /// Localization mode: the start search's answer P must be the only pose that fits. The scan is
+    /// scored over the whole map (every heading, positions every ambiguity_step [m] on the cells
+    /// the map saw free, headings every ambiguity_angle_step [rad]); if a pose farther than
+    /// ambiguity_translation [m] or ambiguity_rotation [rad] from P fits as well as P within
+    /// ambiguity_margin [m] of the mean truncated distance (ScanMatcher::score), or better, the start
+    /// is ambiguous: not taken, searched again at most every ambiguity_retry_interval [s].
+    bool ambiguity_check = true;
+    double ambiguity_translation = 0.5;
+    double ambiguity_rotation = 0.52;  // 30 deg
+    double ambiguity_margin = 0.01;
+    double ambiguity_step = 0.1;
+    double ambiguity_angle_step = 0.05;
+    double ambiguity_retry_interval = 2.0;
     /// Localized once this many consecutive matches each moved the pose by less than
     /// localized_translation [m] / localized_rotation [rad].
     int localized_scans = 5;
@@ -61,7 +74,15 @@ class MapCorrection {
     ScanMatcher::Params matcher;
   };
 
-  enum class Status { kMapping, kAccepted, kRejectedFit, kRejectedJump, kRejectedEmpty, kSearched };
+  enum class Status {
+    kMapping,
+    kAccepted,
+    kRejectedFit,
+    kRejectedJump,
+    kRejectedEmpty,
+    kSearched,
+    kRejectedAmbiguous
+  };
 
   struct Update {
     Status status = Status::kRejectedEmpty;
@@ -69,6 +90,11 @@ class MapCorrection {
     Eigen::Isometry2d map_from_odom = Eigen::Isometry2d::Identity();
     bool map_changed = false;
     std::string reason;
+    /// A start search ran its ambiguity check (kSearched, kRejectedAmbiguous): what it found.
+    bool start_checked = false;
+    ScanMatcher::Rival rival;
+    double start_score = 0.0;     ///< ScanMatcher::score of the search's answer [m]
+    double start_check_ms = 0.0;  ///< CPU time of the check [ms]
   };
 
   MapCorrection();
@@ -99,6 +125,9 @@ class MapCorrection {
  private:
   Update searchStart(double time, const Points2d& points, const Eigen::Isometry2d& odom_from_base,
                      const Eigen::Isometry2d& prior);
+  /// The ambiguity check of a start search's answer u->match (fills u's start fields; false with
+  /// u->reason when another pose fits as well).
+  bool startIsUnique(const Points2d& points, Update* u) const;
   bool fitOk(const ScanMatcher::Result& m, std::string* reason) const;
   bool standingUpdate(double time, const Eigen::Isometry2d& pose, const Points2d& points,
                       const OccupancyMap::Insert& base);
@@ -120,6 +149,9 @@ class MapCorrection {
   bool searched_ = false;
   int good_matches_ = 0;
   int failed_matches_ = 0;
+  bool ambiguous_ = false;  ///< the last start search was ambiguous (at ambiguous_time_)
+  double ambiguous_time_ = 0.0;
+  std::string ambiguous_reason_;
 };
 
 }  // namespace rbd_localization

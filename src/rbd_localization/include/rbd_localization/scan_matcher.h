@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <vector>
 
 #include "rbd_localization/occupancy_map.h"
 
@@ -41,6 +42,22 @@ class ScanMatcher {
   explicit ScanMatcher(const Params& params) : params_(params) {}
   const Params& params() const { return params_; }
 
+  /// How rivalElsewhere() scans the whole map.
+  struct GlobalSearch {
+    double step = 0.1;         ///< [m] position grid
+    double angle_step = 0.05;  ///< [rad] heading grid (all headings)
+    int subset = 60;           ///< points scored per pose (every n-th of the scan)
+    int candidates = 8;        ///< best distinct grid poses refined with match()
+  };
+
+  /// The best pose found over the whole map, away from a given one (rivalElsewhere()).
+  struct Rival {
+    bool found = false;  ///< a refined pose farther than the distinctness radius exists
+    Result match;        ///< that pose, refined with match()
+    double score = 0.0;  ///< its score() [m]
+    int poses_scored = 0;
+  };
+
   /// Aligns points (in the base frame) to the map's distance field starting at prior.
   Result match(const OccupancyMap& map, const Points2d& points_in_base, const Eigen::Isometry2d& prior) const;
 
@@ -50,6 +67,19 @@ class ScanMatcher {
   /// best refined fit (most inliers) returned. For a start far from the prior.
   Result search(const OccupancyMap& map, const Points2d& points_in_base, const Eigen::Isometry2d& prior,
                 double max_translation, double max_rotation, double step = 0.1) const;
+
+  /// The truncated-distance score search() ranks poses by: the mean over the points of their
+  /// distance to structure, each capped at kTruncate [m] (0 = every point on a wall; lower is better).
+  static double score(const OccupancyMap& map, const Points2d& points_in_base, const Eigen::Isometry2d& pose);
+  static constexpr double kTruncate = 0.3;
+
+  /// Scores poses over the whole map (every heading; positions on a `how.step` grid over the
+  /// cells the map saw free, where a robot can stand) and refines the best distinct ones with
+  /// match(); returns the best refined pose (lowest score()) farther than min_translation [m] or
+  /// min_rotation [rad] from `pose`. A start search uses it to tell whether its answer is the
+  /// only pose that fits the scan (a room that is almost symmetric has a twin of every pose).
+  Rival rivalElsewhere(const OccupancyMap& map, const Points2d& points_in_base, const Eigen::Isometry2d& pose,
+                       double min_translation, double min_rotation, const GlobalSearch& how) const;
 
  private:
   Params params_;

@@ -11,10 +11,11 @@ master for both runs:
    ``first_start``) against /rbd_localization/pose (map): the time from the first sensor data until
    the error is <= 0.05 m / 2 deg for good, when /rbd_localization/localized turned true (and
    that it was false before), preflight's "Localized in the map" line once localized.
-   Optionally (``far_check``), before it: the whole system (rbd_bringup ``sim.launch``) placed
-   ``FAR_PLACE`` from home, outside the start search, where the robot cannot localize:
-   ``localized`` stays false, the controller refuses the gesture "spin" after the e-stop is
-   released (its warning, no state change, no motion) and preflight's line FAILs.
+   Optionally (``far_check``), before it: the whole system (rbd_bringup ``sim.launch``) placed at
+   each of ``FAR_PLACES`` from home, where the robot must not localize (outside the start search;
+   or outside it with its near 180-degree twin inside it): ``localized`` stays false, the
+   controller refuses the gesture "spin" after the e-stop is released (its warning, no state
+   change, no motion) and preflight's line FAILs.
 3. Loops: the robot walks home and round the thesis path ``loops`` times, steered on
    /rbd_localization/pose (sim_loops.py's steering, ``steer="corrected"``, each loop settled
    back onto home after its last turn, which creeps); each loop's end is compared with its start
@@ -46,12 +47,14 @@ import sim_loops  # noqa: E402
 CONVERGED_M, CONVERGED_DEG, CONVERGE_WITHIN_S = 0.05, 2.0, 5.0
 #: The brief's placement: 0.8 m / 40 deg from home (x, y [m], yaw [rad] relative to home).
 DEFAULT_PLACE = (-0.8 * math.cos(math.radians(45.0)), 0.8 * math.sin(math.radians(45.0)), math.radians(40.0))
-#: Placement outside the start search (search_translation 1.2 m / search_rotation 0.9 rad): 1.96 m
-#: from home, turned 90 deg, clear of the lab's people and furniture (the collision zone stays free).
-#: Not (1.6, -1.2, 150 deg): there the search locks onto the lab's near 180-degree twin of the pose
-#: (0.4, 1.2, -30 deg), inside the search, and reports localized at 2.7 m / 180 deg off (measured
-#: 2026-11-29; rbd_localization README "On the simulator").
-FAR_PLACE = (-1.9, 0.5, -math.pi / 2)
+#: Placements where the robot must not localize (report key: (x, y [m], yaw [rad]) from home), clear
+#: of the lab's people and furniture (the collision zone stays free). "far": outside the start
+#: search (search_translation 1.2 m / search_rotation 0.9 rad), 1.96 m from home, turned 90 deg.
+#: "twin": 2.0 m / 150 deg from home, outside the search, but the lab's walls are almost
+#: point-symmetric and the pose's near 180-degree twin (0.4, 1.2, -30 deg) lies inside it: before
+#: the start search's ambiguity check the search took the twin and reported localized 2.7 m /
+#: 180 deg off (rbd_localization README "On the simulator").
+FAR_PLACES = (("far", (-1.9, 0.5, -math.pi / 2)), ("twin", (1.6, -1.2, math.radians(150.0))))
 #: s the far run waits for a localization that must not come.
 FAR_WAIT_S = 10.0
 #: s the mapping run stands before saving: the walls must stay occupied for static_time (10 s).
@@ -182,6 +185,38 @@ def refused_gesture(rospy, runner):
         sub.unregister()
     return {"states": list(states), "states_after_gesture": states[n_states:], "refusals": list(refusals),
             "moved": math.hypot(end[0] - start[0], end[1] - start[1])}
+
+
+def never_localized_run(env, rospy, world, seed, columns, first_start, map_file, place, name):
+    """The whole system (rbd_bringup sim.launch, the controller too) in the map, placed where it must
+    not localize (place: from home): the controller's answer to "spin", preflight's line, the
+    latched ``localized`` values and the pose error at the end (dict)."""
+    from rbd_testkit import free_port
+    from rbd_testkit.process import stop_process
+
+    far = compose(first_start, place)
+    runner = sim_loops.Runner(map_origin=first_start)
+    watch = Watch(runner)
+    stack = env.launch("rbd_bringup", "sim.launch", "world:=%s" % world, "seed:=%d" % seed,
+                       "lidar_columns:=%d" % columns, "map:=%s" % map_file, "bridge_port:=%d" % free_port(),
+                       "robot_x:=%.6f" % far[0], "robot_y:=%.6f" % far[1], "robot_yaw:=%.6f" % far[2], name=name)
+    t = time.monotonic()
+    try:
+        if not runner.wait_ready(120.0):
+            raise RuntimeError("%s: no ground truth / pose / odometry\n%s" % (name, env.tails()))
+        out = {"place_from_home": [place[0], place[1], math.degrees(place[2])]}
+        out["gesture"] = refused_gesture(rospy, runner)
+        rospy.sleep(max(0.0, FAR_WAIT_S - 5.0))
+        out["preflight_localized"] = preflight_localized_row(env)
+        with watch.lock:
+            out["localized_values"] = [v for _, v in watch.localized]
+            last = watch.samples[-1] if watch.samples else None
+        out["last_error"] = None if last is None else [last[1], last[2]]
+    finally:
+        watch.close()
+        stop_process(stack, timeout=20.0)
+    out["run_s"] = time.monotonic() - t
+    return out
 
 
 def save_map(env, directory, name):
@@ -342,7 +377,7 @@ def place_crowd(rospy, crowd_world, remove=False):
 def run(out_dir, loops=1, world="lab", seed=1, columns=512, first_start=(0.0, 0.0, 0.0), place=DEFAULT_PLACE,
         box_seconds=0.0, crowd_seconds=0.0, far_check=False, log_dir=None):
     """The whole experiment (see the module docstring); returns the report (dict)."""
-    from rbd_testkit import RosEnv, free_port, restore_sigint
+    from rbd_testkit import RosEnv, restore_sigint
     from rbd_testkit.process import stop_process
 
     restore_sigint()
@@ -397,28 +432,11 @@ def run(out_dir, loops=1, world="lab", seed=1, columns=512, first_start=(0.0, 0.
         if crowd_seconds > 0:  # the saved map is in the map frame: the crowd relative to home
             report["crowd"]["cells"] = crowd_cells(map_file, list(CROWD))
         t = time.monotonic()
-        # --- 2a. placed outside the start search: never localized, preflight refuses -----------------
+        # --- 2a. placed where it cannot localize: never localized, preflight and the controller refuse --
         if far_check:
-            far = compose(first_start, FAR_PLACE)
-            runner = sim_loops.Runner(map_origin=first_start)
-            watch = Watch(runner)
-            # the whole system (rbd_bringup sim.launch): the controller too
-            stack = env.launch("rbd_bringup", "sim.launch", "world:=%s" % world, "seed:=%d" % seed,
-                               "lidar_columns:=%d" % columns, "map:=%s" % map_file, "bridge_port:=%d" % free_port(),
-                               "robot_x:=%.6f" % far[0], "robot_y:=%.6f" % far[1], "robot_yaw:=%.6f" % far[2],
-                               name="far_run")
-            if not runner.wait_ready(120.0):
-                raise RuntimeError("far run: no ground truth / pose / odometry\n" + env.tails())
-            report["far"] = {"place_from_home": [FAR_PLACE[0], FAR_PLACE[1], math.degrees(FAR_PLACE[2])]}
-            report["far"]["gesture"] = refused_gesture(rospy, runner)
-            rospy.sleep(max(0.0, FAR_WAIT_S - 5.0))
-            report["far"]["preflight_localized"] = preflight_localized_row(env)
-            with watch.lock:
-                report["far"]["localized_values"] = [v for _, v in watch.localized]
-                last = watch.samples[-1] if watch.samples else None
-            report["far"]["last_error"] = None if last is None else [last[1], last[2]]
-            watch.close()
-            stop_process(stack, timeout=20.0)
+            for key, far_place in FAR_PLACES:
+                report[key] = never_localized_run(env, rospy, world, seed, columns, first_start, map_file, far_place,
+                                                  key + "_run")
         # --- 2. localization run, placed away from home -------------------------------------------------
         placed = compose(first_start, place)
         report["placed_world"] = [placed[0], placed[1], math.degrees(placed[2])]
@@ -498,12 +516,12 @@ def main():
     ap.add_argument("--crowd-seconds", type=float, default=0.0,
                     help="a crowd stands around the robot this long from the start of the mapping run")
     ap.add_argument("--far-check", action="store_true",
-                    help="first restart placed outside the start search: localized must stay false")
+                    help="first restarts placed where it cannot localize (FAR_PLACES): localized must stay false")
     args = ap.parse_args()
     report = run(args.out, loops=args.loops, world=args.world, seed=args.seed, columns=args.columns,
                  box_seconds=args.box_seconds, crowd_seconds=args.crowd_seconds, far_check=args.far_check)
-    summary = {k: report.get(k) for k in ("convergence", "preflight_localized", "home_reached", "box", "crowd",
-                                          "far")}
+    summary = {k: report.get(k) for k in ("convergence", "preflight_localized", "home_reached", "box", "crowd")
+               + tuple(key for key, _ in FAR_PLACES)}
     summary["loops"] = [{"loop": e["loop"], "truth_closure": e["truth_closure"], "corrected": e["corrected"]}
                         for e in report.get("loops", [])]
     print(json.dumps(summary, indent=1))
