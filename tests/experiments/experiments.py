@@ -597,10 +597,24 @@ def exp_reaction(ctx):
     return result
 
 
+def exp_mount(ctx):
+    """mount_zone.py's measurements (test_mount_zone.py) on this stack, with the shipped mounts file.
+
+    The safety stack is mount_zone.py's stack with sim.launch's default mounts (the same launch
+    arguments): measured here, first (the robot where the simulator put it), instead of on a
+    stack of its own. ``run_all --mount-check`` runs it.
+    """
+    import mount_zone
+    import rospkg
+
+    return mount_zone.measure(os.path.join(rospkg.RosPack().get_path("rbd_description"), "config", "mounts.yaml"))
+
+
 import avoidance  # noqa: E402  (issue 17: box, wall, visitor)
 
 EXPERIMENTS = {"control": [("step", exp_step), ("rotation", exp_rotation), ("path", exp_path)],
-               "safety": [("zone", exp_zone), ("boundary", exp_boundary), ("reaction", exp_reaction),
+               "safety": [("mount", exp_mount), ("zone", exp_zone), ("boundary", exp_boundary),
+                          ("reaction", exp_reaction),
                           ("detect", avoidance.exp_detect), ("stopping", avoidance.exp_stopping),
                           ("box", avoidance.exp_box), ("wall", avoidance.exp_wall),
                           ("visitor", avoidance.exp_visitor)]}

@@ -54,6 +54,44 @@ def cloud_target_x(since):
     raise RuntimeError("target not in the cloud (%d returns)" % len(xs))
 
 
+def measure(mounts):
+    """The measurements above on the running stack (a ROS node of this process already), as a dict.
+
+    Args:
+        mounts: the mounts file the stack was started with (recorded in the result).
+
+    The robot must stand where the simulator put it (facing +x): first on a stack.
+    """
+    import rospy
+    import tf2_ros
+
+    result = {"mounts": os.path.abspath(mounts)}
+    truth = experiments.Truth()
+    if not experiments.wait_for(lambda: truth.last() is not None, 60.0):
+        raise RuntimeError("no ground truth")
+    zone = experiments.Zone("collision_zone")
+    buf = tf2_ros.Buffer()
+    tf2_ros.TransformListener(buf)
+    t = buf.lookup_transform("base_link", "os_sensor", rospy.Time(0), rospy.Duration(30.0)).transform.translation
+    result["tf_mount"] = [t.x, t.y, t.z]
+    _, body_x, body_y = truth.last()[:3]
+    result["truth_xy"] = [body_x, body_y]
+    # The flat target straight ahead of the body (the robot faces +x at start).
+    placed = rospy.Time.now()
+    place = zone.place(name="flat", x=body_x + TARGET_SURFACE_X + TARGET_RADIUS, y=body_y, radius=TARGET_RADIUS,
+                       height=1.7, remove=False)
+    if not place.success:
+        raise RuntimeError("place_obstacle refused")
+    result["cloud_x"], result["cloud_returns"] = cloud_target_x(placed)
+    zone.remove("flat")
+    for side, angle, target in (("front", 0.0, zone.zone[0]), ("back", math.pi, zone.zone[1])):
+        flip = experiments.flip_distance(zone, "fig23", angle, TARGET_RADIUS, target + TARGET_RADIUS, 0.005)
+        result[side] = None if flip is None else flip - TARGET_RADIUS
+        result[side + "_set"] = target
+        zone.remove("fig23")
+    return result
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--mounts", required=True)
@@ -62,38 +100,14 @@ def main():
     args = ap.parse_args()
     log_dir = os.path.join(os.path.dirname(os.path.abspath(args.out)), "logs-" + os.path.basename(args.out))
     stack = RosEnv(log_dir=log_dir, use_here=True, prefix="rbd-exp-home.")
-    result = {"mounts": os.path.abspath(args.mounts)}
     try:
         stack.launch("rbd_bringup", "sim.launch", "localization:=false", "rviz:=false", "gui:=false",
                      "seed:=1", "lidar_columns:=%d" % args.columns, "bridge_port:=%d" % free_port(),
                      "mounts:=" + os.path.abspath(args.mounts), name="sim")
         import rospy
-        import tf2_ros
 
         rospy.init_node("mount_zone", anonymous=True, disable_signals=True)
-        truth = experiments.Truth()
-        if not experiments.wait_for(lambda: truth.last() is not None, 60.0):
-            raise RuntimeError("no ground truth")
-        zone = experiments.Zone("collision_zone")
-        buf = tf2_ros.Buffer()
-        tf2_ros.TransformListener(buf)
-        t = buf.lookup_transform("base_link", "os_sensor", rospy.Time(0), rospy.Duration(30.0)).transform.translation
-        result["tf_mount"] = [t.x, t.y, t.z]
-        _, body_x, body_y = truth.last()[:3]
-        result["truth_xy"] = [body_x, body_y]
-        # The flat target straight ahead of the body (the robot faces +x at start).
-        placed = rospy.Time.now()
-        place = zone.place(name="flat", x=body_x + TARGET_SURFACE_X + TARGET_RADIUS, y=body_y, radius=TARGET_RADIUS,
-                           height=1.7, remove=False)
-        if not place.success:
-            raise RuntimeError("place_obstacle refused")
-        result["cloud_x"], result["cloud_returns"] = cloud_target_x(placed)
-        zone.remove("flat")
-        for side, angle, target in (("front", 0.0, zone.zone[0]), ("back", math.pi, zone.zone[1])):
-            flip = experiments.flip_distance(zone, "fig23", angle, TARGET_RADIUS, target + TARGET_RADIUS, 0.005)
-            result[side] = None if flip is None else flip - TARGET_RADIUS
-            result[side + "_set"] = target
-            zone.remove("fig23")
+        result = measure(args.mounts)
     finally:
         stack.close(timeout=25.0)  # roslaunch itself escalates SIGINT -> SIGTERM after 15 s
     with open(args.out, "w") as fh:

@@ -1,7 +1,7 @@
 """The thesis experiments in their short form (make test) plus the ROS-free maths behind them.
 
-One `run_all --short --parallel` run (two simulator stacks at once) feeds every system test
-below; the bounds come from the thesis / DESIGN (tests/experiments/thesis.py), never from a
+One `run_all --short --parallel` run (two simulator stacks at once; conftest.py) feeds every system
+test below; the bounds come from the thesis / DESIGN (tests/experiments/thesis.py), never from a
 previous result. RBD_EXPERIMENTS_OUT keeps the output directory.
 """
 
@@ -17,7 +17,7 @@ sys.path.insert(0, HERE)
 
 import analysis  # noqa: E402
 import thesis  # noqa: E402
-from short_run import result, run_all  # noqa: E402
+from short_run import result  # noqa: E402
 
 # ---------------------------------------------------------------------------------------------
 # ROS-free: the measurement maths
@@ -167,9 +167,7 @@ def test_root_readme_table_is_the_generated_one():
 # ---------------------------------------------------------------------------------------------
 
 
-@pytest.fixture(scope="module")
-def short_run():
-    yield from run_all(["--short", "--parallel"], 400, keep=os.environ.get("RBD_EXPERIMENTS_OUT"))
+# short_run: conftest.py's one `run_all --short --parallel --mount-check` (shared with test_mount_zone.py)
 
 
 def test_fig18_steps_integrate_with_small_latency(short_run):

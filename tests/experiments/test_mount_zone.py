@@ -1,8 +1,10 @@
 """A mount changed in the calibration file moves the simulated OS1; the zone stays with the body.
 
-Two runs of mount_zone.py (each its own simulator stack, run side by side): the shipped
-config/mounts.yaml (the OS1 on the robot's back, thesis §3.3.1) and the same file with the OS1
-centred on the trunk (the mount the URDF used to hard-code). The truth is the simulator's: the
+mount_zone.py's measurements for two mounts files, from conftest.py's one run_all: the shipped
+config/mounts.yaml (the OS1 on the robot's back, thesis §3.3.1), measured first on the safety
+stack (sim.launch with the same arguments as mount_zone.py's own stack), and the same file with
+the OS1 centred on the trunk (the mount the URDF used to hard-code), mount_zone.py on a stack of
+its own after the control stack. The truth is the simulator's: the
 ground-truth body position, a target placed in the world, the cloud the simulated sensor sees
 (decoded with sensor_msgs.point_cloud2), and the zone boundaries found by Fig. 23's bisection on
 the collision state, measured from the body frame collision_zone.
@@ -10,45 +12,31 @@ the collision state, measured from the body frame collision_zone.
 
 import json
 import os
-import subprocess
 import sys
 
 import pytest
 import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
-SHIPPED = os.path.join(ROOT, "src", "rbd_description", "config", "mounts.yaml")
+sys.path.insert(0, HERE)
+
+from short_run import result  # noqa: E402
+
 THESIS_TOLERANCE = 0.08  # Fig. 23: the boundary within +-80 mm of the set distance
 SAME_BOUNDARY = 0.02  # the two mounts' boundaries agree to this; moving the zone with the sensor shifts them 0.08 m
 TARGET_SURFACE = 1.2  # mount_zone.py: target surface this far ahead of the body [m]
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory):
-    out = tmp_path_factory.mktemp("mount_zone")
-    with open(SHIPPED) as fh:
-        centred = yaml.safe_load(fh)
-    centred["os_sensor"]["xyz"] = [0.0, 0.0, 0.07]
-    files = {"back": SHIPPED, "centre": str(out / "centre.yaml")}
-    with open(files["centre"], "w") as fh:
-        yaml.safe_dump(centred, fh)
-    procs = {name: subprocess.Popen([sys.executable, os.path.join(HERE, "mount_zone.py"), "--mounts", path,
-                                     "--out", str(out / (name + ".json"))], start_new_session=True)
-             for name, path in files.items()}
-    try:
-        for name, proc in procs.items():
-            assert proc.wait(timeout=300) == 0, "mount_zone.py failed for %s (logs in %s)" % (name, out)
-    finally:
-        for proc in procs.values():
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
-    results = {}
-    for name, path in files.items():
-        with open(str(out / (name + ".json"))) as fh:
-            results[name] = json.load(fh)
-        with open(path) as fh:
+def runs(short_run):
+    """mount_zone.py's measurements per mounts file, with the file's os_sensor xyz as ``file_xyz``."""
+    path = os.path.join(short_run["out"], "mount_check.json")
+    assert os.path.exists(path), "mount_zone.py wrote nothing; run_all's output:\n" + short_run["stdout"][-6000:]
+    with open(path) as fh:
+        results = {"back": result(short_run, "mount"), "centre": json.load(fh)}
+    for name, mounts in short_run["mount_files"].items():
+        assert results[name]["mounts"] == os.path.abspath(mounts), (name, results[name]["mounts"])
+        with open(mounts) as fh:
             results[name]["file_xyz"] = yaml.safe_load(fh)["os_sensor"]["xyz"]
     return results
 
