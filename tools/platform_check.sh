@@ -10,7 +10,7 @@
 #    $RBD_PLATFORM_CACHE/<release> (default /var/cache/robodog-platform); it is kept between
 #    runs with what the runs install (apt packages, the venv, pip/npm caches, ccache).
 # 2. The checkout's files (git ls-files: committed, changed and new, not ignored) are copied
-#    to /root/robodog in the chroot (its build/, devel/ and .venv stay for the next run).
+#    to /root/robodog in the chroot (its .venv, the ccache and the apt/pip/npm caches stay for the next run; build/ and devel/ do not).
 # 3. In the chroot: rbd_local installed with pip into a fresh venv of the chroot's Python and
 #    its own tests, then tools/setup.sh (the same script as on Debian 12) and `make test` (build,
 #    lint, every gtest/rostest/pytest). RBD_PLATFORM_TESTS=0: setup and build only.
@@ -33,7 +33,8 @@ mkdir -p "$cache"
 
 if [ "$bare" = 1 ] && [ -e "$chroot_dir" ]; then
   echo "platform_check: bare run: removing the cached $chroot_dir first"
-  for m in dev/shm dev/pts dev sys proc; do umount -l "$chroot_dir/$m" 2>/dev/null || true; done
+  # every mount below it (proc, sys, dev; a network namespace file a failed test left), deepest first
+  findmnt -rn -o TARGET | grep "^$chroot_dir\(/\|$\)" | sort -r | while read -r m; do umount -l "$m" || true; done
   rm -rf --one-file-system "$chroot_dir"
 fi
 if [ ! -f "$chroot_dir/.rbd-debootstrap" ]; then
@@ -85,9 +86,11 @@ fi
 # the checkout, without what is ignored (build products, venv, node_modules)
 work="$chroot_dir/root/robodog"
 mkdir -p "$work"
-for d in "$work"/*; do
-  case "$(basename "$d")" in build | devel) ;; *) rm -rf "$d" ;; esac
-done
+# build/ and devel/ too: Debian 11's catkin re-configuring a build it configured before keeps
+# GMOCK_FOUND/GMOCK_LIBRARIES (gmock_main;gmock) cached but no longer defines those targets, and
+# the gtests stop linking ("No rule to make target 'gmock_main'", 2026-11-29). A fresh build, as
+# a fresh clone has; ccache in the chroot keeps it short.
+rm -rf "${work:?}"/*
 (cd "$root" && git ls-files -z -co --exclude-standard | while IFS= read -r -d '' f; do [ -e "$f" ] && printf '%s\0' "$f"; done |
   tar --null -T - -cf -) | tar -C "$work" -xf -
 echo "platform_check: copied $(cd "$root" && git describe --always --dirty) into $work ($(( $(date +%s) - t0 )) s so far)"
