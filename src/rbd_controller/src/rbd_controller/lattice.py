@@ -9,7 +9,9 @@ their cost is time at the planned speed and turn rate. Every motion is checked a
 (samples every ``resolution``) against a configuration-space map per heading bin: the obstacle
 cells dilated by the rectangle rotated over the whole bin, so any heading inside a bin is covered.
 A straight shot (turn on the spot towards the goal, walk, turn to the goal's heading) is tried
-from the expanded poses and ends the search when its sweep is free.
+from the expanded poses; one free at the fastest speed ends the search, a slower one (its turn on the
+spot beside the obstacle only free at a slow turn rate) is a candidate with its time: the search goes
+on (at most ``IMPROVE_SECONDS``) while a quicker path can exist and answers with the quickest found.
 
 Each motion is timed at the fastest speed (of ``speed`` x 0.5^n, then ``min_speed``) whose grown
 zone stays free along it; the search itself runs in the slowest speed's space. Near obstacles the
@@ -27,14 +29,20 @@ from typing import Any, Callable, List, Optional, Sequence, Tuple
 import numpy as np
 
 from rbd_controller.arena import Arena
-from rbd_controller.cspace import CSpace, Window
+from rbd_controller.cspace import EXACT_MARGIN, CSpace, Window
 from rbd_controller.detour import MAX_DETOUR_SPAN, GridMap, finite_points
 from rbd_controller.footprint import ZoneGrowth, motion_zone
 from rbd_controller.lattice_plan import LatticePlan, Pose, path_length
+from rbd_controller.primitives import Primitive, primitives
 from rbd_geometry.rotation import wrap_angle
 
 #: Walking on a path, the follower's yaw rate may exceed speed x curvature by this share of its limit.
 STEER_ALLOWANCE = 0.25
+#: A turn on the spot costs this much more per heading bin than its time (the follower settles on each) [s].
+SPOT_TURN_PENALTY = 0.3
+#: Once a straight shot slower than the fastest speed is found, the search goes on this long for a quicker
+#: path, then answers with the quickest found [s] (wall clock; the robot stands while it plans).
+IMPROVE_SECONDS = 1.0
 
 
 class LatticePlanner:
@@ -111,6 +119,20 @@ class LatticePlanner:
     def turn_zone_for(self, speed: float, age: float = 0.0) -> Tuple[float, float, float, float]:
         """The rectangle kept free while turning on the spot at the follower's turn rate for speed."""
         return self._shift(motion_zone(self.zone, 0.0, self.turn_rate(speed), self.growth, self.margin, age))
+
+    def turn_room(self, speed: Optional[float] = None) -> Tuple[float, float, float, float]:
+        """Per side (FRONT, LEFT, BACK, RIGHT), how far beyond rbd_lidar's rest zone an obstacle must lie for a turn.
+
+        A turn on the spot at the follower's turn rate for speed (None: the fastest) sweeps the turning zone's
+        corners round a circle about base_link; an obstacle on a side (measured along that side from the zone's
+        origin, as rbd_lidar's min_distance) at least rest zone + this keeps that circle free [m]. The escape
+        backs off this far where it can (:func:`rbd_controller.escape.plan_escape`): beside the box the detour
+        then starts with a quick turn instead of one at the slowest speed's turn rate.
+        """
+        f, left, b, right = self.turn_zone_for(self.speed if speed is None else speed)
+        reach = math.hypot(max(f, b), max(left, right)) + EXACT_MARGIN
+        rest = self._shift(self.zone)
+        return tuple(max(0.0, reach - z) for z in rest)  # type: ignore[return-value]
 
     def _shift(self, zone: Sequence[float]) -> Tuple[float, float, float, float]:
         """A zone measured from origin as limits around the robot's own frame."""
@@ -276,43 +298,14 @@ class LatticePlanner:
         return np.concatenate(out).reshape(-1, 2)
 
     # ------------------------------------------------------------------ search
-    def _primitives_cached(self, speed: float) -> List[List[Tuple[float, float, int, float, np.ndarray, float]]]:
+    def _primitives_cached(self, speed: float) -> List[List[Primitive]]:
         key = round(speed, 9)
         if key not in self._prims:
             self._prims[key] = self._primitives(speed)
         return self._prims[key]
 
-    def _primitives(self, speed: float) -> List[List[Tuple[float, float, int, float, np.ndarray]]]:
-        """Per heading bin: (dx, dy, dbin, cost [s], samples M x 3 relative (dx, dy, heading), curvature [1/m]).
-
-        On-the-spot turns have dx = dy = 0 and an infinite curvature.
-        """
-        out = []
-        step, nb = self.step, self.headings
-        for k in range(nb):
-            th = k * self.bin
-            prims = []
-            for dk in (-2, -1, 0, 1, 2):
-                turn = dk * self.bin
-                # Samples <= 0.02 m and <= 0.01 rad apart (EXACT_MARGIN covers what lies between).
-                n = max(2, int(math.ceil(step / 0.02)), int(math.ceil(abs(turn) / 0.01)))
-                s = np.arange(1, n + 1) / n * step
-                if dk == 0:
-                    xs, ys, hs = s * math.cos(th), s * math.sin(th), np.full(n, th)
-                else:
-                    kappa = turn / step
-                    hs = th + kappa * s
-                    xs = (np.sin(hs) - math.sin(th)) / kappa
-                    ys = (math.cos(th) - np.cos(hs)) / kappa
-                cost = max(step / speed, abs(turn) / self.turn_rate(speed)) + 0.05 * abs(dk)
-                prims.append((float(xs[-1]), float(ys[-1]), dk, cost, np.stack([xs, ys, hs], axis=1), turn / step))
-            for dk in (-1, 1):
-                m = max(2, int(math.ceil(self.bin / 0.01)))
-                hs = th + dk * self.bin * np.arange(1, m + 1) / m
-                samples = np.stack([np.zeros(m), np.zeros(m), hs], axis=1)
-                prims.append((0.0, 0.0, dk, self.bin / self.turn_rate(speed) + 0.3, samples, math.inf))
-            out.append(prims)
-        return out
+    def _primitives(self, speed: float) -> List[List[Primitive]]:
+        return primitives(self.step, self.headings, speed, self.turn_rate(speed), SPOT_TURN_PENALTY)
 
     def _level(self, spaces: List[CSpace], check: Callable[[CSpace], bool]) -> int:
         """Index of the fastest space in which check(space) holds; len(spaces) if none.
@@ -332,15 +325,24 @@ class LatticePlanner:
 
     def _search(self, spaces: List[CSpace], speeds: List[float], start: Pose,
                 goal: Pose) -> Tuple[Optional[List[Pose]], List[float], int]:
-        """Hybrid A* in the slowest speed's space; each motion is timed at the fastest speed it is free for."""
+        """Hybrid A* in the slowest speed's space; each motion is timed at the fastest speed it is free for.
+
+        The answer is the quickest path found: a straight shot at full speed at once; else the search goes
+        on past slower shots until no open node can beat the best (f >= its time), IMPROVE_SECONDS after the
+        first one, the budget or max_expansions, whichever comes first.
+        """
         nb = self.headings
         space = spaces[-1]
         heur = space.heuristic(goal, speeds[0])
         if not math.isfinite(heur(start[0], start[1])):
             return None, [], 0
+        # A shot at full speed ends the search; a slower one is a candidate (see the docstring).
+        best = None  # type: Optional[Tuple[float, int, List[Pose], List[float]]]  # (time, node, poses, speeds)
         shot = self._shot(spaces, speeds, start, goal)
         if shot is not None:
-            return shot[0], shot[1], 0
+            if shot[3]:
+                return shot[0], shot[1], 0
+            best = (shot[2], 0, shot[0], shot[1])
         prims = [self._primitives_cached(v) for v in speeds]
         k0 = int(round(start[2] / self.bin)) % nb
         # The start's own heading may lie between bins: turn on the spot to the nearest bin first.
@@ -356,8 +358,11 @@ class LatticePlanner:
         heap = [(heur(first[0], first[1]), 0.0, len(nodes) - 1, first)]
         closed = set()
         expanded = 0
-        while heap and expanded < self.max_expansions and time.monotonic() < self._deadline:
-            _, g, idx, (x, y, k) = heapq.heappop(heap)
+        deadline = self._deadline if best is None else min(self._deadline, time.monotonic() + IMPROVE_SECONDS)
+        while heap and expanded < self.max_expansions and time.monotonic() < deadline:
+            f, g, idx, (x, y, k) = heapq.heappop(heap)
+            if best is not None and f >= best[0]:
+                break  # nothing left can be quicker than the best shot (the heuristic never overestimates)
             key = (int(math.floor(x / cres)), int(math.floor(y / cres)), k)
             if key in closed:
                 continue
@@ -366,9 +371,12 @@ class LatticePlanner:
             pose = (x, y, wrap_angle(k * self.bin))
             if expanded % 2 == 1 or math.hypot(goal[0] - x, goal[1] - y) < 1.0:
                 shot = self._shot(spaces, speeds, pose, goal)
-                if shot is not None:
-                    poses, vs = self._unwind(nodes, idx)
-                    return poses + shot[0], vs + shot[1], expanded
+                if shot is not None and (best is None or g + shot[2] < best[0]):
+                    if best is None and not shot[3]:
+                        deadline = min(deadline, time.monotonic() + IMPROVE_SECONDS)
+                    best = (g + shot[2], idx, shot[0], shot[1])
+                    if shot[3]:
+                        break
             for j, (dx, dy, dk, _, samples, curv) in enumerate(prims[-1][k]):
                 nk = (k + dk) % nb
                 nx, ny = x + dx, y + dy
@@ -388,7 +396,10 @@ class LatticePlanner:
                 cost = prims[lvl][k][j][3]
                 nodes.append(((nx, ny, wrap_angle(nk * self.bin)), idx, speeds[lvl]))
                 heapq.heappush(heap, (g + cost + h, g + cost, len(nodes) - 1, (nx, ny, nk)))
-        return None, [], expanded
+        if best is None:
+            return None, [], expanded
+        poses, vs = self._unwind(nodes, best[1])
+        return poses + best[2], vs + best[3], expanded
 
     @staticmethod
     def _unwind(nodes: List[Any], idx: int) -> Tuple[List[Pose], List[float]]:
@@ -401,8 +412,13 @@ class LatticePlanner:
         return poses[::-1][1:], vs[::-1][1:]  # without the start
 
     def _shot(self, spaces: List[CSpace], speeds: List[float], pose: Pose,
-              goal: Pose) -> Optional[Tuple[List[Pose], List[float]]]:
-        """Turn on the spot towards the goal, walk straight, turn to the goal's heading: free or None."""
+              goal: Pose) -> Optional[Tuple[List[Pose], List[float], float, bool]]:
+        """Turn on the spot towards the goal, walk straight, turn to the goal's heading.
+
+        Returns:
+            None when its sweep is not free at the slowest speed, else (poses, speed of each motion, its time
+            [s] as the search counts it, True when every motion is free at the fastest speed).
+        """
         dist = math.hypot(goal[0] - pose[0], goal[1] - pose[1])
         if self._any_heading:
             face = math.atan2(goal[1] - pose[1], goal[0] - pose[0]) if dist >= 0.05 else pose[2]
@@ -415,11 +431,19 @@ class LatticePlanner:
         if not spaces[-1].free_path(path):
             return None
         out, vs = [], []
+        cost, fastest = 0.0, True
         for prev, p in zip(path, path[1:]):
-            if abs(p[0] - prev[0]) + abs(p[1] - prev[1]) < 1e-9 and abs(wrap_angle(p[2] - prev[2])) < 1e-3:
+            dist, turn = math.hypot(p[0] - prev[0], p[1] - prev[1]), abs(wrap_angle(p[2] - prev[2]))
+            if dist < 1e-9 and turn < 1e-3:
                 continue  # no turn needed
+            lvl = min(self._level(spaces, lambda sp, seg=(prev, p): sp.free_path(seg)), len(speeds) - 1)
             out.append(p)
-            vs.append(speeds[self._level(spaces, lambda sp, seg=(prev, p): sp.free_path(seg))])
+            vs.append(speeds[lvl])
+            fastest = fastest and lvl == 0
+            # As the primitives count it: walking at the speed, a turn on the spot at its turn rate plus
+            # SPOT_TURN_PENALTY per heading bin.
+            cost += (dist / speeds[lvl] if dist >= 1e-9 else
+                     turn / self.turn_rate(speeds[lvl]) + SPOT_TURN_PENALTY * turn / self.bin)
         if not out:
             out, vs = [goal], [speeds[-1]]
-        return out, vs
+        return out, vs, cost, fastest
