@@ -381,6 +381,8 @@ def run_trick_with_box(ctx, watch, op, trick, avoidance, blocked_wait):
             (round(t - t0, 2), e[:60]) for t, e in events]
     result["timeline"].sort()
     result["box_dropped_s"] = round(t_box - t0, 2)
+    result["track"] = [[round(v, 3) for v in smp[:5]] for smp in samples[::10]]  # t (absolute), x, y, yaw, speed
+    result["t0"] = t0
     result["path"] = [(s[1], s[2]) for s in samples[::5]]
     result["plans"] = plans
     result["arena"] = arena
