@@ -66,6 +66,7 @@ class LatticePlanner:
             wall clock: the planner runs in a worker thread beside the node's, CPU time would count both).
         origin: (x, y) of the point the zone is measured from in the robot's frame [m] (rbd_lidar's
             ~zone_frame: collision_zone, 0.08 m behind base_link on the A1); the poses are base_link's.
+        improve_seconds: after a straight shot slower than full speed, search this much longer for a quicker path [s].
 
     Raises:
         ValueError: a value out of range.
@@ -75,7 +76,8 @@ class LatticePlanner:
                  speed: float = 0.3, max_vx: float = 0.3, max_wz: float = math.radians(36.0), margin: float = 0.0,
                  min_speed: float = 0.06, resolution: float = 0.04, headings: int = 48, step: float = 0.2,
                  window_margin: float = 2.0, max_expansions: int = 6000,
-                 origin: Sequence[float] = (0.0, 0.0), max_seconds: float = 5.0) -> None:
+                 origin: Sequence[float] = (0.0, 0.0), max_seconds: float = 5.0,
+                 improve_seconds: float = IMPROVE_SECONDS) -> None:
         if len(zone) != 4 or not all(math.isfinite(z) and z >= 0 for z in zone):
             raise ValueError("zone needs 4 finite sides >= 0, got %r" % (zone,))
         if not (0 < min_speed <= speed <= max_vx and 0 < max_wz and 0 <= margin and 0 < resolution <= 0.2
@@ -87,6 +89,7 @@ class LatticePlanner:
         self.speed = float(speed)
         self.max_vx = float(max_vx)
         self.max_seconds = float(max_seconds)
+        self.improve_seconds = float(improve_seconds)
         self._any_heading = False
         self._deadline = math.inf
         self.origin = (float(origin[0]), float(origin[1]))
@@ -309,7 +312,7 @@ class LatticePlanner:
         heap = [(heur(first[0], first[1]), 0.0, len(nodes) - 1, first)]
         closed = set()
         expanded = 0
-        deadline = self._deadline if best is None else min(self._deadline, time.monotonic() + IMPROVE_SECONDS)
+        deadline = self._deadline if best is None else min(self._deadline, time.monotonic() + self.improve_seconds)
         while heap and expanded < self.max_expansions and time.monotonic() < deadline:
             f, g, idx, (x, y, k) = heapq.heappop(heap)
             if best is not None and f >= best[0]:
@@ -324,7 +327,7 @@ class LatticePlanner:
                 shot = self._shot(spaces, speeds, pose, goal)
                 if shot is not None and (best is None or g + shot[2] < best[0]):
                     if best is None and not shot[3]:
-                        deadline = min(deadline, time.monotonic() + IMPROVE_SECONDS)
+                        deadline = min(deadline, time.monotonic() + self.improve_seconds)
                     best = (g + shot[2], idx, shot[0], shot[1])
                     if shot[3]:
                         break
