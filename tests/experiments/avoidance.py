@@ -375,6 +375,14 @@ def run_trick_with_box(ctx, watch, op, trick, avoidance, blocked_wait):
     result["obstacles_avoided"] = sum(1 for _, e in events if e.startswith("avoided"))
     result["events"] = [e for _, e in events]
     result["states"] = states
+    # When (s after the gesture): where the time went (classification, escape, plans, detour, way back).
+    with watch.lock:
+        result["timeline"] = [(round(t - t0, 2), st) for t, st in watch.states if t0 <= t <= t1] + [
+            (round(t - t0, 2), e[:60]) for t, e in events]
+    result["timeline"].sort()
+    result["box_dropped_s"] = round(t_box - t0, 2)
+    result["track"] = [[round(v, 3) for v in smp[:5]] for smp in samples[::10]]  # t (absolute), x, y, yaw, speed
+    result["t0"] = t0
     result["path"] = [(s[1], s[2]) for s in samples[::5]]
     result["plans"] = plans
     result["arena"] = arena

@@ -12,7 +12,16 @@ import numpy as np
 import pytest
 
 from rbd_controller.arena import Arena, default_arena
-from rbd_controller.blocking import CLEAR, MOVING, STATIC, UNKNOWN, BlockClassifier, near_fraction
+from rbd_controller.blocking import (
+    CLEAR,
+    MOVING,
+    STATIC,
+    UNKNOWN,
+    BlockClassifier,
+    is_low,
+    near_fraction,
+    top_beam_from,
+)
 from rbd_controller.detour import DetourPlanner, GridMap, dilate, distance_field
 from rbd_controller.dodge import ApproachDetector, dodge_target
 from rbd_controller.escape import BACK, FRONT, LEFT, RIGHT, ZoneReading, clear_by_margin, plan_escape
@@ -45,6 +54,66 @@ def test_unmoved_box_becomes_static_after_static_after_with_noise():
     for i in range(15, 22):
         c.update(0.1 * i, box_face(0.5, -0.2, 0.2, noise=0.03, rng=rng))
     assert c.classify() == STATIC and "unmoved" in c.reason
+
+
+#: rbd_lidar's OS1-32 beam table: altitudes from 20.55 deg up to 21.48 deg down.
+BEAMS = np.linspace(20.5477, -21.4764, 32)
+SENSOR_HEIGHT = 0.35  # the simulated OS1 above the floor [m]
+
+
+def seen(distance, height, width=0.4, floor=0.10):
+    """Points (x y z, LiDAR frame) of an upright face at distance whose top is height above the floor."""
+    out = []
+    for beam in np.radians(BEAMS):
+        z = distance * math.tan(beam)
+        if floor - SENSOR_HEIGHT <= z <= height - SENSOR_HEIGHT:
+            out += [(distance, y, z) for y in np.linspace(-width / 2, width / 2, 9)]
+    return np.array(out).reshape(-1, 3)
+
+
+@pytest.mark.parametrize("distance", [0.45, 0.6, 0.8, 1.0, 1.3])
+def test_a_bag_is_low_and_a_person_child_or_table_never_is(distance):
+    top = top_beam_from(BEAMS.tolist())
+    assert top == pytest.approx(math.radians(20.5477))
+    assert is_low(seen(distance, 0.40), top)  # the 0.4 m box: its top seen, the beams above pass over
+    for height in (1.75, 1.1, 0.75):  # a standing person, a child, a table's leg
+        assert not is_low(seen(distance, height, width=0.2), top), height
+    # Nothing seen, no beam table or a non-finite point: no low rule.
+    assert not is_low(np.zeros((0, 3)), top)
+    assert not is_low(seen(distance, 0.40), None) and top_beam_from([]) is None and top_beam_from("x") is None
+    bad = seen(distance, 0.40)
+    bad[0, 2] = float("nan")
+    assert not is_low(bad, top)
+
+
+def test_a_low_obstacle_is_static_after_low_after_a_tall_one_after_static_after_and_motion_wins():
+    rng = np.random.default_rng(2)
+    low, tall = BlockClassifier(static_after=5.0, low_after=1.5), BlockClassifier(static_after=5.0, low_after=1.5)
+    for i in range(14):
+        pts = box_face(0.5, -0.2, 0.2, noise=0.03, rng=rng)
+        low.update(0.1 * i, pts, True)
+        tall.update(0.1 * i, pts, False)
+        assert low.classify() == UNKNOWN and tall.classify() == UNKNOWN, i
+    for i in range(14, 17):
+        pts = box_face(0.5, -0.2, 0.2, noise=0.03, rng=rng)
+        low.update(0.1 * i, pts, True)
+        tall.update(0.1 * i, pts, False)
+    assert low.classify() == STATIC and low.low_match and "low obstacle" in low.reason
+    assert tall.classify() == UNKNOWN and not tall.low_match
+    # One scan in the window that was not low (a leg stepped in): no low verdict.
+    mixed = BlockClassifier(static_after=5.0, low_after=1.5)
+    for i in range(20):
+        mixed.update(0.1 * i, box_face(0.5, -0.2, 0.2), i != 12)
+    assert mixed.classify() == UNKNOWN
+    # A low thing that moves (a dog) is moving at once and never static.
+    dog = BlockClassifier(static_after=5.0, low_after=1.5)
+    results = set()
+    for i in range(30):
+        dog.update(0.1 * i, person(0.6, -0.6 + 0.05 * i, r=0.15), True)
+        results.add(dog.classify())
+    assert MOVING in results and STATIC not in results
+    with pytest.raises(ValueError):
+        BlockClassifier(low_after=-1.0)
 
 
 def test_walking_person_is_moving_and_never_static():
@@ -332,6 +401,30 @@ def test_escape_distance_is_limited_by_the_arena_and_the_room_behind():
     fenced = Arena.rectangle(-0.3, -2, 2, 2)
     esc, _ = plan_escape(reading((300, 0, 0, 0), (0.30, INF, INF, INF)), ZONE, (0.0, 0.0, 0.0), arena=fenced)
     assert esc.distance == pytest.approx(0.2, abs=0.021)
+
+
+def test_escape_backs_off_as_far_as_the_turn_room_asks_where_there_is_room():
+    # Issue 27: beside the box the detour began with a turn on the spot at 7 deg/s (the 0.15 m margin
+    # left the box inside a faster turn's swept circle); the escape now aims for the turn's room.
+    room = (0.30, 0.55, 0.28, 0.55)
+    r = reading((300, 0, 0, 0), (0.80, INF, INF, INF))  # the box's face 0.80 m ahead: clear by 0.10 m only
+    esc, why = plan_escape(r, ZONE, (0.0, 0.0, 0.0), margin=0.15, room=room)
+    assert esc is not None and esc.side == BACK, why
+    assert esc.distance == pytest.approx(0.70 + 0.30 + 0.05 - 0.80)
+    plain, _ = plan_escape(r, ZONE, (0.0, 0.0, 0.0), margin=0.15)
+    assert plain.distance == pytest.approx(0.70 + 0.15 + 0.05 - 0.80) and plain.distance < esc.distance
+    # Never beyond the free space behind (kept clear by the margin), max_distance or the arena.
+    esc, _ = plan_escape(reading((300, 0, 0, 0), (0.80, INF, 0.85, INF)), ZONE, (0.0, 0.0, 0.0), margin=0.15,
+                         room=room)
+    assert esc.distance == pytest.approx(0.85 - 0.55 - 0.15)
+    esc, _ = plan_escape(reading((300, 0, 0, 0), (0.30, INF, INF, INF)), ZONE, (0.0, 0.0, 0.0), margin=0.15,
+                         max_distance=0.6, room=room)
+    assert esc.distance == pytest.approx(0.6)
+    # A room below the margin changes nothing; an already clear zone is not escaped from.
+    esc, _ = plan_escape(r, ZONE, (0.0, 0.0, 0.0), margin=0.15, room=(0.0, 0.0, 0.0, 0.0))
+    assert esc.distance == pytest.approx(plain.distance)
+    esc, why = plan_escape(reading(dist=(0.90, INF, INF, INF)), ZONE, (0.0, 0.0, 0.0), margin=0.15, room=room)
+    assert esc is None and "already clear" in why
 
 
 def test_clear_by_margin():

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from rbd_controller.cspace import CSpace
+from rbd_controller.cspace import CSpace, obstacle_grid
 from rbd_controller.lattice import LatticePlanner
 
 ZONE = (0.70, 0.35, 0.55, 0.35)
@@ -27,7 +27,7 @@ def test_the_convolved_configuration_space_is_the_stamped_one():
                             rng.uniform([2.6, -2.0], [3.0, -1.6], size=(20, 2))])
     planner = LatticePlanner(ZONE)
     window = planner._window((-1.0, 0.0, 0.0), (1.0, 0.0, 0.0))
-    space = CSpace(window, planner._obstacles(window, None, walls), planner.zone_for(0.3), planner.bin,
+    space = CSpace(window, obstacle_grid(window, planner.resolution, None, walls), planner.zone_for(0.3), planner.bin,
                    planner.headings, None, planner.resolution)
     for k in range(0, planner.headings, 7):
         got = space._dilated(k)

@@ -251,3 +251,66 @@ def test_progress_passes_turns_on_the_spot_once_faced_so_a_slow_turn_does_not_ho
     assert speed_ahead(plan, i) == 0.3
     # A robot that walked on without standing exactly at the turns is past them too.
     assert progress_index(plan, (-0.25, 0.12, math.radians(150)), 0) == 4
+
+
+def planned_time(planner, start, plan):
+    """The plan's time as the search counts it (walks at their speed, turns on the spot at their turn rate) [s]."""
+    total = 0.0
+    for a, b, v in zip([tuple(start)] + list(plan.poses), plan.poses, plan.speeds):
+        dist = math.hypot(b[0] - a[0], b[1] - a[1])
+        total += dist / v if dist >= 1e-9 else abs(wrap_angle(b[2] - a[2])) / planner.turn_rate(v)
+    return total
+
+
+def slow_spot_turns(start, plan, below=0.15):
+    """Positions of the plan's turns on the spot planned slower than below [m/s]."""
+    path = [tuple(start)] + list(plan.poses)
+    return [b[:2] for a, b, v in zip(path, path[1:], plan.speeds)
+            if math.hypot(b[0] - a[0], b[1] - a[1]) < 1e-9 and v < below - 1e-9]
+
+
+def test_turn_room_keeps_a_full_rate_turn_free_and_less_does_not():
+    origin = (-0.08, 0.0)
+    planner = LatticePlanner(ZONE, origin=origin)
+    room = planner.turn_room()
+    turn = [(0.0, 0.0, 0.0), (0.0, 0.0, 2.0), (0.0, 0.0, 4.0), (0.0, 0.0, 6.2)]  # a whole turn on the spot
+    zone = planner.turn_zone_for(planner.speed)
+    for side, (ux, uy) in enumerate(((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))):
+        # rbd_lidar measures along the side from the zone's origin
+        at = ZONE[side] + room[side]
+        point = np.array([[origin[0] + ux * at, origin[1] + uy * at]])
+        closer = np.array([[origin[0] + ux * (at - 0.05), origin[1] + uy * (at - 0.05)]])
+        assert swept_hits(turn, zone, point) == 0, side
+        assert swept_hits(turn, zone, closer) > 0, side
+    # The escape's 0.15 m margin ahead leaves the box inside a full-rate turn's circle.
+    assert room[0] > 0.15 + 0.05
+
+
+def test_the_sim_strolls_box_detour_has_no_slow_turn_on_the_spot_beside_the_box():
+    # Issue 27: the first shot found was taken; from beside the box it turned on the spot at 0.06 m/s
+    # (7 deg/s) where arcs walked at full speed were quicker. A slower shot is now only a candidate.
+    pts = box(-0.06, -0.01, 0.2, step=0.01)
+    # (improve_seconds: the answer must not depend on the machine's load; the node's is 1 s of wall clock)
+    planner = LatticePlanner(ZONE, origin=(-0.08, 0.0), headings=32, improve_seconds=60.0)
+    start = (0.96, 0.0, -3.13)  # where the escape with the 0.15 m margin left it
+    plan = planner.plan(start, (-1.0, -0.03, -3.13), points=pts, any_heading=True, budget=30.0)
+    assert plan.ok, plan
+    assert_sound(plan, start, pts, origin=(-0.08, 0.0))
+    # Turns slower than full rate only where it stands after the escape (nothing else is free there).
+    assert all(math.hypot(p[0] - start[0], p[1] - start[1]) < 1e-6
+               for p in slow_spot_turns(start, plan, below=0.3)), (plan.poses, plan.speeds)
+    # The way back from the far pose (arrived facing -120 deg): was a turn at 0.06 m/s beside the box.
+    far = (-1.0, -0.03, math.radians(-120.0))
+    back = planner.plan(far, (1.0, 0.0, 0.0), points=pts, any_heading=True, budget=30.0)
+    assert back.ok, back
+    assert_sound(back, far, pts, origin=(-0.08, 0.0))
+    assert all(math.hypot(p[0] - far[0], p[1] - far[1]) < 1e-6
+               for p in slow_spot_turns(far, back, below=0.3)), (back.poses, back.speeds)
+    # With the escape's turn room the detour starts at full rate: no slow turn at all, and quicker.
+    room = planner.turn_room()
+    roomy = (0.14 + ZONE[0] + room[0] + 0.05 - 0.08, 0.0, -3.13)
+    quick = planner.plan(roomy, (-1.0, -0.03, -3.13), points=pts, any_heading=True, budget=30.0)
+    assert quick.ok, quick
+    assert_sound(quick, roomy, pts, origin=(-0.08, 0.0))
+    assert slow_spot_turns(roomy, quick) == [], (quick.poses, quick.speeds)
+    assert planned_time(planner, roomy, quick) < planned_time(planner, start, plan)

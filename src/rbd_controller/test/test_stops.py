@@ -30,10 +30,10 @@ def blocked(ctl, t=0.0):
     assert ctl.state == State.BLOCKED
 
 
-def feed(ctl, t, points):
+def feed(ctl, t, points, low=False):
     ctl.perception.on_pose(t, 0.0, 0.0, 0.0)
     ctl.perception.on_zone(t, ZoneReading([10, 0, 0, 0], [0.4, 9.0, 9.0, 9.0]))
-    ctl.perception.on_blocking_points(t, points)
+    ctl.perception.on_blocking_points(t, points, low)
 
 
 def test_unknown_operator_policy_is_refused():
@@ -70,6 +70,32 @@ def test_blocked_waits_blocked_timeout_unless_it_is_the_known_obstacle():
             feed(ctl, 0.1 * i, box)
         ctl.stops.tick(State.BLOCKED, 0.7, ctl.fsm.epoch)
         assert ctl.state == expect, known
+
+
+def test_a_low_obstacle_is_static_after_low_static_after_and_escaped_from_without_blocked_timeout():
+    # Issue 27: a bag's 5 s classification plus nothing to wait for; a tall blocker keeps both waits.
+    box = [(0.5, y / 50.0) for y in range(-10, 11)]
+    for low in (False, True):
+        ctl = make(low_static_after=1.5)
+        ctl.set_emergency(False)
+        ctl.fsm.fire(Event.GESTURE)
+        ctl.fsm.fire(Event.PATH_READY)
+        ctl.ctx.now = 0.0
+        ctl.set_collision(True)
+        states = []
+        for i in range(25):  # 2.4 s of the same points
+            t = 0.1 * i
+            ctl.ctx.now = t
+            feed(ctl, t, box, low)
+            ctl.stops.tick(ctl.state, t, ctl.fsm.epoch)
+            states.append((round(t, 1), ctl.state))
+        if low:
+            assert all(st == State.COLLISION_DETECTED for t, st in states if t < 1.45), states
+            assert ctl.state == State.ESCAPING, states
+            blocked_at = min(t for t, st in states if st != State.COLLISION_DETECTED)
+            assert blocked_at <= 1.7, states
+        else:
+            assert all(st == State.COLLISION_DETECTED for _, st in states), states
 
 
 def test_blocked_with_a_moving_blocker_goes_back_to_waiting_for_it():

@@ -161,3 +161,26 @@ def test_path_of_one_turn_and_a_path_already_done():
     assert abs(log.poses[-1][3] - 1.5) <= 0.03 and max(math.hypot(p[1], p[2]) for p in log.poses) < 0.03
     follower = PathFollower([(0.0, 0.0, 0.0)], 0.3, GAINS, FollowerParams())
     assert follower.command((0.0, 0.0, 0.0)) == (0.0, 0.0, 0.0) and follower.done
+
+
+def test_a_turn_in_heading_bins_is_turned_through_without_slowing_at_each_bin():
+    # Issue 27: the detour planner turns on the spot in 11.25 deg bins; the follower settled on each bin
+    # (its yaw rate falling towards 0 every 11 deg), so a 45 deg turn took twice its time or more.
+    bins = [(0.0, 0.0, math.radians(11.25 * i)) for i in range(1, 5)]
+    binned = run_path(bins, 0.3, PARAMS)
+    whole = run_path([bins[-1]], 0.3, PARAMS)
+    assert abs(wrap_angle(binned.poses[-1][3] - math.radians(45.0))) <= 0.03
+    assert binned.done <= whole.done + 0.1, (binned.done, whole.done)
+    # One acceleration, one deceleration: the yaw rate never rises again at a bin.
+    rates = [abs(c[3]) for c in binned.cmds]
+    peak = rates.index(max(rates))
+    assert all(b <= a + 1e-9 for a, b in zip(rates[peak:], rates[peak + 1:]))
+    assert max(math.hypot(p[1], p[2]) for p in binned.poses) < 0.03
+
+
+def test_a_turn_in_bins_goes_the_planned_way_round_past_half_a_turn():
+    # 8 bins of -30 deg: 240 deg clockwise, the way the planner checked, not the 120 deg the other way.
+    bins = [(0.0, 0.0, wrap_angle(math.radians(-30.0 * i))) for i in range(1, 9)]
+    log = run_path(bins, 0.3, PARAMS)
+    turned = sum(wrap_angle(b[3] - a[3]) for a, b in zip(log.poses, log.poses[1:]))
+    assert turned == pytest.approx(math.radians(-240.0), abs=0.05), math.degrees(turned)

@@ -152,7 +152,8 @@ class Avoidance(Behaviour):
                 return
             arena = p.ensure_arena(ctx.home or (pose[0], pose[1]))
             # Like the position controller's guard: one critical point closes a side.
-            esc, why = plan_escape(reading, a.zone, pose, 1, a.escape_margin, a.escape_max, arena=arena)
+            esc, why = plan_escape(reading, a.zone, pose, 1, a.escape_margin, a.escape_max, arena=arena,
+                                   room=self.lattice.turn_room())  # room for the detour's first turn at full rate
             if esc is None:
                 self._attempts += 1
                 self._retry_at = now + 1.0

@@ -18,10 +18,21 @@ the normal classification, so a moving person is still waited for at once.
 A person who stands still for ``static_after`` counts as static: the avoidance
 then steps away from them and walks around, never towards (the position controller's zone
 guard), and a person who starts to move again is classified moving at the next scan.
+
+A *low* blocker (a bag, a box: :func:`is_low`) is static once unmoved for ``low_after`` (1.5 s)
+instead of ``static_after``. Why that is sound: ``static_after`` is the time a visitor who stopped
+in front of the robot gets to walk on, and what stands in front of the robot is low only when the
+LiDAR sees its top with free beams above it: every point lies below ``LOW_HEIGHT`` above the sensor
+(about 0.5 m above the floor on the A1) and at least ``LOW_MARGIN`` below the highest beam at the
+point's range. A standing or sitting person, a child, a table's leg reach the highest beam at any
+range in the zone (the OS1's top beam, 20.5 deg up, climbs 0.37 m per metre), so their points fail
+the second test; only something whose top is seen, lower than that, passes. Motion still means
+MOVING at once (a crawling child, a dog), and a person lying still is walked around at the zone's
+distance, as any static blocker.
 """
 
 import math
-from typing import Callable, Optional, Sequence, Tuple
+from typing import Any, Callable, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -37,6 +48,38 @@ MOVING = "moving"
 KNOWN_FRACTION = 0.9
 #: Coordinates beyond this are no measurement (they would overflow the cell hashing) [m].
 MAX_COORD = 1e6
+#: A low blocker's points all lie at most this high above the LiDAR [m] ...
+LOW_HEIGHT = 0.15
+#: ... and at least this far below the highest beam at their range [m] (beam spacing, body pitch).
+LOW_MARGIN = 0.10
+
+
+def top_beam_from(angles: Any) -> Optional[float]:
+    """The highest beam [rad] of rbd_lidar's ``beam_altitude_angles`` [deg]; None when there are none (no low rule)."""
+    try:
+        values = [float(a) for a in angles]
+    except (TypeError, ValueError):
+        return None
+    values = [a for a in values if math.isfinite(a) and -90.0 < a < 90.0]
+    return math.radians(max(values)) if values else None
+
+
+def is_low(points: np.ndarray, top_beam: Optional[float], low_height: float = LOW_HEIGHT,
+           margin: float = LOW_MARGIN) -> bool:
+    """True when blocking points (N x 3, x y z in the LiDAR's frame) are a low obstacle whose top the LiDAR sees.
+
+    Every point lies at most ``low_height`` above the sensor and ``margin`` below the highest beam
+    (``top_beam`` [rad] up) at its horizontal range: the beams above it pass over. False for no
+    points, non-finite values or an unknown top beam (None).
+    """
+    if top_beam is None or not math.isfinite(top_beam):
+        return False
+    pts = np.asarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] < 3 or not len(pts) or not np.all(np.isfinite(pts[:, :3])):
+        return False
+    rng = np.hypot(pts[:, 0], pts[:, 1])
+    z = pts[:, 2]
+    return bool(np.all((z <= low_height) & (z <= rng * math.tan(top_beam) - margin)))
 
 
 def near_fraction(points: np.ndarray, reference: np.ndarray, radius: float) -> float:
@@ -75,6 +118,8 @@ class BlockClassifier:
             at static_after).
         horizon: scans older than this are forgotten [s].
         max_gap: scans without blocking points for longer than this end the observation [s].
+        low_after: seconds a low blocker (every scan of them low, see :func:`is_low`) must stay put
+            to count as static (capped at static_after; 0: no such rule).
 
     Raises:
         ValueError: non-positive static_after, match_radius or horizon.
@@ -90,6 +135,7 @@ class BlockClassifier:
         map_confirm: float = 0.5,
         horizon: float = 10.0,
         max_gap: float = 1.5,
+        low_after: float = 0.0,
     ) -> None:
         for name, v in (("static_after", static_after), ("match_radius", match_radius), ("horizon", horizon),
                         ("map_confirm", map_confirm)):
@@ -103,17 +149,23 @@ class BlockClassifier:
         self.map_confirm = min(float(map_confirm), self.static_after)
         self.horizon = max(float(horizon), self.static_after + 1.0)
         self.max_gap = float(max_gap)
+        if not math.isfinite(low_after) or low_after < 0.0:
+            raise ValueError("low_after must be a finite number >= 0, got %r" % (low_after,))
+        self.low_after = min(float(low_after), self.static_after)
         self.scans = []  # type: List[Tuple[float, np.ndarray]]
+        self.lows = []  # type: List[bool]  # per scan: its points were a low obstacle
         self.reason = ""
         self.known_match = False  # the last STATIC came from the known obstacle
+        self.low_match = False  # the last STATIC came from the low-obstacle rule
 
     def reset(self) -> None:
         """Forget the history (the robot moved, or a new stop began)."""
         self.scans = []
+        self.lows = []
         self.reason = ""
 
-    def update(self, t: float, points: Sequence[Point]) -> None:
-        """Add one scan's blocking points (map frame) received at time t [s]."""
+    def update(self, t: float, points: Sequence[Point], low: bool = False) -> None:
+        """Add one scan's blocking points (map frame) received at time t [s]; low: they are a low obstacle."""
         arr = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         arr = arr[np.all(np.isfinite(arr) & (np.abs(arr) < MAX_COORD), axis=1)]  # NaN/inf/absurd: no point
         if len(arr):  # thin to one point per 5 cm cell: thousands of critical points become tens
@@ -121,8 +173,10 @@ class BlockClassifier:
         if self.scans and t < self.scans[-1][0]:
             self.reset()  # clock jumped back
         self.scans.append((float(t), arr))
+        self.lows.append(bool(low) and len(arr) > 0)
         while self.scans and self.scans[0][0] < t - self.horizon:
             self.scans.pop(0)
+            self.lows.pop(0)
 
     def latest(self) -> np.ndarray:
         """The last scan's points (N x 2), empty before the first."""
@@ -153,6 +207,11 @@ class BlockClassifier:
                 return None
         return min(fractions)
 
+    def _all_low(self, since: float) -> bool:
+        """Every scan with points since the time was a low obstacle (and there were at least 3)."""
+        flags = [low for (t, pts), low in zip(self.scans, self.lows) if t >= since and len(pts)]
+        return len(flags) >= 3 and all(flags)
+
     def classify(self, occupied: Optional[Callable[[float, float], bool]] = None,
                  known: Optional[np.ndarray] = None) -> str:
         """CLEAR, UNKNOWN, STATIC or MOVING for the history so far; ``reason`` says why.
@@ -163,6 +222,7 @@ class BlockClassifier:
                 ``known_match`` tells whether a STATIC came from them.
         """
         self.known_match = False
+        self.low_match = False
         if not self.scans or len(self.scans[-1][1]) == 0:
             self.reason = "no blocking points"
             return CLEAR
@@ -212,6 +272,10 @@ class BlockClassifier:
                 return STATIC
         if unmoved >= self.static_after:
             self.reason = "blocking points unmoved for %.1f s" % unmoved
+            return STATIC
+        if 0.0 < self.low_after <= unmoved and self._all_low(t_last - self.low_after):
+            self.low_match = True
+            self.reason = "a low obstacle (its top seen below the beams above it), unmoved for %.1f s" % unmoved
             return STATIC
         self.reason = "observed for %.1f s of %.1f s" % (unmoved, self.static_after)
         return UNKNOWN

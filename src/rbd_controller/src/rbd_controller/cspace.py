@@ -14,7 +14,7 @@ import numpy as np
 from scipy.signal import fftconvolve
 
 from rbd_controller.arena import Arena
-from rbd_controller.detour import dilate
+from rbd_controller.detour import GridMap, dilate
 from rbd_controller.footprint import sample_path
 from rbd_geometry.rotation import wrap_angle
 
@@ -239,3 +239,53 @@ class CSpace:
 
         return heur
 
+
+def obstacle_grid(window: Window, resolution: float, grid: Optional[GridMap], pts: np.ndarray) -> np.ndarray:
+    """The window's cells (H x W booleans) holding an occupied map cell (any overlap) or an obstacle point."""
+    x0, y0, w, h = window
+    res = resolution
+    obstacles = np.zeros((h, w), dtype=bool)
+    if grid is not None and grid.occupied.ndim == 2 and grid.occupied.size:
+        xs, ys = x0 + (np.arange(w) + 0.5) * res, y0 + (np.arange(h) + 0.5) * res
+        gc = np.floor((xs - grid.origin[0]) / grid.resolution).astype(np.int64)
+        gr = np.floor((ys - grid.origin[1]) / grid.resolution).astype(np.int64)
+        gh, gw = grid.occupied.shape
+        vc, vr = (gc >= 0) & (gc < gw), (gr >= 0) & (gr < gh)
+        obstacles[np.ix_(vr, vc)] |= grid.occupied[np.ix_(gr[vr], gc[vc])]
+        # A map cell larger than ours: mark every one of our cells it overlaps (its corners too).
+        if grid.resolution > res:
+            r, c = np.nonzero(grid.occupied)
+            for fx in (0.0, 1.0):
+                for fy in (0.0, 1.0):
+                    cx = np.floor((grid.origin[0] + (c + fx) * grid.resolution - x0) / res - 1e-9 * fx)
+                    cy = np.floor((grid.origin[1] + (r + fy) * grid.resolution - y0) / res - 1e-9 * fy)
+                    ok = (cx >= 0) & (cx < w) & (cy >= 0) & (cy < h)
+                    obstacles[cy[ok].astype(np.int64), cx[ok].astype(np.int64)] = True
+    if len(pts):
+        c = np.floor((pts[:, 0] - x0) / res).astype(np.int64)
+        r = np.floor((pts[:, 1] - y0) / res).astype(np.int64)
+        ok = (c >= 0) & (c < w) & (r >= 0) & (r < h)
+        obstacles[r[ok], c[ok]] = True
+    return obstacles
+
+def exact_points(window: Window, resolution: float, grid: Optional[GridMap], pts: np.ndarray) -> np.ndarray:
+    """The obstacles as points: the scan points, and each occupied map cell's centre and corners.
+
+    Only those in the window, rounded to 5 mm and deduplicated (a scan holds thousands of points
+    on the walls around; the exact check's cost grows with them).
+    """
+    x0, y0, w, h = window
+    pts = pts.reshape(-1, 2)
+    inside = (pts[:, 0] >= x0) & (pts[:, 0] <= x0 + w * resolution) & (pts[:, 1] >= y0) & (
+        pts[:, 1] <= y0 + h * resolution)
+    out = [np.unique(np.round(pts[inside] / 0.005), axis=0) * 0.005]
+    if grid is not None and grid.occupied.ndim == 2 and grid.occupied.size:
+        x0, y0, w, h = window
+        r, c = np.nonzero(grid.occupied)
+        gx, gy = grid.origin[0] + c * grid.resolution, grid.origin[1] + r * grid.resolution
+        near = (gx > x0 - 1.0) & (gx < x0 + w * resolution + 1.0) & (gy > y0 - 1.0) & (
+            gy < y0 + h * resolution + 1.0)
+        gx, gy = gx[near], gy[near]
+        for fx, fy in ((0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.5, 0.5)):
+            out.append(np.stack([gx + fx * grid.resolution, gy + fy * grid.resolution], axis=1))
+    return np.concatenate(out).reshape(-1, 2)

@@ -98,6 +98,7 @@ def plan_escape(
     side_step: float = 0.3,
     arena: Optional[Arena] = None,
     arena_margin: float = 0.1,
+    room: Optional[Sequence[float]] = None,
 ) -> Tuple[Optional[Escape], str]:
     """Choose the escape motion for a blocked zone.
 
@@ -111,6 +112,11 @@ def plan_escape(
         side_step: distance of a sideways step when backing off is not possible [m].
         arena: the escape target must stay inside (None: no limit).
         arena_margin: distance kept from the arena's edge [m].
+        room: per side, the clearance beyond the zone a step straight away from that side aims for when
+            it is more than margin (None: margin) [m]: room for the detour's first turn on the spot at
+            full rate (:meth:`rbd_controller.lattice.LatticePlanner.turn_room`). Still at most
+            max_distance, the free space on the side moved towards and the arena; the escape ends, as
+            before, once every side is clear by margin.
 
     Returns:
         (Escape, "") or (None, reason) when the zone is unusable, already clear or every
@@ -128,7 +134,8 @@ def plan_escape(
     step_length = min(max_distance, side_step)  # no escape is longer than max_distance
     for s in blocking:
         away = OPPOSITE[s]
-        need = zone[s] + margin + OVERSHOOT - reading.min_distance[s]
+        want = margin if room is None or not math.isfinite(room[s]) else max(margin, room[s])
+        need = zone[s] + want + OVERSHOOT - reading.min_distance[s]
         candidates.append(((away,), TOWARDS[away], min(max_distance, max(MIN_STEP, need)),
                            "away from the %s" % SIDE_NAMES[s]))
     for s in blocking:

@@ -9,7 +9,9 @@ their cost is time at the planned speed and turn rate. Every motion is checked a
 (samples every ``resolution``) against a configuration-space map per heading bin: the obstacle
 cells dilated by the rectangle rotated over the whole bin, so any heading inside a bin is covered.
 A straight shot (turn on the spot towards the goal, walk, turn to the goal's heading) is tried
-from the expanded poses and ends the search when its sweep is free.
+from the expanded poses; one free at the fastest speed ends the search, a slower one (its turn on the
+spot beside the obstacle only free at a slow turn rate) is a candidate with its time: the search goes
+on (at most ``IMPROVE_SECONDS``) while a quicker path can exist and answers with the quickest found.
 
 Each motion is timed at the fastest speed (of ``speed`` x 0.5^n, then ``min_speed``) whose grown
 zone stays free along it; the search itself runs in the slowest speed's space. Near obstacles the
@@ -27,14 +29,20 @@ from typing import Any, Callable, List, Optional, Sequence, Tuple
 import numpy as np
 
 from rbd_controller.arena import Arena
-from rbd_controller.cspace import CSpace, Window
+from rbd_controller.cspace import EXACT_MARGIN, CSpace, Window, exact_points, obstacle_grid
 from rbd_controller.detour import MAX_DETOUR_SPAN, GridMap, finite_points
 from rbd_controller.footprint import ZoneGrowth, motion_zone
 from rbd_controller.lattice_plan import LatticePlan, Pose, path_length
+from rbd_controller.primitives import Primitive, primitives
 from rbd_geometry.rotation import wrap_angle
 
 #: Walking on a path, the follower's yaw rate may exceed speed x curvature by this share of its limit.
 STEER_ALLOWANCE = 0.25
+#: A turn on the spot costs this much more per heading bin than its time (the follower settles on each) [s].
+SPOT_TURN_PENALTY = 0.3
+#: Once a straight shot slower than the fastest speed is found, the search goes on this long for a quicker
+#: path, then answers with the quickest found [s] (wall clock; the robot stands while it plans).
+IMPROVE_SECONDS = 1.0
 
 
 class LatticePlanner:
@@ -58,6 +66,7 @@ class LatticePlanner:
             wall clock: the planner runs in a worker thread beside the node's, CPU time would count both).
         origin: (x, y) of the point the zone is measured from in the robot's frame [m] (rbd_lidar's
             ~zone_frame: collision_zone, 0.08 m behind base_link on the A1); the poses are base_link's.
+        improve_seconds: after a straight shot slower than full speed, search this much longer for a quicker path [s].
 
     Raises:
         ValueError: a value out of range.
@@ -67,7 +76,8 @@ class LatticePlanner:
                  speed: float = 0.3, max_vx: float = 0.3, max_wz: float = math.radians(36.0), margin: float = 0.0,
                  min_speed: float = 0.06, resolution: float = 0.04, headings: int = 48, step: float = 0.2,
                  window_margin: float = 2.0, max_expansions: int = 6000,
-                 origin: Sequence[float] = (0.0, 0.0), max_seconds: float = 5.0) -> None:
+                 origin: Sequence[float] = (0.0, 0.0), max_seconds: float = 5.0,
+                 improve_seconds: float = IMPROVE_SECONDS) -> None:
         if len(zone) != 4 or not all(math.isfinite(z) and z >= 0 for z in zone):
             raise ValueError("zone needs 4 finite sides >= 0, got %r" % (zone,))
         if not (0 < min_speed <= speed <= max_vx and 0 < max_wz and 0 <= margin and 0 < resolution <= 0.2
@@ -79,6 +89,7 @@ class LatticePlanner:
         self.speed = float(speed)
         self.max_vx = float(max_vx)
         self.max_seconds = float(max_seconds)
+        self.improve_seconds = float(improve_seconds)
         self._any_heading = False
         self._deadline = math.inf
         self.origin = (float(origin[0]), float(origin[1]))
@@ -111,6 +122,20 @@ class LatticePlanner:
     def turn_zone_for(self, speed: float, age: float = 0.0) -> Tuple[float, float, float, float]:
         """The rectangle kept free while turning on the spot at the follower's turn rate for speed."""
         return self._shift(motion_zone(self.zone, 0.0, self.turn_rate(speed), self.growth, self.margin, age))
+
+    def turn_room(self, speed: Optional[float] = None) -> Tuple[float, float, float, float]:
+        """Per side (FRONT, LEFT, BACK, RIGHT), how far beyond rbd_lidar's rest zone an obstacle must lie for a turn.
+
+        A turn on the spot at the follower's turn rate for speed (None: the fastest) sweeps the turning zone's
+        corners round a circle about base_link; an obstacle on a side (measured along that side from the zone's
+        origin, as rbd_lidar's min_distance) at least rest zone + this keeps that circle free [m]. The escape
+        backs off this far where it can (:func:`rbd_controller.escape.plan_escape`): beside the box the detour
+        then starts with a quick turn instead of one at the slowest speed's turn rate.
+        """
+        f, left, b, right = self.turn_zone_for(self.speed if speed is None else speed)
+        reach = math.hypot(max(f, b), max(left, right)) + EXACT_MARGIN
+        rest = self._shift(self.zone)
+        return tuple(max(0.0, reach - z) for z in rest)  # type: ignore[return-value]
 
     def _shift(self, zone: Sequence[float]) -> Tuple[float, float, float, float]:
         """A zone measured from origin as limits around the robot's own frame."""
@@ -189,8 +214,8 @@ class LatticePlanner:
             age = 0.0
         pts = finite_points(points)
         window = self._window(start, goal)
-        obstacles = self._obstacles(window, grid, pts)
-        exact = self._exact_points(window, grid, pts)
+        obstacles = obstacle_grid(window, self.resolution, grid, pts)
+        exact = exact_points(window, self.resolution, grid, pts)
         speeds = self.speeds()
         spaces = [CSpace(window, obstacles, self.zone_for(v, age), self.bin, self.headings, arena, self.resolution,
                          self._kernels, exact, self.turn_zone_for(v, age), self._walk_zones(v, age)) for v in speeds]
@@ -226,93 +251,15 @@ class LatticePlanner:
         x1, y1 = max(start[0], goal[0]) + m, max(start[1], goal[1]) + m
         return x0, y0, int(math.ceil((x1 - x0) / res)), int(math.ceil((y1 - y0) / res))
 
-    def _obstacles(self, window: Window, grid: Optional[GridMap], pts: np.ndarray) -> np.ndarray:
-        x0, y0, w, h = window
-        res = self.resolution
-        obstacles = np.zeros((h, w), dtype=bool)
-        if grid is not None and grid.occupied.ndim == 2 and grid.occupied.size:
-            xs, ys = x0 + (np.arange(w) + 0.5) * res, y0 + (np.arange(h) + 0.5) * res
-            gc = np.floor((xs - grid.origin[0]) / grid.resolution).astype(np.int64)
-            gr = np.floor((ys - grid.origin[1]) / grid.resolution).astype(np.int64)
-            gh, gw = grid.occupied.shape
-            vc, vr = (gc >= 0) & (gc < gw), (gr >= 0) & (gr < gh)
-            obstacles[np.ix_(vr, vc)] |= grid.occupied[np.ix_(gr[vr], gc[vc])]
-            # A map cell larger than ours: mark every one of our cells it overlaps (its corners too).
-            if grid.resolution > res:
-                r, c = np.nonzero(grid.occupied)
-                for fx in (0.0, 1.0):
-                    for fy in (0.0, 1.0):
-                        cx = np.floor((grid.origin[0] + (c + fx) * grid.resolution - x0) / res - 1e-9 * fx)
-                        cy = np.floor((grid.origin[1] + (r + fy) * grid.resolution - y0) / res - 1e-9 * fy)
-                        ok = (cx >= 0) & (cx < w) & (cy >= 0) & (cy < h)
-                        obstacles[cy[ok].astype(np.int64), cx[ok].astype(np.int64)] = True
-        if len(pts):
-            c = np.floor((pts[:, 0] - x0) / res).astype(np.int64)
-            r = np.floor((pts[:, 1] - y0) / res).astype(np.int64)
-            ok = (c >= 0) & (c < w) & (r >= 0) & (r < h)
-            obstacles[r[ok], c[ok]] = True
-        return obstacles
-
-    def _exact_points(self, window: Window, grid: Optional[GridMap], pts: np.ndarray) -> np.ndarray:
-        """The obstacles as points: the scan points, and each occupied map cell's centre and corners.
-
-        Only those in the window, rounded to 5 mm and deduplicated (a scan holds thousands of points
-        on the walls around; the exact check's cost grows with them).
-        """
-        x0, y0, w, h = window
-        pts = pts.reshape(-1, 2)
-        inside = (pts[:, 0] >= x0) & (pts[:, 0] <= x0 + w * self.resolution) & (pts[:, 1] >= y0) & (
-            pts[:, 1] <= y0 + h * self.resolution)
-        out = [np.unique(np.round(pts[inside] / 0.005), axis=0) * 0.005]
-        if grid is not None and grid.occupied.ndim == 2 and grid.occupied.size:
-            x0, y0, w, h = window
-            r, c = np.nonzero(grid.occupied)
-            gx, gy = grid.origin[0] + c * grid.resolution, grid.origin[1] + r * grid.resolution
-            near = (gx > x0 - 1.0) & (gx < x0 + w * self.resolution + 1.0) & (gy > y0 - 1.0) & (
-                gy < y0 + h * self.resolution + 1.0)
-            gx, gy = gx[near], gy[near]
-            for fx, fy in ((0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.5, 0.5)):
-                out.append(np.stack([gx + fx * grid.resolution, gy + fy * grid.resolution], axis=1))
-        return np.concatenate(out).reshape(-1, 2)
-
     # ------------------------------------------------------------------ search
-    def _primitives_cached(self, speed: float) -> List[List[Tuple[float, float, int, float, np.ndarray, float]]]:
+    def _primitives_cached(self, speed: float) -> List[List[Primitive]]:
         key = round(speed, 9)
         if key not in self._prims:
             self._prims[key] = self._primitives(speed)
         return self._prims[key]
 
-    def _primitives(self, speed: float) -> List[List[Tuple[float, float, int, float, np.ndarray]]]:
-        """Per heading bin: (dx, dy, dbin, cost [s], samples M x 3 relative (dx, dy, heading), curvature [1/m]).
-
-        On-the-spot turns have dx = dy = 0 and an infinite curvature.
-        """
-        out = []
-        step, nb = self.step, self.headings
-        for k in range(nb):
-            th = k * self.bin
-            prims = []
-            for dk in (-2, -1, 0, 1, 2):
-                turn = dk * self.bin
-                # Samples <= 0.02 m and <= 0.01 rad apart (EXACT_MARGIN covers what lies between).
-                n = max(2, int(math.ceil(step / 0.02)), int(math.ceil(abs(turn) / 0.01)))
-                s = np.arange(1, n + 1) / n * step
-                if dk == 0:
-                    xs, ys, hs = s * math.cos(th), s * math.sin(th), np.full(n, th)
-                else:
-                    kappa = turn / step
-                    hs = th + kappa * s
-                    xs = (np.sin(hs) - math.sin(th)) / kappa
-                    ys = (math.cos(th) - np.cos(hs)) / kappa
-                cost = max(step / speed, abs(turn) / self.turn_rate(speed)) + 0.05 * abs(dk)
-                prims.append((float(xs[-1]), float(ys[-1]), dk, cost, np.stack([xs, ys, hs], axis=1), turn / step))
-            for dk in (-1, 1):
-                m = max(2, int(math.ceil(self.bin / 0.01)))
-                hs = th + dk * self.bin * np.arange(1, m + 1) / m
-                samples = np.stack([np.zeros(m), np.zeros(m), hs], axis=1)
-                prims.append((0.0, 0.0, dk, self.bin / self.turn_rate(speed) + 0.3, samples, math.inf))
-            out.append(prims)
-        return out
+    def _primitives(self, speed: float) -> List[List[Primitive]]:
+        return primitives(self.step, self.headings, speed, self.turn_rate(speed), SPOT_TURN_PENALTY)
 
     def _level(self, spaces: List[CSpace], check: Callable[[CSpace], bool]) -> int:
         """Index of the fastest space in which check(space) holds; len(spaces) if none.
@@ -332,15 +279,24 @@ class LatticePlanner:
 
     def _search(self, spaces: List[CSpace], speeds: List[float], start: Pose,
                 goal: Pose) -> Tuple[Optional[List[Pose]], List[float], int]:
-        """Hybrid A* in the slowest speed's space; each motion is timed at the fastest speed it is free for."""
+        """Hybrid A* in the slowest speed's space; each motion is timed at the fastest speed it is free for.
+
+        The answer is the quickest path found: a straight shot at full speed at once; else the search goes
+        on past slower shots until no open node can beat the best (f >= its time), IMPROVE_SECONDS after the
+        first one, the budget or max_expansions, whichever comes first.
+        """
         nb = self.headings
         space = spaces[-1]
         heur = space.heuristic(goal, speeds[0])
         if not math.isfinite(heur(start[0], start[1])):
             return None, [], 0
+        # A shot at full speed ends the search; a slower one is a candidate (see the docstring).
+        best = None  # type: Optional[Tuple[float, int, List[Pose], List[float]]]  # (time, node, poses, speeds)
         shot = self._shot(spaces, speeds, start, goal)
         if shot is not None:
-            return shot[0], shot[1], 0
+            if shot[3]:
+                return shot[0], shot[1], 0
+            best = (shot[2], 0, shot[0], shot[1])
         prims = [self._primitives_cached(v) for v in speeds]
         k0 = int(round(start[2] / self.bin)) % nb
         # The start's own heading may lie between bins: turn on the spot to the nearest bin first.
@@ -356,8 +312,11 @@ class LatticePlanner:
         heap = [(heur(first[0], first[1]), 0.0, len(nodes) - 1, first)]
         closed = set()
         expanded = 0
-        while heap and expanded < self.max_expansions and time.monotonic() < self._deadline:
-            _, g, idx, (x, y, k) = heapq.heappop(heap)
+        deadline = self._deadline if best is None else min(self._deadline, time.monotonic() + self.improve_seconds)
+        while heap and expanded < self.max_expansions and time.monotonic() < deadline:
+            f, g, idx, (x, y, k) = heapq.heappop(heap)
+            if best is not None and f >= best[0]:
+                break  # nothing left can be quicker than the best shot (the heuristic never overestimates)
             key = (int(math.floor(x / cres)), int(math.floor(y / cres)), k)
             if key in closed:
                 continue
@@ -366,9 +325,12 @@ class LatticePlanner:
             pose = (x, y, wrap_angle(k * self.bin))
             if expanded % 2 == 1 or math.hypot(goal[0] - x, goal[1] - y) < 1.0:
                 shot = self._shot(spaces, speeds, pose, goal)
-                if shot is not None:
-                    poses, vs = self._unwind(nodes, idx)
-                    return poses + shot[0], vs + shot[1], expanded
+                if shot is not None and (best is None or g + shot[2] < best[0]):
+                    if best is None and not shot[3]:
+                        deadline = min(deadline, time.monotonic() + self.improve_seconds)
+                    best = (g + shot[2], idx, shot[0], shot[1])
+                    if shot[3]:
+                        break
             for j, (dx, dy, dk, _, samples, curv) in enumerate(prims[-1][k]):
                 nk = (k + dk) % nb
                 nx, ny = x + dx, y + dy
@@ -388,7 +350,10 @@ class LatticePlanner:
                 cost = prims[lvl][k][j][3]
                 nodes.append(((nx, ny, wrap_angle(nk * self.bin)), idx, speeds[lvl]))
                 heapq.heappush(heap, (g + cost + h, g + cost, len(nodes) - 1, (nx, ny, nk)))
-        return None, [], expanded
+        if best is None:
+            return None, [], expanded
+        poses, vs = self._unwind(nodes, best[1])
+        return poses + best[2], vs + best[3], expanded
 
     @staticmethod
     def _unwind(nodes: List[Any], idx: int) -> Tuple[List[Pose], List[float]]:
@@ -401,8 +366,13 @@ class LatticePlanner:
         return poses[::-1][1:], vs[::-1][1:]  # without the start
 
     def _shot(self, spaces: List[CSpace], speeds: List[float], pose: Pose,
-              goal: Pose) -> Optional[Tuple[List[Pose], List[float]]]:
-        """Turn on the spot towards the goal, walk straight, turn to the goal's heading: free or None."""
+              goal: Pose) -> Optional[Tuple[List[Pose], List[float], float, bool]]:
+        """Turn on the spot towards the goal, walk straight, turn to the goal's heading.
+
+        Returns:
+            None when its sweep is not free at the slowest speed, else (poses, speed of each motion, its time
+            [s] as the search counts it, True when every motion is free at the fastest speed).
+        """
         dist = math.hypot(goal[0] - pose[0], goal[1] - pose[1])
         if self._any_heading:
             face = math.atan2(goal[1] - pose[1], goal[0] - pose[0]) if dist >= 0.05 else pose[2]
@@ -415,11 +385,19 @@ class LatticePlanner:
         if not spaces[-1].free_path(path):
             return None
         out, vs = [], []
+        cost, fastest = 0.0, True
         for prev, p in zip(path, path[1:]):
-            if abs(p[0] - prev[0]) + abs(p[1] - prev[1]) < 1e-9 and abs(wrap_angle(p[2] - prev[2])) < 1e-3:
+            dist, turn = math.hypot(p[0] - prev[0], p[1] - prev[1]), abs(wrap_angle(p[2] - prev[2]))
+            if dist < 1e-9 and turn < 1e-3:
                 continue  # no turn needed
+            lvl = min(self._level(spaces, lambda sp, seg=(prev, p): sp.free_path(seg)), len(speeds) - 1)
             out.append(p)
-            vs.append(speeds[self._level(spaces, lambda sp, seg=(prev, p): sp.free_path(seg))])
+            vs.append(speeds[lvl])
+            fastest = fastest and lvl == 0
+            # As the primitives count it: walking at the speed, a turn on the spot at its turn rate plus
+            # SPOT_TURN_PENALTY per heading bin.
+            cost += (dist / speeds[lvl] if dist >= 1e-9 else
+                     turn / self.turn_rate(speeds[lvl]) + SPOT_TURN_PENALTY * turn / self.bin)
         if not out:
             out, vs = [goal], [speeds[-1]]
-        return out, vs
+        return out, vs, cost, fastest

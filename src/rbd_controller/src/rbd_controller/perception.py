@@ -30,6 +30,7 @@ class AvoidParams:
         dodge: step away from visitors while idle.
         blocked_timeout: stopped this long by a static obstacle before avoiding [s].
         static_after: blocking points unmoved this long count as static [s].
+        low_static_after: ... and a low obstacle's (its top seen, see rbd_controller.blocking) [s]; 0 = no such rule.
         avoid_timeout: one avoidance (escape + detour) may take this long [s].
         max_detour_factor: a detour longer than this times the direct distance is refused [-].
         give_up: ``skip`` (drop the blocked pose) or ``home`` (go back to the trick's start).
@@ -60,6 +61,7 @@ class AvoidParams:
         dodge: bool = False,
         blocked_timeout: float = 3.0,
         static_after: float = 5.0,
+        low_static_after: float = 1.5,
         avoid_timeout: float = 60.0,
         max_detour_factor: float = 4.0,
         give_up: str = "skip",
@@ -106,6 +108,10 @@ class AvoidParams:
         self.dodge = bool(dodge)
         self.blocked_timeout = float(blocked_timeout)
         self.static_after = float(static_after)
+        if isinstance(low_static_after, bool) or not isinstance(low_static_after, (int, float)) or not (
+                math.isfinite(low_static_after) and low_static_after >= 0):
+            raise ValueError("low_static_after must be a finite number >= 0, got %r" % (low_static_after,))
+        self.low_static_after = float(low_static_after)
         self.avoid_timeout = float(avoid_timeout)
         self.max_detour_factor = float(max_detour_factor)
         self.give_up = give_up
@@ -152,7 +158,7 @@ class Perception:
         self._poses = []  # type: List[Tuple[float, float, float]]
         self.reading = None  # type: Optional[ZoneReading]
         self.reading_time = None  # type: Optional[float]
-        self.classifier = BlockClassifier(static_after=params.static_after)
+        self.classifier = BlockClassifier(static_after=params.static_after, low_after=params.low_static_after)
         band = [z + s for z, s in zip(params.zone, params.slowdown)]
         self.approach = ApproachDetector(band)
         self.approached = []  # type: List[int]
@@ -200,8 +206,8 @@ class Perception:
             if sides:
                 self.approached, self.approached_time = sides, now
 
-    def on_blocking_points(self, now: float, points: Sequence[Point]) -> None:
-        """The critical points of one scan, map frame.
+    def on_blocking_points(self, now: float, points: Sequence[Point], low: bool = False) -> None:
+        """The critical points of one scan, map frame; low: they are a low obstacle (rbd_controller.blocking.is_low).
 
         For the planner each point also stands for what the LiDAR cannot see behind it: the
         obstacle is assumed to extend ``shadow_depth`` further along the ray from the robot (a
@@ -209,7 +215,7 @@ class Perception:
         """
         arr = _measured(points)
         with self.lock:
-            self.classifier.update(now, arr)
+            self.classifier.update(now, arr, low)
             if len(arr):
                 thin = arr[:: max(1, len(arr) // 400)]
                 if self.pose is not None and self.shadow_depth > 0.0:
@@ -266,6 +272,12 @@ class Perception:
             if result == STATIC:
                 self._static = self.classifier.latest()
             return result, self.classifier.reason
+
+    @property
+    def low_match(self) -> bool:
+        """The last :meth:`classify` found the blocker static by the low-obstacle rule."""
+        with self.lock:
+            return self.classifier.low_match
 
     @property
     def known_match(self) -> bool:

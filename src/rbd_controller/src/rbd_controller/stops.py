@@ -125,6 +125,10 @@ class Stops(Behaviour):
                 # The obstacle a detour is going around: no new wait for it to go away (issue 27).
                 ctx.ports.log("info", "stopped again at the static obstacle being avoided: avoiding")
                 ctx.fire_if(epoch, Event.AVOID)
+            elif result == STATIC and ctx.perception.low_match:
+                # A bag put down does not walk away: ~blocked_timeout is the time a person gets (issue 27).
+                ctx.ports.log("info", "blocked by a low static obstacle (%s): avoiding" % reason)
+                ctx.fire_if(epoch, Event.AVOID)
 
     # ------------------------------------------------------------------ stop inputs (node callbacks)
     def set_emergency(self, engaged: bool) -> str:

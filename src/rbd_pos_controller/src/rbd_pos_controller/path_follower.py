@@ -3,6 +3,8 @@
 ROS-free. A path is a list of poses (x, y, yaw) in the controller's frame. Consecutive poses at one
 position are a turn on the spot (to the second pose's heading); the others are walked, forwards,
 the robot turning while it walks (pure pursuit towards a point ``lookahead`` ahead on the path).
+Consecutive turns on the spot in one direction (a planner's turn in heading bins) are turned through
+without slowing down at each, the planned way round.
 Each run of walked segments ends on its last pose's position (the saturated proportional law of
 Eq. 1 for the last centimetres); the final pose's heading is then turned to on the spot.
 
@@ -140,15 +142,35 @@ class PathFollower:
         if self.index >= len(self.poses):
             self.done = True
 
+    def _turn_steps(self) -> List[float]:
+        """The heading steps [rad] of the turns on the spot that follow the current pose at its position."""
+        steps = []
+        j = self.index
+        while j + 1 < len(self.poses) and _dist(self.poses[j], self.poses[j + 1]) <= SPOT:
+            steps.append(wrap_angle(self.poses[j + 1][2] - self.poses[j][2]))
+            j += 1
+        return steps
+
     def _turn(self, pose: Pose) -> Optional[Twist2D]:
         target = self.poses[self.index]
         delta = wrap_angle(target[2] - pose[2])
-        if abs(delta) <= self.params.yaw_tolerance:
+        steps = self._turn_steps()
+        # More turns on the spot in the same direction follow (a planner's turn in heading bins): turn through
+        # this pose's heading without slowing down (it is passed once reached or overshot in that direction)
+        # and aim the rate at the end of the whole turn, taken the planned way round.
+        through = bool(steps) and steps[0] != 0.0 and delta * steps[0] >= 0.0
+        if abs(delta) <= self.params.yaw_tolerance or (bool(steps) and delta * steps[0] < 0.0):
             self._advance(pose)
             return None
+        ahead = 0.0
+        if through:
+            for step in steps:
+                if step * steps[0] <= 0.0:
+                    break
+                ahead += step
         if self._hold is None:
             self._hold = (target[0], target[1])
-        wz = saturate(self.gains.k_alpha * delta, self.max_wz)
+        wz = saturate(self.gains.k_alpha * (delta + ahead), self.max_wz)
         err = Errors(pose[0], pose[1], pose[2], self._hold[0], self._hold[1], pose[2])
         vx, vy = hold_command(err, self.params.k_hold, min(self.max_speed, self.gains.max_vy), True, True)
         return (vx, vy, wz)
