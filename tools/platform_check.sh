@@ -34,7 +34,7 @@ mkdir -p "$cache"
 if [ "$bare" = 1 ] && [ -e "$chroot_dir" ]; then
   echo "platform_check: bare run: removing the cached $chroot_dir first"
   # every mount below it (proc, sys, dev; a network namespace file a failed test left), deepest first
-  findmnt -rn -o TARGET | grep "^$chroot_dir\(/\|$\)" | sort -r | while read -r m; do umount -l "$m" || true; done
+  { findmnt -rn -o TARGET | grep "^$chroot_dir\(/\|$\)" || true; } | sort -r | while read -r m; do umount -l "$m" || true; done
   rm -rf --one-file-system "$chroot_dir"
 fi
 if [ ! -f "$chroot_dir/.rbd-debootstrap" ]; then
