@@ -20,9 +20,7 @@ setup:
 build: setup
 	@tools/build.sh
 
-# make test: the build runs inside setup, beside pip's downloads (tools/setup.sh --build)
-test:
-	@tools/setup.sh --build
+test: build
 	@tools/run_tests.sh
 
 test-long: build

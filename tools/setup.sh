@@ -6,15 +6,10 @@
 #   3. .venv from /usr/bin/python3 --system-site-packages with pinned requirements
 #      (skipped when requirements.txt and rbd_local/pyproject.toml are unchanged)
 #   4. roslibjs from npm (beside 3)
-# `tools/setup.sh --build` (make test) also runs tools/build.sh, while pip downloads the wheels:
-# the build needs only the Debian packages and the venv's interpreter, and the wheels are
-# installed after it (the build's Python must not see a half-installed setuptools).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 t_setup=$(date +%s)
-build_beside=0
-[ "${1:-}" = --build ] && build_beside=1
 
 mapfile -t pkgs < <(grep -v '^\s*#' tools/apt-packages.txt | grep -v '^\s*$')
 # nodejs + npm (roslibjs for the bridge's JavaScript client tests, below) in the same apt run:
@@ -45,10 +40,7 @@ if [ ${#missing[@]} -gt 0 ]; then
   sudo_cmd=()
   [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
   "${sudo_cmd[@]}" apt-get update -qq
-  # --force-unsafe-io: dpkg skips its fsync per unpacked file (a fresh machine's first install of
-  # ~1400 packages; a power cut during it means re-running setup, as any interrupted install does).
-  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends \
-    -o Dpkg::Options::=--force-unsafe-io "${missing[@]}"
+  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
   echo "setup: Debian packages installed ($(( $(date +%s) - t_setup )) s)"
 else
   echo "setup: Debian packages present"
@@ -80,26 +72,7 @@ if [ "$want" != "$have" ] || [ ! -x .venv/bin/python ]; then
   if [ ${#pypi[@]} -gt 0 ]; then
     .venv/bin/python -m pip install -q --disable-pip-version-check "${pypi[@]}"
   fi
-  wheels=()
-  if [ "$build_beside" = 1 ]; then
-    rm -rf build/pip-wheels
-    echo "setup: building (tools/build.sh) while pip downloads the wheels (log: build/pip-download.log)"
-    .venv/bin/python -m pip download -q --disable-pip-version-check -d build/pip-wheels -r requirements.txt \
-      > build/pip-download.log 2>&1 &
-    download_pid=$!
-    build_rc=0
-    tools/build.sh || build_rc=$?
-    download_rc=0
-    wait "$download_pid" || download_rc=$?
-    [ "$build_rc" -eq 0 ] || { echo "setup: tools/build.sh failed (exit $build_rc)" >&2; exit "$build_rc"; }
-    [ "$download_rc" -eq 0 ] || { cat build/pip-download.log >&2; echo "setup: pip download failed" >&2; exit 1; }
-    # the build's own line in make test's phase table, outside the sum (it ran inside setup's time)
-    sed -i 's/^build: /(beside setup) build: /' build/phase-build.tsv
-    wheels=(--no-index --find-links build/pip-wheels)
-    built=1
-  fi
-  .venv/bin/python -m pip install -q --disable-pip-version-check "${wheels[@]}" -r requirements.txt 2>&1 | { grep -v "is ignored: it is neither" || true; }
-  rm -rf build/pip-wheels
+  .venv/bin/python -m pip install -q --disable-pip-version-check -r requirements.txt 2>&1 | { grep -v "is ignored: it is neither" || true; }
   .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps -e rbd_local 2>&1 | { grep -v "is ignored: it is neither" || true; }
   echo "$want" > .venv/.rbd-requirements
   echo "setup: .venv done ($(( $(date +%s) - t_setup )) s)"
@@ -119,10 +92,4 @@ fi
 
 # Its wall time, for make test's per-phase report (tools/run_tests.sh).
 mkdir -p build
-label='setup: Debian packages, .venv, npm (make setup)'
-[ "${built:-0}" = 1 ] && label='setup + build: Debian packages, .venv, npm; the build beside pip'
-printf '%s\t%s\n' "$label" "$(( $(date +%s) - t_setup ))" > build/phase-setup.tsv
-
-if [ "$build_beside" = 1 ] && [ "${built:-0}" = 0 ]; then
-  tools/build.sh  # the venv was up to date: nothing to overlap; the build's own phase line
-fi
+printf 'setup: Debian packages, .venv, npm (make setup)\t%s\n' "$(( $(date +%s) - t_setup ))" > build/phase-setup.tsv
