@@ -5,7 +5,6 @@ import collections
 import io
 import json
 import math
-import re
 import struct
 import zlib
 from typing import Any, List
@@ -82,37 +81,6 @@ def _untag(value: Any) -> Any:
             raise DecodeError("typed array length not a multiple of its element size")
         return list(struct.unpack("<%d%s" % (len(inner) // size, fmt), inner))
     return value
-
-
-#: Deepest JSON nesting a frame may have. rosbridge frames nest a message's fields (a few levels);
-#: the limit is far below the interpreter's recursion limit, whose overflow inside the C JSON decoder
-#: is a fatal abort on Python <= 3.10 when the limit was raised (Debian 11's 3.9: the whole process).
-MAX_JSON_DEPTH = 200
-_JSON_TOKENS = re.compile(r'"(?:[^"\\]|\\.)*"|[\[\]{}]')
-
-
-def json_loads(text: str) -> Any:
-    """``json.loads`` for a client's frame, refusing nesting deeper than ``MAX_JSON_DEPTH``.
-
-    Raises:
-        DecodeError: On malformed or too deeply nested JSON.
-    """
-    if text.count("[") + text.count("{") > MAX_JSON_DEPTH:  # only then can it be too deep: count it
-        depth = deepest = 0
-        for token in _JSON_TOKENS.finditer(text):
-            c = token.group()
-            if c in "[{":
-                depth += 1
-                if depth > deepest:
-                    deepest = depth
-                    if deepest > MAX_JSON_DEPTH:
-                        raise DecodeError("JSON nested deeper than %d levels" % MAX_JSON_DEPTH)
-            elif c in "]}":
-                depth -= 1
-    try:
-        return json.loads(text)
-    except (ValueError, RecursionError) as exc:
-        raise DecodeError("malformed JSON: %s" % str(exc)[:120]) from None
 
 
 def cbor_loads(data: Any) -> Any:

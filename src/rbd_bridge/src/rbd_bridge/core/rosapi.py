@@ -9,7 +9,6 @@ Needs a *graph* with rosgraph.Master's ``getTopicTypes``, ``getSystemState`` and
 import json
 from typing import Any, Callable, Dict
 
-from rbd_bridge.core import encoding
 from rbd_bridge.core.types import ConversionError
 
 __all__ = ["RosApi", "ROSAPI_TYPES", "RosApiError"]
@@ -33,8 +32,8 @@ def _str_arg(args: Dict[str, Any], key: str) -> str:
 def _loads(text: str) -> Any:
     """JSON text as its value, any other text as itself (parameter values, as rosapi)."""
     try:
-        return encoding.json_loads(text)  # nesting bounded as for frames
-    except encoding.DecodeError:
+        return json.loads(text)
+    except ValueError:
         return text
 
 

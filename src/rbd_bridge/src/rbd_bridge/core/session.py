@@ -7,6 +7,7 @@ ROS- and transport-free, on the event loop thread: ``receive()`` takes client fr
 
 import collections
 import itertools
+import json
 import logging
 import time
 from typing import Any, Callable, Dict, Optional
@@ -175,14 +176,14 @@ class Session:
                 frame = encoding.cbor_loads(data)
             except encoding.DecodeError:
                 try:
-                    frame = encoding.json_loads(bytes(data).decode("utf-8"))
-                except (UnicodeDecodeError, encoding.DecodeError):
+                    frame = json.loads(bytes(data).decode("utf-8"))
+                except (UnicodeDecodeError, ValueError, RecursionError):
                     raise BridgeError("binary frame is neither CBOR nor UTF-8 JSON") from None
         else:
             try:
-                frame = encoding.json_loads(data)
-            except encoding.DecodeError as exc:
-                raise BridgeError(str(exc)) from None
+                frame = json.loads(data)
+            except (ValueError, RecursionError) as exc:
+                raise BridgeError("malformed JSON: %s" % str(exc)[:120]) from None
         if not isinstance(frame, dict):
             raise BridgeError("a frame must be a JSON object with an 'op' field, got %s" % type(frame).__name__)
         return frame
