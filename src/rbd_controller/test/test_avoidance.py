@@ -2,6 +2,8 @@
 
 import math
 
+import fsm_scenes
+
 from rbd_controller.core import MainController, Ports
 from rbd_controller.detour import Plan
 from rbd_controller.fsm import Event, State
@@ -28,16 +30,7 @@ class Fake:
 
     def avoiding(self):
         """An executing trick, blocked and escaped: AVOIDING towards the pose (2, 0)."""
-        ctl = self.ctl
-        ctl.set_emergency(False)
-        ctl.fsm.fire(Event.GESTURE)
-        ctl.fsm.fire(Event.PATH_READY)
-        ctl.tricks.current = ((2.0, 0.0, 0.0), "blocked pose")
-        for event in (Event.COLLISION, Event.BLOCKED_STATIC, Event.AVOID, Event.COLLISION_CLEAR, Event.ESCAPED):
-            ctl.fsm.fire(event)
-        assert ctl.state == State.AVOIDING
-        return ctl.avoidance
-
+        return fsm_scenes.avoiding(self.ctl)
 
 def done(ctl):
     ctl.on_pos_status("running")

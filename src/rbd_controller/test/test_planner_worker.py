@@ -10,12 +10,13 @@ import math
 import threading
 import time
 
+import fsm_scenes
 import numpy as np
 import pytest
 
 from rbd_controller.core import MainController, Ports
 from rbd_controller.detour import GridMap
-from rbd_controller.fsm import Event, State
+from rbd_controller.fsm import State
 from rbd_controller.lattice_plan import LatticePlan
 from rbd_controller.perception import AvoidParams
 from rbd_controller.planner_worker import PlannerWorker
@@ -94,15 +95,7 @@ class Fake:
                   follow_path=lambda poses, v: self.paths.append((poses, v)) or (True, "ok")),
             avoid=AvoidParams(static_after=0.5))
         self.ctl.perception.on_pose(0.0, 0.0, 0.0, 0.0)
-        ctl = self.ctl
-        ctl.set_emergency(False)
-        ctl.fsm.fire(Event.GESTURE)
-        ctl.fsm.fire(Event.PATH_READY)
-        ctl.tricks.current = ((2.0, 0.0, 0.0), "blocked pose")
-        for event in (Event.COLLISION, Event.BLOCKED_STATIC, Event.AVOID, Event.COLLISION_CLEAR, Event.ESCAPED):
-            ctl.fsm.fire(event)
-        assert ctl.state == State.AVOIDING
-        self.av = ctl.avoidance
+        self.av = fsm_scenes.avoiding(self.ctl)
 
     def tick(self):
         self.av._plan_detour(0.0, self.ctl.fsm.epoch)
